@@ -1,0 +1,34 @@
+"""spacearm: a JAX design-space explorer for manipulators on free-floating spacecraft.
+
+Starts from Umetani & Yoshida, "Workspace and Manipulability Analysis of Space
+Manipulator", Trans. SICE 26(2), 1990. Importing the package changes no global JAX
+setting; call :func:`enable_x64` once for float64 (the command line does).
+"""
+
+from ._version import __version__ as __version__
+from .config import enable_x64 as enable_x64
+from .kinematics import (
+    angular_momentum as angular_momentum,
+    arm_jacobian as arm_jacobian,
+    base_jacobian as base_jacobian,
+    base_rate as base_rate,
+    centroid_positions as centroid_positions,
+    design_coefficients as design_coefficients,
+    fixed_base_jacobian as fixed_base_jacobian,
+    fixed_base_manipulability as fixed_base_manipulability,
+    generalized_jacobian as generalized_jacobian,
+    manipulability as manipulability,
+    manipulability_ellipse as manipulability_ellipse,
+    manipulability_on_grid as manipulability_on_grid,
+    momentum_inertias as momentum_inertias,
+    robot_frame_tip_position as robot_frame_tip_position,
+    tip_coefficients as tip_coefficients,
+    tip_position as tip_position,
+)
+from .robot import (
+    ConfigError as ConfigError,
+    PlanarRobot as PlanarRobot,
+    load_robot as load_robot,
+    stack_robots as stack_robots,
+    umetani1990 as umetani1990,
+)
