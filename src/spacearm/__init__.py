@@ -32,3 +32,22 @@ from .robot import (
     stack_robots as stack_robots,
     umetani1990 as umetani1990,
 )
+
+# Public names from the higher layers, imported on first use (keeps `import spacearm`
+# light). Each entry: public name -> module under spacearm.
+_LAZY = {
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f"spacearm.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'spacearm' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
