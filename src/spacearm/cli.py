@@ -17,7 +17,10 @@ EXIT_INVALID = 2
 
 # Subcommands living in other modules: (module, function adding the subparser).
 # Each adder receives the subparsers object and sets ``func`` on its parser.
-_EXTERNAL_COMMANDS: list[tuple[str, str]] = []
+_EXTERNAL_COMMANDS: list[tuple[str, str]] = [
+    ("sweep", "add_sweep_command"),
+    ("sweep", "add_figures_command"),
+]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:

@@ -1,0 +1,176 @@
+"""Sweep files: validation, batched execution, resume, sharding, the command line."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import spacearm as sa
+from spacearm import results
+from spacearm.cli import main
+from spacearm.sweep import build_designs, load_sweep, run_sweep
+
+ROBOT = str(Path("configs/umetani1990.yaml").resolve())
+
+
+def sweep_config(**changes):
+    config = {
+        "name": "unit",
+        "robot": ROBOT,
+        "axes": {"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.0, 0.5, 1.0, 1.5, 2.0]}},
+        "metrics": ["radii"],
+        "chunk_size": 2,
+    }
+    config.update(changes)
+    return config
+
+
+def write(tmp_path, config, name="s.yaml"):
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+def test_designs_follow_the_axes():
+    spec = load_sweep(sweep_config(
+        axes={
+            "l1_over_L": {"field": "arm.length_split", "values": [0.25, 0.5, 0.75]},
+            "ratio": {"field": "arm.mass_ratio", "values": [0.1, 0.4]},
+        }
+    ))
+    robot, points = build_designs(spec)
+    assert robot.batch_shape == (6,)
+    np.testing.assert_allclose(robot.reach, 4.0, rtol=1e-15)  # L held fixed
+    np.testing.assert_allclose(np.asarray(robot.link_length)[:, 0] / 4.0, points["l1_over_L"], rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(robot.link_mass).sum(1) / 1000.0, points["ratio"], rtol=1e-15)
+    # uniform scaling of a link keeps a/l and I/(m l^2)
+    a_over_l = np.asarray(robot.link_a) / np.asarray(robot.link_length)
+    np.testing.assert_allclose(a_over_l, 0.5, rtol=1e-15)
+    shape = np.asarray(robot.link_inertia) / (np.asarray(robot.link_mass) * np.asarray(robot.link_length) ** 2)
+    np.testing.assert_allclose(shape, 33.3 / (100.0 * 4.0), rtol=1e-13)
+
+
+def test_zip_and_ranges():
+    spec = load_sweep(sweep_config(
+        combine="zip",
+        axes={
+            "m0": {"field": "base.mass", "range": {"start": 500, "stop": 1500, "num": 3}},
+            "l2": {"field": "links[1].length", "range": {"start": 1.0, "stop": 3.0, "step": 1.0}},
+        },
+    ))
+    robot, points = build_designs(spec)
+    np.testing.assert_allclose(robot.base_mass, [500, 1000, 1500])
+    np.testing.assert_allclose(np.asarray(robot.link_length)[:, 1], [1.0, 2.0, 3.0])
+
+
+def test_table_matches_single_design_functions(tmp_path):
+    spec = load_sweep(sweep_config())
+    result = run_sweep(spec, tmp_path / "out", progress=False)
+    table = results.read_csv(tmp_path / "out" / "table.csv")
+    for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
+        robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
+        K = np.asarray(sa.tip_coefficients(robot))
+        assert table["b0_over_B0"][i] == ratio
+        np.testing.assert_allclose(table["base_attach_m"][i], 1.4 * ratio, rtol=1e-15)
+        np.testing.assert_allclose(table["R_max_m"][i], K.sum(), rtol=1e-14)
+        np.testing.assert_allclose(table["R_guaranteed_m"][i], abs(K[0] - K[1] - K[2]), rtol=1e-13)
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    for key in ("config", "config_sha256", "packages", "git", "float64", "device_count", "devices", "timings_s"):
+        assert key in manifest
+    assert manifest["float64"] is True
+    assert manifest["config_sha256"] == results.config_hash(spec.config)
+    with np.load(tmp_path / "out" / "grids.npz") as grids:
+        np.testing.assert_allclose(grids["metric/R_max_m"], table["R_max_m"])
+    assert (tmp_path / "out" / "metrics.png").exists()
+    assert not any(p.name.startswith(".partial") for p in (tmp_path / "out").iterdir())
+    assert result.manifest["n_designs"] == 5
+
+
+def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
+    spec = load_sweep(sweep_config())
+    run_sweep(spec, tmp_path / "full", progress=False)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "cut", progress=False, stop_after_chunks=2)
+    assert not (tmp_path / "cut" / "table.csv").exists()
+    partial = [p for p in (tmp_path / "cut").iterdir() if p.name.startswith(".partial")]
+    assert len(partial) == 1 and len(list(partial[0].glob("chunk_*.npz"))) == 2
+    resumed = run_sweep(spec, tmp_path / "cut", progress=False)
+    assert resumed.manifest["resumed_chunks"] == 2
+    assert (tmp_path / "full" / "table.csv").read_text() == (tmp_path / "cut" / "table.csv").read_text()
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(axes={}), r"axes: must be a non-empty mapping"),
+        (dict(axes={"x": {"field": "base.attach", "values": []}}), r"axes\.x\.values: is empty"),
+        (dict(axes={"x": {"field": "base.atach", "values": [1]}}), r"unknown design field 'base.atach' \(did you mean 'base.attach'\?\)"),
+        (dict(axes={"x": {"field": "base.attach", "valeus": [1]}}), r"unknown key 'valeus' \(did you mean 'values'\?\)"),
+        (dict(metircs=["radii"]), r"unknown key 'metircs' \(did you mean 'metrics'\?\)"),
+        (dict(metrics=["wbra"]), r"unknown metric 'wbra' \(did you mean 'wbar'\?\)"),
+        (dict(robot="nowhere.yaml"), r"robot: no such robot file 'nowhere.yaml'"),
+        (dict(axes={"x": {"field": "base.attach", "values": ["far"]}}), r"axes\.x\.values\[0\]: must be a finite number"),
+        (dict(axes={"x": {"field": "links[2].mass", "values": [1.0]}}), r"link index 2 out of range"),
+        (dict(chunk_size=0), r"chunk_size: must be a positive integer"),
+        (
+            dict(axes={"m1": {"field": "links[0].mass", "values": [100.0, -5.0]}}),
+            r"sweep point 1 \(m1=-5\) gives an invalid robot: links\[0\]\.mass: must be positive",
+        ),
+    ],
+)
+def test_invalid_sweeps_name_the_problem(change, message):
+    with pytest.raises(sa.ConfigError, match=message):
+        load_sweep(sweep_config(**change))
+
+
+def test_cli_invalid_sweep_exits_2_and_writes_nothing(tmp_path, capsys):
+    path = write(tmp_path, sweep_config(axes={"m1": {"field": "links[0].mass", "values": [-1.0]}}))
+    out = tmp_path / "never"
+    assert main(["sweep", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "links[0].mass: must be positive" in err and "Traceback" not in err
+    assert not out.exists()
+    assert main(["validate", str(path)]) == 2
+
+
+def test_cli_sweep_with_set_override(tmp_path, capsys):
+    path = write(tmp_path, sweep_config())
+    out = tmp_path / "o"
+    code = main(["sweep", str(path), "--out", str(out), "--quiet", "--set", "axes.b0_over_B0.values=[0.0, 2.0]"])
+    assert code == 0
+    table = results.read_csv(out / "table.csv")
+    assert table["b0_over_B0"] == [0.0, 2.0]
+    assert main(["validate", str(path)]) == 0
+    assert "valid sweep" in capsys.readouterr().out
+
+
+def test_sharded_sweep_equals_single_device(tmp_path):
+    path = write(tmp_path, sweep_config(
+        axes={
+            "b0_over_B0": {"field": "base.attach", "relative": True, "range": {"start": 0, "stop": 2, "num": 7}},
+            "m0": {"field": "base.mass", "values": [500.0, 1000.0, 2000.0]},
+        },
+        chunk_size=5,
+    ))
+    single = tmp_path / "single"
+    assert main(["sweep", str(path), "--out", str(single), "--quiet"]) == 0
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")
+    code = (
+        "import sys, jax; from spacearm.cli import main; "
+        "assert jax.device_count() == 4, jax.devices(); "
+        f"sys.exit(main(['sweep', {str(path)!r}, '--out', {str(tmp_path / 'sharded')!r}, '--quiet']))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    manifest = json.loads((tmp_path / "sharded" / "manifest.json").read_text())
+    assert manifest["device_count"] == 4
+    a = results.read_csv(single / "table.csv")
+    b = results.read_csv(tmp_path / "sharded" / "table.csv")
+    for column in a:
+        np.testing.assert_allclose(b[column], a[column], rtol=1e-14, err_msg=column)
+    assert (tmp_path / "sharded" / "heatmap_R_max_m.png").exists()
