@@ -594,6 +594,25 @@ def _take(robot: PlanarRobot, start: int, stop: int, size: int) -> PlanarRobot:
     return jax.tree_util.tree_map(lambda x: np.asarray(x)[index], robot)
 
 
+def _shard(tree, sharding):
+    """Place a host batch on the device mesh; every process supplies the shards it owns,
+    so the same code runs on one device, many devices, or many hosts (jax.distributed)."""
+    def place(x):
+        x = np.asarray(x)
+        return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
+
+    return jax.tree_util.tree_map(place, tree)
+
+
+def _gather(array) -> np.ndarray:
+    """A global result as a host array (all-gathered across processes when multi-host)."""
+    if getattr(array, "is_fully_addressable", True):
+        return np.asarray(array)
+    from jax.experimental import multihost_utils
+
+    return np.asarray(multihost_utils.process_allgather(array, tiled=True))
+
+
 @dataclasses.dataclass
 class SweepResult:
     out_dir: Path
@@ -645,14 +664,15 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
             if stop_after_chunks is not None and done >= stop_after_chunks:
                 raise KeyboardInterrupt
             start, stop = spans[number]
-            batch = jax.device_put(_take(robot, start, stop, chunk), sharding)
+            batch = _shard(_take(robot, start, stop, chunk), sharding)
             if compiled is None:
                 t0 = time.perf_counter()
                 compiled = evaluate.lower(batch).compile()
                 compile_s = time.perf_counter() - t0
             values = compiled(batch)
-            piece = {c: np.asarray(values[c])[: stop - start] for c in columns}
-            results.write_npz(partial / f"chunk_{number:06d}.npz", **piece)
+            piece = {c: _gather(values[c])[: stop - start] for c in columns}
+            if jax.process_index() == 0:
+                results.write_npz(partial / f"chunk_{number:06d}.npz", **piece)
             pieces[number] = piece
             bar.update(stop - start)
     finally:
@@ -665,6 +685,8 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     table.update(_design_columns(robot, spec))
     table.update(metric_values)
 
+    if jax.process_index() != 0:  # multi-host: the first process writes the results
+        return SweepResult(out_dir, table, {}, [])
     files = [results.write_csv(out_dir / "table.csv", table)]
     grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
     grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
