@@ -36,6 +36,21 @@ from .robot import (
 # Public names from the higher layers, imported on first use (keeps `import spacearm`
 # light). Each entry: public name -> module under spacearm.
 _LAZY = {
+    "integrate_joint_path": "motion",
+    "joint_path_history": "motion",
+    "straight_tip_path": "motion",
+    "straight_tip_path_history": "motion",
+    "StraightPath": "motion",
+    "go_and_back": "motion",
+    "straight_path_workspace": "workspace",
+    "fixed_vehicle_radius": "workspace",
+    "attitude_constraint": "workspace",
+    "maximum_reachable_radius": "workspace",
+    "guaranteed_radius": "workspace",
+    "path_independent_radius": "workspace",
+    "dynamic_singularities": "workspace",
+    "maximum_reachable_radii": "workspace",
+    "workspace_relations": "workspace",
 }
 
 

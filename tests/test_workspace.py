@@ -1,0 +1,169 @@
+"""Workspaces (sec. 3): closed forms, relations (eq. 9), dynamic singularities, straight paths."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import spacearm as sa
+from spacearm import workspace as ws
+
+from . import reference
+from .conftest import random_robot
+
+
+def _random_postures(rng, count, n):
+    return rng.uniform(-np.pi, np.pi, (count, n + 1))
+
+
+def _reference_tips(robot, phis):
+    d = reference.design(robot)
+    return np.array([reference.tip(d, p) for p in phis])
+
+
+# Closed forms ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_closed_form_radii_against_naive_model(n):
+    rng = np.random.default_rng(n)
+    robot = random_robot(rng, n)
+    d = reference.design(robot)
+    # Area 3: the stretched arm reaches K0+..+Kn, and no sampled posture goes farther.
+    stretched = reference.tip(d, np.zeros(n + 1))
+    assert np.linalg.norm(stretched) == pytest.approx(float(ws.maximum_reachable_radius(robot)), rel=1e-12)
+    phis = _random_postures(rng, 3000, n)
+    radii = np.linalg.norm(_reference_tips(robot, phis), axis=-1)
+    assert radii.max() <= float(ws.maximum_reachable_radius(robot)) + 1e-12
+    assert radii.min() >= float(ws.maximum_reachable_inner_radius(robot)) - 1e-12
+    # Area 2 (phi0 = 0): every tip within K1+..+Kn of (K0, 0), outside the hole.
+    center, radius = ws.attitude_constraint(robot)
+    phis[:, 0] = 0.0
+    gaps = np.linalg.norm(_reference_tips(robot, phis) - np.asarray(center), axis=-1)
+    assert gaps.max() <= float(radius) + 1e-12
+    assert gaps.max() >= 0.9 * float(radius)
+    assert gaps.min() >= float(ws.attitude_constraint_inner_radius(robot)) - 1e-12
+    # Area 1 placement: joint 1 of the stretched posture phi = 0 is its centre.
+    joint1 = stretched - np.array([float(robot.reach), 0.0])
+    np.testing.assert_allclose(np.asarray(ws.fixed_vehicle_center(robot)), joint1, atol=1e-12)
+
+
+def test_table1_radii_and_table2_areas():
+    robot = sa.umetani1990()
+    K = np.asarray(sa.tip_coefficients(robot))
+    np.testing.assert_allclose(K, [1.4 * 1000 / 1200, 2100 / 1200, 2300 / 1200], rtol=1e-14)
+    assert float(ws.guaranteed_radius(robot)) == pytest.approx(2.5, rel=1e-14)
+    assert float(ws.kinematic_singularity_radius(robot)) == pytest.approx(1.0, rel=1e-14)
+    assert float(ws.attitude_constraint_inner_radius(robot)) == pytest.approx(1 / 6, rel=1e-12)
+    # Table 2 of the paper, S_M and S_G to its two printed decimals.
+    printed = {0.0: (0.84, 0.84), 0.5: (1.13, 0.59), 1.0: (1.46, 0.39), 1.5: (1.83, 0.23), 2.0: (2.25, 0.11)}
+    for ratio, (s_m, s_g) in printed.items():
+        areas = ws.normalized_areas(robot.replace(base_attach=np.float64(1.4 * ratio)))
+        assert float(areas["maximum_reachable_disk"]) == pytest.approx(s_m, abs=0.006)
+        assert float(areas["guaranteed"]) == pytest.approx(s_g, abs=0.006)
+
+
+def _contained(center_in, r_in, center_out, r_out, samples=720):
+    """Disk containment by sampling the inner boundary (independent of the gap formula)."""
+    angle = np.linspace(0, 2 * np.pi, samples, endpoint=False)
+    ring = center_in[..., None, :] + r_in[..., None, None] * np.stack([np.cos(angle), np.sin(angle)], -1)
+    return np.all(np.linalg.norm(ring - center_out[..., None, :], axis=-1) <= r_out[..., None] + 1e-9, axis=-1)
+
+
+def test_relations_of_section_3_2_on_random_designs():
+    rng = np.random.default_rng(7)
+    designs = sa.stack_robots([random_robot(rng, 2) for _ in range(1000)])
+    rel = {k: np.asarray(v) for k, v in ws.workspace_relations(designs).items()}
+    K = np.asarray(sa.tip_coefficients(designs))
+    zero = np.zeros((1000, 2))
+    c1, r1 = np.asarray(ws.fixed_vehicle_center(designs)), np.asarray(designs.reach)
+    c2, r2 = (np.asarray(x) for x in ws.attitude_constraint(designs))
+    r3, r5 = np.asarray(ws.maximum_reachable_radius(designs)), np.asarray(ws.guaranteed_radius(designs))
+    np.testing.assert_array_equal(rel["3>=2"], _contained(c2, r2, zero, r3))
+    np.testing.assert_array_equal(rel["2>=5"], _contained(zero, r5, c2, r2))
+    np.testing.assert_array_equal(rel["3>=1"], _contained(c1, r1, zero, r3))
+    np.testing.assert_array_equal(rel["1>=2"], _contained(c2, r2, c1, r1))
+    assert rel["3>=2"].all() and rel["1>=2"].all()
+    # "Area 2 >= Area 5 always" fails exactly when K0 > K1 + K2 (Area 5 is then Area 3's hole).
+    np.testing.assert_array_equal(rel["2>=5"], K[:, 0] <= K[:, 1] + K[:, 2] + 1e-12)
+    assert 0 < np.sum(~rel["2>=5"]) < 1000
+    # Eq. (9) is the condition for Area 3 >= Area 1, and both happen in the sample.
+    np.testing.assert_array_equal(rel["3>=1"], rel["eq9"])
+    assert 0 < np.sum(rel["eq9"]) < 1000
+
+
+def test_maximum_reachable_radii_under_joint_limits():
+    robot = sa.umetani1990()
+    inner, outer, _, _ = ws.maximum_reachable_radii(robot)
+    assert float(outer) == pytest.approx(float(ws.maximum_reachable_radius(robot)), abs=1e-10)
+    assert float(inner) == pytest.approx(float(ws.maximum_reachable_inner_radius(robot)), abs=1e-7)
+    limited = robot.replace(
+        joint_lower=np.radians(np.array([-90.0, 30.0])), joint_upper=np.radians(np.array([90.0, 150.0]))
+    )
+    inner, outer, j_in, j_out = ws.maximum_reachable_radii(limited)
+    # Brute force on the law of cosines: |p|^2 = sum K^2 + 2 sum K_i K_j cos(theta_i - theta_j).
+    K0, K1, K2 = np.asarray(sa.tip_coefficients(robot))
+    q1, q2 = np.meshgrid(np.radians(np.linspace(-90, 90, 1801)), np.radians(np.linspace(30, 150, 1201)))
+    r = np.sqrt(K0**2 + K1**2 + K2**2 + 2 * K0 * K1 * np.cos(q1) + 2 * K0 * K2 * np.cos(q1 + q2) + 2 * K1 * K2 * np.cos(q2))
+    assert float(outer) == pytest.approx(r.max(), abs=1e-6) and float(outer) >= r.max() - 1e-12
+    assert float(inner) == pytest.approx(r.min(), abs=1e-6) and float(inner) <= r.min() + 1e-12
+    assert np.all(np.asarray(j_out) >= np.asarray(limited.joint_lower) - 1e-15)
+    assert np.all(np.asarray(j_in) <= np.asarray(limited.joint_upper) + 1e-15)
+    assert float(outer) < float(ws.maximum_reachable_radius(robot)) - 0.05
+
+
+# Dynamic singularities -----------------------------------------------------------------
+
+
+def test_dynamic_singular_set_table1():
+    robot = sa.umetani1990()
+    s = ws.dynamic_singularities(robot, n_phi1=360, n_phi2=128)
+    phi1, phi2 = np.asarray(s.phi1), np.asarray(s.phi2)
+    found = np.isfinite(phi2)
+    assert np.all(found.sum(axis=1) == 2)  # one stretched and one folded root for each phi1
+    # det J* vanishes there, by the naive model's complex-step Jacobian.
+    d = reference.design(robot)
+    rows = np.argwhere(found)[::37]
+    for i, j in rows:
+        J = reference.generalized_jacobian(d, np.array([0.0, phi1[i, j], phi2[i, j]]))
+        scale = np.linalg.norm(J[:, 0]) * np.linalg.norm(J[:, 1])
+        assert abs(np.linalg.det(J)) <= 1e-11 * scale
+    folded = np.asarray(s.folded)
+    stretched_phi2 = np.abs(phi2[found & ~folded])
+    # Not phi2 = 0: the stretched branch bulges ~17.8 deg away for Table 1 ...
+    assert 15.0 < np.degrees(stretched_phi2.max()) < 20.0
+    # ... but passes through the collinear postures, where eq. (8) is attained.
+    radius = np.asarray(s.radius)
+    assert np.nanmin(np.where(folded, np.nan, radius)) == pytest.approx(2.5, abs=1e-9)
+    assert np.nanmax(radius) == pytest.approx(float(ws.maximum_reachable_radius(robot)), abs=1e-9)
+    # The folded branch, which eq. (8) ignores, comes to 1.0 m of the centroid.
+    assert float(ws.path_independent_radius(robot, n_phi1=360, n_phi2=128)) == pytest.approx(1.0, abs=1e-9)
+    # Robot-frame tips are the fixed-base tips of those postures.
+    np.testing.assert_allclose(
+        np.linalg.norm(np.asarray(s.tip_robot)[found], axis=-1),
+        np.sqrt(8 + 8 * np.cos(phi2[found])),
+        atol=1e-12,
+    )
+
+
+def test_singular_set_with_base_at_centroid_is_kinematic():
+    # b0 = 0: det J* = (1 - I_M1/I_S) K1 K2 sin(phi2) (J_S equals J_M's first column).
+    robot = random_robot(np.random.default_rng(3), 2).replace(base_attach=np.float64(0.0))
+    s = ws.dynamic_singularities(robot, n_phi1=90, n_phi2=64)
+    phi2 = np.asarray(s.phi2)[np.isfinite(np.asarray(s.phi2))]
+    assert np.allclose(np.minimum(np.abs(phi2), np.pi - np.abs(phi2)), 0.0, atol=1e-12)
+    K = np.asarray(sa.tip_coefficients(robot))
+    assert float(ws.path_independent_radius(robot, n_phi1=90, n_phi2=64)) == pytest.approx(abs(K[1] - K[2]), abs=1e-12)
+
+
+def test_path_independent_radius_never_exceeds_collinear_bound():
+    rng = np.random.default_rng(11)
+    designs = sa.stack_robots([random_robot(rng, 2) for _ in range(12)])
+    piw = np.asarray(ws.path_independent_radius(designs, n_phi1=180, n_phi2=64))
+    kin = np.asarray(ws.kinematic_singularity_radius(designs))
+    assert np.all(piw <= kin + 1e-9)
+    assert np.all(kin <= np.asarray(ws.guaranteed_radius(designs)) + 1e-12)
+
+
+def test_dynamic_singularities_rejects_n3():
+    with pytest.raises(sa.ConfigError, match="links"):
+        ws.dynamic_singularities(random_robot(np.random.default_rng(0), 3))
