@@ -37,7 +37,7 @@ of Delta finds the smallest useful reorientation. Targets whose distance from th
 system centroid no rotation of the current workspace covers are reached by first
 moving the joints to a posture whose tip lies at the target's radius (then the
 maneuver brings the tip onto the target). Targets outside the Maximum Reachable
-space (radius |K0| + ... + |Kn| about the system centroid) are refused with
+space (radius K0 + ... + Kn about the system centroid) are refused with
 :class:`~spacearm.robot.ConfigError`.
 """
 
@@ -64,7 +64,10 @@ __all__ = [
     "ReorientationLoop",
     "rotation_curl",
     "plan_reach",
-    "maximum_reachable_radius",
+    "reachable_bounds",
+    "MODE_STRAIGHT",
+    "MODE_REORIENT",
+    "MODE_REPOSITION",
     "add_reach_command",
 ]
 
@@ -463,16 +466,16 @@ class ReachPlan:
     error: float
 
 
-def maximum_reachable_radius(robot: PlanarRobot) -> tuple[float, float]:
-    """Inner and outer radius of the Maximum Reachable space (Area 3), m.
+def reachable_bounds(robot: PlanarRobot) -> tuple[float, float]:
+    """Inner and outer radius of the Maximum Reachable space (Area 3) about the system centroid, m.
 
-    Outer |K0| + .. + |Kn| about the system centroid (sec. 3.1 (3-a)); inner
-    max(0, 2 max_k |K_k| - sum_k |K_k|), the hole when one coefficient outweighs the rest.
-    Joint limits are not taken into account (they can only shrink the space).
+    Outer K0 + .. + Kn (sec. 3.1 (3-a)); inner max(0, 2 max_k K_k - sum_k K_k), the hole
+    when one coefficient outweighs the rest (both from :mod:`spacearm.workspace`). Joint
+    limits are not taken into account here (they can only shrink the space).
     """
-    K = np.abs(np.asarray(tip_coefficients(robot)))
-    outer = float(np.sum(K))
-    return max(0.0, 2.0 * float(np.max(K)) - outer), outer
+    from .workspace import maximum_reachable_inner_radius, maximum_reachable_radius
+
+    return float(maximum_reachable_inner_radius(robot)), float(maximum_reachable_radius(robot))
 
 
 def _rotate(points: np.ndarray, angle) -> np.ndarray:
@@ -586,7 +589,7 @@ def plan_reach(
 
     Raises:
         ConfigError: bad input; the target outside the Maximum Reachable space (radius
-            |K0| + .. + |Kn| about the system centroid); or no plan found.
+            K0 + .. + Kn about the system centroid); or no plan found.
     """
     from .motion import (
         REASON_MAX_LENGTH,
@@ -600,13 +603,13 @@ def plan_reach(
     target = np.asarray(target, dtype=float)
     if target.shape != (2,) or not np.all(np.isfinite(target)):
         raise ConfigError(f"target: expected two finite numbers (x, y) in m, got {np.asarray(target).tolist()!r}")
-    inner, outer = maximum_reachable_radius(robot)
+    inner, outer = reachable_bounds(robot)
     distance_from_centroid = float(np.linalg.norm(target))
     if distance_from_centroid > outer * (1.0 - 1e-12) or distance_from_centroid < inner * (1.0 + 1e-12):
         hole = f", outside its hole of radius {inner:.6g} m" if inner > 0 else ""
         raise ConfigError(
             f"target: ({target[0]:.6g}, {target[1]:.6g}) m is {distance_from_centroid:.6g} m from the system "
-            f"centroid, outside the Maximum Reachable space (radius {outer:.6g} m = |K0| + .. + |Kn|{hole}); "
+            f"centroid, outside the Maximum Reachable space (radius {outer:.6g} m = K0 + .. + Kn{hole}); "
             "no motion of this robot can reach it"
         )
     q0 = phi[1:]
@@ -705,3 +708,87 @@ def plan_reach(
     waypoints = np.concatenate([segment, loop.waypoints[1:]])
     phi_after = np.asarray(integrate_joint_path(robot, jnp.asarray(phi), jnp.asarray(waypoints)))
     return finish(MODE_REPOSITION, waypoints, phi_after, delta, loop.loops)
+
+
+# Command line --------------------------------------------------------------------------
+
+
+def _numbers(text: str, count: int, what: str) -> np.ndarray:
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise ConfigError(f"{what}: expected {count} comma-separated numbers, got {text!r}") from None
+    if values.size != count or not np.all(np.isfinite(values)):
+        raise ConfigError(f"{what}: expected {count} finite comma-separated numbers, got {text!r}")
+    return values
+
+
+def _cmd_reach(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .figures.planning import animate_reach, draw_reach
+    from .robot import load_robot
+
+    robot = load_robot(args.robot)
+    phi = _numbers(args.start, robot.n_links + 1, "--from")
+    if not args.radians:
+        phi = np.radians(phi)
+    target = _numbers(args.target, 2, "--to")
+    plan = plan_reach(robot, phi, target)
+    out = Path(args.out)
+    figure_path = draw_reach(robot, phi, plan, out / "reach.png")
+    lines = [
+        f"mode           {plan.mode}",
+        f"start tip      ({plan.tips[0, 0]:.6f}, {plan.tips[0, 1]:.6f}) m",
+        f"target         ({target[0]:.6f}, {target[1]:.6f}) m",
+        f"base rotation  {np.degrees(plan.delta_phi0):.6f} deg by {plan.loops} loop(s)",
+        f"joint travel   {plan.joint_travel:.6f} rad",
+        f"straight path  {plan.straight_length:.6f} m",
+        "end posture    " + ", ".join(f"{v:.6f}" for v in np.degrees(plan.end_posture)) + " deg",
+        f"tip error      {plan.error:.3e} m",
+        f"figure         {figure_path}",
+    ]
+    if args.animate:
+        lines.append(f"animation      {animate_reach(robot, plan, out / 'reach.gif')}")
+    np.savez(
+        out / "reach.npz",
+        postures_rad=plan.postures,
+        tips_m=plan.tips,
+        phase=plan.phase,
+        joint_waypoints_rad=plan.joint_waypoints,
+        target_m=plan.target,
+    )
+    print("\n".join(lines))
+    return 0
+
+
+def add_reach_command(subparsers) -> None:
+    """Register ``spacearm reach ROBOT.yaml --from PHI0,PHI1,..,PHIn --to X,Y``."""
+    parser = subparsers.add_parser(
+        "reach",
+        help="plan how the tip reaches an inertial point (straight path, or base reorientation first)",
+        description=(
+            "Plan a motion that brings the tip to an inertial target (Umetani & Yoshida 1990, sec. 3.2, "
+            "points B and C): a straight tip path when the target is in the current Straight-Path "
+            "workspace, otherwise a cyclic joint maneuver that turns the base first. Writes reach.png "
+            "(and reach.npz with the whole history) into --out. Exit 2 for a target outside the "
+            "Maximum Reachable space."
+        ),
+    )
+    parser.add_argument("robot", help="robot YAML file, e.g. configs/umetani1990.yaml")
+    parser.add_argument(
+        "--from",
+        dest="start",
+        required=True,
+        metavar="PHI0,PHI1,..",
+        help="start posture: base attitude then joint angles, in DEGREES (radians with --radians); "
+        "write --from=-10,20,30 when the first value is negative",
+    )
+    parser.add_argument(
+        "--to", dest="target", required=True, metavar="X,Y",
+        help="target in the inertial frame, m, origin at the system centroid (--to=-2,1 for a negative x)",
+    )
+    parser.add_argument("--radians", action="store_true", help="read --from in radians")
+    parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
+    parser.add_argument("--animate", action="store_true", help="also write reach.gif")
+    parser.set_defaults(func=_cmd_reach)

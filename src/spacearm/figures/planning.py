@@ -1,0 +1,230 @@
+"""Reaching point C (Umetani & Yoshida 1990, sec. 3.2, Fig. 5): base, arm and tip path.
+
+``draw_reach`` draws a :class:`~spacearm.planning.ReachPlan` in the inertial frame (left:
+the Maximum Reachable circle, the Straight-Path workspace before and after the
+reorientation, the tip path by phase, the robot at the start, after the loop and at
+the end; right: the base attitude and joint angles along the plan).
+``animate_reach`` writes the same motion as a GIF. The registered figure "reach"
+plans point C for the Table 1 robot from the Fig. 3 posture.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from . import figure
+
+DEG = np.pi / 180.0
+# Fig. 3/5 initial posture and a point C for the Table 1 robot (our choice of point: the
+# paper does not print coordinates for it).
+FIG5_START = np.array([0.0, -60.0, 120.0]) * DEG
+FIG5_POINT_C = np.array([0.0, -3.0])
+
+
+def robot_outline(robot, phi) -> tuple[np.ndarray, np.ndarray]:
+    """Base centroid and the chain [joint 1, ..., joint n, tip] in the inertial frame, m.
+
+    Args:
+        phi: ``(n+1,)`` posture, rad.
+
+    Returns:
+        ``(2,)`` base centroid and ``(n+1, 2)`` joints then tip.
+    """
+    from ..kinematics import centroid_positions
+
+    phi = np.asarray(phi, float)
+    theta = np.cumsum(phi)
+    base = np.asarray(centroid_positions(robot, phi))[0]
+    spans = np.r_[float(robot.base_attach), np.asarray(robot.link_length)]
+    steps = spans[:, None] * np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+    return base, base + np.cumsum(steps, axis=0)
+
+
+def _base_box(robot, base, phi0):
+    """Corners of a square base drawn about its centroid, side 2 b0 (at least 0.6 m)."""
+    half = max(float(robot.base_attach), 0.3)
+    corners = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1], [1, 1]]) * half
+    c, s = np.cos(phi0), np.sin(phi0)
+    return base + corners @ np.array([[c, s], [-s, c]])
+
+
+def _draw_robot(ax, robot, phi, color, label, alpha=1.0):
+    base, chain = robot_outline(robot, phi)
+    box = _base_box(robot, base, phi[0])
+    ax.fill(box[:, 0], box[:, 1], color=color, alpha=0.12 * alpha)
+    ax.plot(box[:, 0], box[:, 1], color=color, lw=1.0, alpha=alpha)
+    points = np.vstack([base, chain])
+    ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, alpha=alpha, label=label)
+
+
+def _atomic_save(fig, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
+    os.close(handle)
+    try:
+        fig.savefig(temporary, dpi=130)
+        os.replace(temporary, path)
+    finally:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+    return path
+
+
+def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -> Path:
+    """Draw a reach plan (PNG, written atomically).
+
+    Args:
+        robot: the design.
+        phi_start: ``(n+1,)`` start posture, rad.
+        plan: a :class:`~spacearm.planning.ReachPlan` from ``plan_reach(robot, phi_start, ...)``.
+        path: output PNG.
+        n_directions: directions of the Straight-Path workspace boundaries drawn.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..planning import PHASE_LOOP, PHASE_REPOSITION, PHASE_STRAIGHT, reachable_bounds
+    from ..workspace import straight_path_workspace
+
+    phi_start = np.asarray(phi_start, float)
+    inner, outer = reachable_bounds(robot)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13.0, 6.2), gridspec_kw={"width_ratios": [1.15, 1.0]})
+
+    circle = np.linspace(0.0, 2.0 * np.pi, 361)
+    ring = np.stack([np.cos(circle), np.sin(circle)], axis=-1)
+    ax.plot(outer * ring[:, 0], outer * ring[:, 1], "k--", lw=1.0, label=f"Maximum Reachable (r = {outer:.3g} m)")
+    if inner > 0:
+        ax.plot(inner * ring[:, 0], inner * ring[:, 1], "k--", lw=1.0)
+
+    boundary = np.asarray(straight_path_workspace(robot, phi_start, n_directions=n_directions))
+    closed = np.vstack([boundary, boundary[:1]])
+    ax.fill(closed[:, 0], closed[:, 1], color="0.6", alpha=0.18)
+    ax.plot(closed[:, 0], closed[:, 1], color="0.45", lw=1.0, label="Straight-Path workspace at the start")
+    loop_rows = np.flatnonzero(plan.phase == PHASE_LOOP)
+    phi_after = plan.postures[loop_rows[-1]] if loop_rows.size else None
+    if phi_after is not None:
+        after = np.asarray(straight_path_workspace(robot, phi_after, n_directions=n_directions))
+        after = np.vstack([after, after[:1]])
+        ax.fill(after[:, 0], after[:, 1], color="tab:blue", alpha=0.08)
+        ax.plot(after[:, 0], after[:, 1], color="tab:blue", lw=1.0, ls=":", label="Straight-Path workspace after the loop")
+
+    styles = {
+        PHASE_REPOSITION: ("tab:purple", "tip: joint repositioning"),
+        PHASE_LOOP: ("tab:orange", f"tip: reorientation loop ({plan.loops}x)"),
+        PHASE_STRAIGHT: ("tab:green", "tip: straight path"),
+    }
+    for phase, (color, label) in styles.items():
+        rows = np.flatnonzero(plan.phase == phase)
+        if rows.size > 1:
+            ax.plot(plan.tips[rows, 0], plan.tips[rows, 1], color=color, lw=1.2, label=label)
+
+    _draw_robot(ax, robot, phi_start, "0.3", "robot at the start")
+    if phi_after is not None:
+        _draw_robot(ax, robot, phi_after, "tab:blue", "after the loop", alpha=0.8)
+    _draw_robot(ax, robot, plan.end_posture, "tab:green", "at the end")
+    ax.plot(*plan.target, marker="*", color="tab:red", ms=15, ls="none", label="target (point C)")
+    ax.plot(0.0, 0.0, "k+", ms=10)
+    ax.annotate("system centroid", (0.0, 0.0), xytext=(4, 4), textcoords="offset points", fontsize=8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m), inertial frame")
+    ax.set_ylabel("y (m)")
+    title = {"straight": "straight tip path", "reorient": "reorientation loop, then straight path",
+             "reposition": "joint repositioning, reorientation loop, straight path"}[plan.mode]
+    ax.set_title(
+        f"{robot.name}: {title}\nbase turned {np.degrees(plan.delta_phi0):.1f} deg, "
+        f"joint travel {plan.joint_travel:.1f} rad, tip error {plan.error:.1e} m",
+        fontsize=10,
+    )
+    ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
+    lim = outer * 1.08
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.grid(alpha=0.25)
+
+    sample = np.arange(len(plan.postures))
+    ax2.plot(sample, np.degrees(plan.postures[:, 0]), color="k", lw=1.6, label="base attitude phi0")
+    for j in range(1, plan.postures.shape[1]):
+        ax2.plot(sample, np.degrees(plan.postures[:, j]), lw=1.0, label=f"joint phi{j}")
+    for phase, (color, _) in styles.items():
+        rows = np.flatnonzero(plan.phase == phase)
+        if rows.size:
+            ax2.axvspan(rows[0], rows[-1], color=color, alpha=0.08)
+    ax2.set_xlabel("sample along the plan (loop samples, then straight-path samples)")
+    ax2.set_ylabel("angle (deg)")
+    ax2.set_title("attitude and joint history (shaded: phase)", fontsize=10)
+    ax2.legend(fontsize=8)
+    ax2.grid(alpha=0.25)
+    fig.tight_layout()
+    try:
+        return _atomic_save(fig, Path(path))
+    finally:
+        plt.close(fig)
+
+
+def animate_reach(robot, plan, path: Path, *, frames: int = 120, fps: int = 20) -> Path:
+    """The plan as a GIF (Pillow writer): the robot and the tip trace in the inertial frame."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    from ..planning import reachable_bounds
+
+    _, outer = reachable_bounds(robot)
+    rows = np.unique(np.linspace(0, len(plan.postures) - 1, frames).round().astype(int))
+    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+    circle = np.linspace(0.0, 2.0 * np.pi, 361)
+    ax.plot(outer * np.cos(circle), outer * np.sin(circle), "k--", lw=0.8)
+    ax.plot(*plan.target, marker="*", color="tab:red", ms=13, ls="none")
+    (trace,) = ax.plot([], [], color="tab:orange", lw=1.0)
+    (arm,) = ax.plot([], [], "-o", color="tab:blue", lw=2.2, ms=3)
+    (box,) = ax.plot([], [], color="tab:blue", lw=1.0)
+    ax.set_aspect("equal")
+    lim = outer * 1.08
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_xlabel("x (m), inertial frame")
+    ax.set_ylabel("y (m)")
+
+    def update(index):
+        row = rows[index]
+        base, chain = robot_outline(robot, plan.postures[row])
+        points = np.vstack([base, chain])
+        arm.set_data(points[:, 0], points[:, 1])
+        corners = _base_box(robot, base, plan.postures[row, 0])
+        box.set_data(corners[:, 0], corners[:, 1])
+        trace.set_data(plan.tips[: row + 1, 0], plan.tips[: row + 1, 1])
+        ax.set_title(f"phi0 = {np.degrees(plan.postures[row, 0]):.1f} deg", fontsize=10)
+        return arm, box, trace
+
+    animation = FuncAnimation(fig, update, frames=len(rows), blit=False)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".gif", dir=path.parent)
+    os.close(handle)
+    try:
+        animation.save(temporary, writer=PillowWriter(fps=fps))
+        os.replace(temporary, path)
+    finally:
+        plt.close(fig)
+        if os.path.exists(temporary):
+            os.remove(temporary)
+    return path
+
+
+@figure("reach")
+def reach_figure(out_dir: Path) -> list[Path]:
+    """Point C of Fig. 5 for the Table 1 robot: reorientation loop, then a straight path."""
+    from ..planning import plan_reach
+    from ..robot import umetani1990
+
+    robot = umetani1990()
+    plan = plan_reach(robot, FIG5_START, FIG5_POINT_C)
+    return [draw_reach(robot, FIG5_START, plan, Path(out_dir) / "reach.png")]

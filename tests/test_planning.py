@@ -1,0 +1,287 @@
+"""Reorientation loops and reach plans against independent references: SciPy quadrature
+of eq. (5) over the naive model of tests/reference.py, a MuJoCo zero-gravity simulation
+of a planned loop, and the reached targets themselves."""
+
+import jax
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import spacearm as sa
+from spacearm import planning
+
+from . import reference as ref
+from .conftest import random_robot
+
+DEG = np.pi / 180.0
+PHI_START = np.array([0.0, -60.0, 120.0]) * DEG  # the initial posture of Fig. 3 and Fig. 5
+
+
+def reference_loop_rotation(d, waypoints):
+    """Line integral of eq. (5) along the polygon, scipy.integrate.quad over the naive model."""
+    total = 0.0
+    for start, end in zip(waypoints[:-1], waypoints[1:]):
+        step = end - start
+        if not np.any(step):
+            continue
+
+        def integrand(t, start=start, step=step):
+            return ref.base_rate(d, np.r_[0.0, start + t * step], step)
+
+        value, _ = quad(integrand, 0.0, 1.0, epsabs=1e-15, epsrel=1e-13, limit=200)
+        total += value
+    return total
+
+
+def split_loops(details):
+    """The waypoints are the loop repeated: return the loop, checking the repetition."""
+    loop = details.loop
+    k = loop.shape[0] - 1
+    assert details.waypoints.shape[0] == details.loops * k + 1
+    for i in range(details.loops):
+        np.testing.assert_array_equal(details.waypoints[i * k : (i + 1) * k + 1], loop)
+    return loop
+
+
+@pytest.fixture(scope="module")
+def loop30():
+    robot = sa.umetani1990()
+    return robot, planning.plan_reorientation_details(robot, PHI_START, 30.0 * DEG)
+
+
+def test_loop_turns_the_base_by_the_request_independently_integrated(loop30):
+    robot, details = loop30
+    waypoints = details.waypoints
+    q0 = PHI_START[1:]
+    # closed, starting and ending exactly at the start joints
+    np.testing.assert_array_equal(waypoints[0], q0)
+    np.testing.assert_array_equal(waypoints[-1], q0)
+    loop = split_loops(details)
+    per_loop = reference_loop_rotation(ref.design(robot), loop)
+    assert abs(details.loops * per_loop - 30.0 * DEG) < 1e-9
+    phi_end = np.asarray(sa.integrate_joint_path(robot, PHI_START, waypoints))
+    assert abs(phi_end[0] - PHI_START[0] - 30.0 * DEG) < 1e-10
+    np.testing.assert_array_equal(phi_end[1:], q0)
+    # the public function returns the same waypoints
+    np.testing.assert_array_equal(sa.plan_reorientation(robot, PHI_START, 30.0 * DEG), waypoints)
+    # the loop stays within the excursion bound and its travel is what it says
+    assert details.excursion <= planning.LoopSettings().max_excursion
+    assert np.max(np.abs(waypoints - q0)) == pytest.approx(details.excursion, abs=1e-12)
+    travel = np.sum(np.linalg.norm(np.diff(waypoints, axis=0), axis=-1))
+    assert travel == pytest.approx(details.travel, rel=1e-12)
+
+
+def test_small_loop_rotation_matches_the_curl_times_the_area():
+    """Stokes: a small loop turns the base by Omega_12 times the enclosed signed area."""
+    robot = sa.umetani1990()
+    q0 = PHI_START[1:]
+    omega = np.asarray(planning.rotation_curl(robot, q0))
+    np.testing.assert_allclose(omega, -omega.T, atol=0)
+    radius = 1e-4
+    t = np.linspace(0.0, 2.0 * np.pi, 401)
+    circle = q0 + radius * np.stack([1.0 - np.cos(t), -np.sin(t)], axis=-1)  # counter-clockwise
+    circle[-1] = q0
+    rotation = reference_loop_rotation(ref.design(robot), circle)
+    area = np.pi * radius**2 * (401 - 1) / (2 * np.pi) * np.sin(2 * np.pi / 400)  # polygon area
+    assert rotation == pytest.approx(omega[0, 1] * area, rel=1e-3)
+
+
+def test_large_rotations_repeat_a_loop_and_stay_exact():
+    robot = sa.umetani1990()
+    d = ref.design(robot)
+    for degrees in (90.0, -180.0):
+        details = planning.plan_reorientation_details(robot, PHI_START, degrees * DEG)
+        assert details.loops > 1  # one loop within 1.5 rad of the start cannot turn the base this far
+        loop = split_loops(details)
+        assert abs(details.loops * reference_loop_rotation(d, loop) - degrees * DEG) < 1e-8
+        phi_end = np.asarray(sa.integrate_joint_path(robot, PHI_START, details.waypoints))
+        assert abs(phi_end[0] - degrees * DEG) < 1e-6
+        assert details.excursion <= planning.LoopSettings().max_excursion
+
+
+def test_joint_limits_are_respected_and_the_cache_is_reused():
+    lower = np.array([-80.0, 100.0]) * DEG
+    upper = np.array([-20.0, 135.0]) * DEG
+    robot = sa.umetani1990().replace(joint_lower=lower, joint_upper=upper)
+    size_before = planning._optimize_loops._cache_size()
+    details = planning.plan_reorientation_details(robot, PHI_START, -20.0 * DEG)
+    assert np.all(details.waypoints >= lower) and np.all(details.waypoints <= upper)
+    assert abs(details.loops * reference_loop_rotation(ref.design(robot), split_loops(details)) + 20.0 * DEG) < 1e-9
+    # new limits, start and angle are new values of the same shapes: no new compilation
+    planning.plan_reorientation_details(robot, PHI_START + np.array([0.0, 0.1, -0.1]), -12.0 * DEG)
+    assert planning._optimize_loops._cache_size() <= size_before + 1
+
+
+def test_redundant_arm():
+    robot = random_robot(np.random.default_rng(7), 3)
+    phi = np.array([0.3, 0.4, -0.9, 1.1])
+    details = planning.plan_reorientation_details(robot, phi, 15.0 * DEG)
+    loop = split_loops(details)
+    assert abs(details.loops * reference_loop_rotation(ref.design(robot), loop) - 15.0 * DEG) < 1e-9
+
+
+def test_reorientation_errors():
+    robot = sa.umetani1990()
+    with pytest.raises(sa.ConfigError, match="phi_start"):
+        planning.plan_reorientation(robot, [0.0, 1.0], 0.1)
+    limited = robot.replace(joint_lower=np.array([-1.0, -1.0]), joint_upper=np.array([1.0, 1.0]))
+    with pytest.raises(sa.ConfigError, match="outside its limits"):
+        planning.plan_reorientation(limited, PHI_START, 0.1)
+    with pytest.raises(sa.ConfigError, match="delta_phi0"):
+        planning.plan_reorientation(robot, PHI_START, float("nan"))
+    tight = planning.LoopSettings(loop_counts=(1,), max_excursion=0.05, steps=20)
+    with pytest.raises(sa.ConfigError, match="no loop turns the base"):
+        planning.plan_reorientation(robot, PHI_START, 90.0 * DEG, settings=tight)
+    still = planning.plan_reorientation(robot, PHI_START, 0.0)
+    np.testing.assert_array_equal(still, [PHI_START[1:], PHI_START[1:]])
+
+
+# MuJoCo -----------------------------------------------------------------------------------
+
+
+def mujoco_model(robot):
+    """A planar free-floating arm in MuJoCo: the base on slide x, slide y and a hinge about z
+    through its centroid, arm hinges about z, zero gravity, no contacts."""
+    d = ref.design(robot)
+    bodies, close = "", ""
+    offset = d["b0"]
+    for i, (a, b) in enumerate(zip(d["a"], d["b"])):
+        m, inertia = d["m"][i + 1], d["inertia"][i + 1]
+        bodies += (
+            f'<body name="link{i + 1}" pos="{offset!r} 0 0">'
+            f'<joint name="q{i + 1}" type="hinge" axis="0 0 1"/>'
+            f'<inertial pos="{a!r} 0 0" mass="{m!r}" diaginertia="{inertia!r} {inertia!r} {inertia!r}"/>'
+        )
+        close += "</body>"
+        offset = a + b
+    bodies += f'<site name="tip" pos="{offset!r} 0 0"/>'
+    m0, i0 = d["m"][0], d["inertia"][0]
+    return f"""
+<mujoco>
+  <option gravity="0 0 0" timestep="2e-4" integrator="RK4"><flag contact="disable"/></option>
+  <worldbody>
+    <body name="base">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="y" type="slide" axis="0 1 0"/>
+      <joint name="phi0" type="hinge" axis="0 0 1"/>
+      <inertial pos="0 0 0" mass="{m0!r}" diaginertia="{i0!r} {i0!r} {i0!r}"/>
+      {bodies}{close}
+    </body>
+  </worldbody>
+</mujoco>"""
+
+
+def simulate_joint_polygon(robot, phi_start, waypoints, segment_time=0.05):
+    """Drive only the arm joints along the polygon (computed torque from MuJoCo's own mass
+    matrix and bias forces, with PD correction); the base floats. Returns final qpos."""
+    mujoco = pytest.importorskip("mujoco")
+    model = mujoco.MjModel.from_xml_string(mujoco_model(robot))
+    data = mujoco.MjData(model)
+    n = robot.n_links
+    base_centroid = np.asarray(sa.centroid_positions(robot, phi_start))[0]
+    data.qpos[:] = np.r_[base_centroid, phi_start]
+    data.qvel[:] = 0.0
+    steps = int(round(segment_time / model.opt.timestep))
+    full = np.zeros((model.nv, model.nv))
+    kp, kd = 1.0e6, 2.0e3
+    dt = model.opt.timestep
+
+    def reference(t, delta):
+        # s(t) = 10 t^3 - 15 t^4 + 6 t^5: rest to rest along the straight segment
+        s = t**3 * (10 - 15 * t + 6 * t * t)
+        ds = 30 * t * t * (1 - t) ** 2 / segment_time
+        dds = 60 * t * (1 - 3 * t + 2 * t * t) / segment_time**2
+        return s * delta, ds * delta, dds * delta
+
+    for start, end in zip(waypoints[:-1], waypoints[1:]):
+        delta = end - start
+        for k in range(steps):
+            position, velocity, _ = reference(k * dt / segment_time, delta)
+            _, _, accel_mid = reference((k + 0.5) * dt / segment_time, delta)  # held over the step
+            mujoco.mj_forward(model, data)
+            mujoco.mj_fullM(model, data, full)
+            bias = data.qfrc_bias.copy()
+            q, dq = data.qpos[3:], data.qvel[3:]
+            accel = accel_mid + kp * (start + position - q) + kd * (velocity - dq)
+            base_accel = np.linalg.solve(full[:3, :3], -full[:3, 3:] @ accel - bias[:3])
+            data.qfrc_applied[:] = 0.0
+            data.qfrc_applied[3:] = full[3:, :3] @ base_accel + full[3:, 3:] @ accel + bias[3:]
+            mujoco.mj_step(model, data)
+    mujoco.mj_forward(model, data)
+    return data.qpos.copy(), data.site_xpos[0][:2].copy(), n
+
+
+def test_mujoco_simulation_of_a_planned_loop_agrees():
+    robot = sa.umetani1990()
+    details = planning.plan_reorientation_details(robot, PHI_START, 8.0 * DEG)
+    assert details.loops == 1
+    qpos, tip, _ = simulate_joint_polygon(robot, PHI_START, details.waypoints)
+    np.testing.assert_allclose(qpos[3:], PHI_START[1:], atol=1e-6)  # the joints came back
+    assert abs(qpos[2] - (PHI_START[0] + 8.0 * DEG)) < 1e-6  # and the base turned by 8 deg
+    end = np.r_[PHI_START[0] + 8.0 * DEG, PHI_START[1:]]
+    np.testing.assert_allclose(tip, np.asarray(sa.tip_position(robot, end)), atol=1e-6)
+
+
+# Reach plans -----------------------------------------------------------------------------
+
+
+def test_point_b_is_reached_by_a_straight_path():
+    robot = sa.umetani1990()
+    target = np.array([2.0, 1.0])
+    plan = sa.plan_reach(robot, PHI_START, target)
+    assert plan.mode == "straight" and plan.loops == 0
+    assert plan.error < 1e-6
+    assert np.linalg.norm(plan.tips[-1] - target) < 1e-6
+    np.testing.assert_allclose(plan.tips[0], np.asarray(sa.tip_position(robot, PHI_START)), atol=1e-12)
+    # every tip of the history lies on the straight line from the start to the target
+    start = plan.tips[0]
+    direction = (target - start) / np.linalg.norm(target - start)
+    offsets = plan.tips - start
+    assert np.max(np.abs(offsets[:, 0] * direction[1] - offsets[:, 1] * direction[0])) < 1e-8
+
+
+def test_point_c_needs_a_reorientation_loop_then_a_straight_path():
+    robot = sa.umetani1990()
+    target = np.array([0.0, -3.0])
+    # point C: the straight path towards it from the start stops at a singularity first
+    start_tip = np.asarray(sa.tip_position(robot, PHI_START))
+    offset = target - start_tip
+    direct = sa.straight_tip_path(robot, PHI_START, offset, max_length=float(np.linalg.norm(offset)))
+    assert int(direct.reason) != 1
+    plan = sa.plan_reach(robot, PHI_START, target)
+    assert plan.mode == "reorient" and plan.loops >= 1
+    assert plan.error < 1e-6
+    assert np.linalg.norm(plan.tips[-1] - target) < 1e-6
+    # the loop part turns the base by the planned angle (independent quadrature), joints back
+    k = np.flatnonzero(plan.phase == planning.PHASE_LOOP)[-1]
+    np.testing.assert_allclose(plan.postures[k, 1:], PHI_START[1:], atol=1e-12)
+    rotation = reference_loop_rotation(ref.design(robot), plan.joint_waypoints)
+    assert abs(rotation - plan.delta_phi0) < 1e-9
+    assert abs(plan.postures[k, 0] - PHI_START[0] - plan.delta_phi0) < 1e-9
+    # zero angular momentum along the whole history (finite differences of the samples)
+    np.testing.assert_allclose(plan.end_tip, np.asarray(sa.tip_position(robot, plan.end_posture)), atol=1e-12)
+
+
+def test_target_outside_the_maximum_reachable_space_is_refused():
+    robot = sa.umetani1990()
+    radius = float(np.sum(np.abs(np.asarray(sa.tip_coefficients(robot)))))
+    with pytest.raises(sa.ConfigError, match="Maximum Reachable"):
+        sa.plan_reach(robot, PHI_START, [0.0, radius * 1.01])
+    with pytest.raises(sa.ConfigError, match="target"):
+        sa.plan_reach(robot, PHI_START, [1.0, np.inf])
+
+
+def test_reach_command_line(tmp_path):
+    from spacearm.cli import main
+
+    robot_file = tmp_path / "robot.yaml"
+    import yaml
+
+    from spacearm.robot import robot_to_mapping
+
+    robot_file.write_text(yaml.safe_dump(robot_to_mapping(sa.umetani1990())))
+    out = tmp_path / "reach"
+    assert main(["reach", str(robot_file), "--from", "0,-60,120", "--to", "2,1", "--out", str(out)]) == 0
+    assert (out / "reach.png").stat().st_size > 0
+    assert main(["reach", str(robot_file), "--from", "0,-60,120", "--to", "9,0", "--out", str(out)]) == 2
+    assert main(["reach", str(robot_file), "--from", "0,-60", "--to", "2,1", "--out", str(out)]) == 2
