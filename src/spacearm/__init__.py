@@ -51,6 +51,8 @@ _LAZY = {
     "dynamic_singularities": "workspace",
     "maximum_reachable_radii": "workspace",
     "workspace_relations": "workspace",
+    "plan_reorientation": "planning",
+    "plan_reach": "planning",
 }
 
 

@@ -20,6 +20,8 @@ EXIT_INVALID = 2
 _EXTERNAL_COMMANDS: list[tuple[str, str]] = [
     ("sweep", "add_sweep_command"),
     ("sweep", "add_figures_command"),
+    ("planning", "add_reach_command"),
+    ("design", "add_optimize_command"),
 ]
 
 
