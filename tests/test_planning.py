@@ -78,11 +78,11 @@ def test_small_loop_rotation_matches_the_curl_times_the_area():
     omega = np.asarray(planning.rotation_curl(robot, q0))
     np.testing.assert_allclose(omega, -omega.T, atol=0)
     radius = 1e-4
-    t = np.linspace(0.0, 2.0 * np.pi, 401)
+    t = np.linspace(0.0, 2.0 * np.pi, 61)
     circle = q0 + radius * np.stack([1.0 - np.cos(t), -np.sin(t)], axis=-1)  # counter-clockwise
     circle[-1] = q0
     rotation = reference_loop_rotation(ref.design(robot), circle)
-    area = np.pi * radius**2 * (401 - 1) / (2 * np.pi) * np.sin(2 * np.pi / 400)  # polygon area
+    area = 0.5 * 60 * radius**2 * np.sin(2 * np.pi / 60)  # area of the inscribed 60-gon
     assert rotation == pytest.approx(omega[0, 1] * area, rel=1e-3)
 
 
@@ -129,9 +129,9 @@ def test_reorientation_errors():
         planning.plan_reorientation(limited, PHI_START, 0.1)
     with pytest.raises(sa.ConfigError, match="delta_phi0"):
         planning.plan_reorientation(robot, PHI_START, float("nan"))
-    tight = planning.LoopSettings(loop_counts=(1,), max_excursion=0.05, steps=20)
+    boxed = robot.replace(joint_lower=PHI_START[1:] - 0.01, joint_upper=PHI_START[1:] + 0.01)
     with pytest.raises(sa.ConfigError, match="no loop turns the base"):
-        planning.plan_reorientation(robot, PHI_START, 90.0 * DEG, settings=tight)
+        planning.plan_reorientation(boxed, PHI_START, 90.0 * DEG)
     still = planning.plan_reorientation(robot, PHI_START, 0.0)
     np.testing.assert_array_equal(still, [PHI_START[1:], PHI_START[1:]])
 
@@ -262,6 +262,20 @@ def test_point_c_needs_a_reorientation_loop_then_a_straight_path():
     np.testing.assert_allclose(plan.end_tip, np.asarray(sa.tip_position(robot, plan.end_posture)), atol=1e-12)
 
 
+def test_repositioning_mode_reaches_the_target():
+    """Forced third strategy: a straight joint move to the target's radius, then a loop."""
+    robot = sa.umetani1990()
+    target = np.array([0.0, -3.0])
+    plan = sa.plan_reach(robot, PHI_START, target, modes=("reposition",))
+    assert plan.mode == "reposition"
+    assert plan.error < 1e-6
+    assert np.any(plan.phase == planning.PHASE_REPOSITION) and np.any(plan.phase == planning.PHASE_LOOP)
+    # the base attitude at the end is what the independent quadrature of the whole joint path gives
+    rotation = reference_loop_rotation(ref.design(robot), plan.joint_waypoints)
+    assert abs(plan.end_posture[0] - PHI_START[0] - rotation) < 1e-9
+    np.testing.assert_allclose(plan.end_tip, target, atol=1e-6)
+
+
 def test_target_outside_the_maximum_reachable_space_is_refused():
     robot = sa.umetani1990()
     radius = float(np.sum(np.abs(np.asarray(sa.tip_coefficients(robot)))))
@@ -269,6 +283,8 @@ def test_target_outside_the_maximum_reachable_space_is_refused():
         sa.plan_reach(robot, PHI_START, [0.0, radius * 1.01])
     with pytest.raises(sa.ConfigError, match="target"):
         sa.plan_reach(robot, PHI_START, [1.0, np.inf])
+    with pytest.raises(sa.ConfigError, match="modes"):
+        sa.plan_reach(robot, PHI_START, [1.0, 1.0], modes=("teleport",))
 
 
 def test_reach_command_line(tmp_path):

@@ -215,8 +215,8 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
     # joint limits, shrunk by `room_fraction` so the final Newton scaling has room. The box
     # contains q0 and is convex, so the loop q0 + c x(s) stays inside for every scale c
     # up to largest_scale(x).
-    room_up = settings.room_fraction * jnp.minimum(settings.max_excursion, upper - settings.limit_margin - q0)
-    room_down = settings.room_fraction * jnp.minimum(settings.max_excursion, q0 - (lower + settings.limit_margin))
+    room_up = settings.room_fraction * jnp.clip(upper - settings.limit_margin - q0, 0.0, settings.max_excursion)
+    room_down = settings.room_fraction * jnp.clip(q0 - (lower + settings.limit_margin), 0.0, settings.max_excursion)
 
     def largest_scale(offsets):
         ratio_up = jnp.where(offsets > 0, room_up / jnp.where(offsets > 0, offsets, 1.0), jnp.inf)
@@ -377,7 +377,11 @@ def plan_reorientation_details(
     loops = int(result["loops"][best])
     waypoints = np.concatenate([loop[:1]] + [loop[1:]] * loops, axis=0)
     waypoints[-1] = q0
-    rotation = float(integrate_joint_path(robot, jnp.asarray(phi), jnp.asarray(waypoints))[0] - phi[0])
+    # One pass with the integrator's full accuracy; the passes are identical and eq. (5) does
+    # not depend on phi0, so N passes turn the base N times as far (one compiled shape for
+    # every N; tests integrate the whole waypoint array independently).
+    loop_start = np.r_[0.0, q0]
+    rotation = loops * float(integrate_joint_path(robot, jnp.asarray(loop_start), jnp.asarray(loop))[0])
     if not abs(rotation - delta) <= tolerance:
         raise ConfigError(
             f"delta_phi0: the planned loop turns the base by {rotation!r} rad instead of {delta!r} rad "
@@ -519,6 +523,28 @@ def _choose_rotation(deltas: np.ndarray, slack: np.ndarray, feasible: np.ndarray
     return float(deltas[candidates[np.argmin(np.abs(deltas[candidates]))]])
 
 
+def _loop_history(robot: PlanarRobot, phi_from: np.ndarray, loop: ReorientationLoop, samples: int = 4):
+    """Postures ``(S, n+1)`` and inertial tips ``(S, 2)`` along the N passes of a loop.
+
+    One pass is integrated (a fixed shape, compiled once); pass i is the first turned by
+    i times the rotation of one pass, a rigid rotation of the whole system about the
+    centroid (phi0 shifts, the tip rotates), because eq. (5) does not depend on phi0.
+    """
+    from .motion import joint_path_history
+
+    if loop.loops == 0:
+        return np.asarray(phi_from)[None], np.asarray(tip_position(robot, jnp.asarray(phi_from)))[None]
+    postures, tips = joint_path_history(robot, jnp.asarray(phi_from), jnp.asarray(loop.loop), samples)
+    postures, tips = np.asarray(postures), np.asarray(tips)
+    per_pass = postures[-1, 0] - postures[0, 0]
+    turns = per_pass * np.arange(loop.loops)
+    all_postures = np.concatenate(
+        [postures[:1]] + [postures[1:] + np.r_[turn, np.zeros(postures.shape[1] - 1)] for turn in turns]
+    )
+    all_tips = np.concatenate([tips[:1]] + [_rotate(tips[1:], turn) for turn in turns])
+    return all_postures, all_tips
+
+
 def _reposition_joints(robot: PlanarRobot, q0: np.ndarray, radius: float) -> np.ndarray:
     """Joint angles nearest q0 (minimum-norm Newton steps) whose tip is ``radius`` from the centroid."""
 
@@ -559,6 +585,7 @@ def plan_reach(
     history_samples: int = 101,
     tolerance: float = 1e-6,
     settings: LoopSettings = LoopSettings(),
+    modes: tuple[str, ...] = (MODE_STRAIGHT, MODE_REORIENT, MODE_REPOSITION),
 ) -> ReachPlan:
     """Plan how the tip reaches an inertial target from a posture (sec. 3.2, points B and C).
 
@@ -583,6 +610,8 @@ def plan_reach(
         history_samples: samples of the straight path in the history.
         tolerance: accepted distance of the final tip from the target, m.
         settings: :class:`LoopSettings` for the reorientation loop.
+        modes: the strategies allowed, tried in the order above ("straight",
+            "reorient", "reposition"); e.g. ``("reposition",)`` forces the third.
 
     Returns:
         a :class:`ReachPlan`.
@@ -593,7 +622,6 @@ def plan_reach(
     """
     from .motion import (
         REASON_MAX_LENGTH,
-        integrate_joint_path,
         joint_path_history,
         straight_tip_path,
         straight_tip_path_history,
@@ -620,24 +648,16 @@ def plan_reach(
         offset = target - tip_from if directions is None else directions
         return straight_tip_path(robot, jnp.asarray(phi_from, dtype), jnp.asarray(offset, dtype), max_length=max_length)
 
-    def finish(mode, joint_waypoints, phi_after, delta, loops):
+    def finish(mode, joint_waypoints, joint_parts, phi_after, delta, loops):
         tip_after = np.asarray(tip_position(robot, jnp.asarray(phi_after, dtype)))
         offset = target - tip_after
         length = float(np.linalg.norm(offset))
         parts_postures, parts_tips, parts_phase = [], [], []
-        if np.any(joint_waypoints != joint_waypoints[0]):
-            postures, tips = joint_path_history(robot, jnp.asarray(phi), jnp.asarray(joint_waypoints), 4)
-            postures, tips = np.asarray(postures), np.asarray(tips)
-            if mode == MODE_REPOSITION:
-                per_segment = 4
-                phase = np.full(len(postures), PHASE_LOOP)
-                phase[: per_segment + 1] = PHASE_REPOSITION
-            else:
-                phase = np.full(len(postures), PHASE_LOOP)
+        for phase, postures, tips in joint_parts:
             parts_postures.append(postures)
             parts_tips.append(tips)
-            parts_phase.append(phase)
-        else:
+            parts_phase.append(np.full(len(postures), phase))
+        if not parts_postures:
             parts_postures.append(phi[None])
             parts_tips.append(np.asarray(tip_position(robot, jnp.asarray(phi)))[None])
             parts_phase.append(np.array([PHASE_STRAIGHT]))
@@ -676,38 +696,50 @@ def plan_reach(
             error=error,
         )
 
+    unknown = set(modes) - {MODE_STRAIGHT, MODE_REORIENT, MODE_REPOSITION}
+    if unknown or not modes:
+        raise ConfigError(f"modes: expected some of 'straight', 'reorient', 'reposition', got {modes!r}")
     still = np.stack([q0, q0])
     tip0 = np.asarray(tip_position(robot, jnp.asarray(phi)))
     distance = float(np.linalg.norm(target - tip0))
-    if distance <= 1e-12:
-        return finish(MODE_STRAIGHT, still, phi, 0.0, 0)
-    if int(straight(phi, max_length=distance).reason) == REASON_MAX_LENGTH:
-        return finish(MODE_STRAIGHT, still, phi, 0.0, 0)
+    if MODE_STRAIGHT in modes:
+        if distance <= 1e-12:
+            return finish(MODE_STRAIGHT, still, [], phi, 0.0, 0)
+        if int(straight(phi, max_length=distance).reason) == REASON_MAX_LENGTH:
+            return finish(MODE_STRAIGHT, still, [], phi, 0.0, 0)
 
     # Point C: which base rotations Delta put the target inside the Straight-Path workspace?
     deltas = _wrap(2.0 * np.pi * np.arange(rotation_grid) / rotation_grid)
     turned = _rotate(target, -deltas)  # (G, 2): the target seen from the unrotated system
     offsets = turned - tip0
     lengths = np.linalg.norm(offsets, axis=-1)
-    ends = straight(np.broadcast_to(phi, (rotation_grid, phi.size)), directions=offsets)
-    slack = np.asarray(ends.length) - lengths
-    feasible = (slack > 1e-6 * float(robot.reach)) & (np.asarray(ends.reason) != 3)
+    feasible = np.zeros(rotation_grid, bool)
+    if MODE_REORIENT in modes:
+        ends = straight(np.broadcast_to(phi, (rotation_grid, phi.size)), directions=offsets)
+        slack = np.asarray(ends.length) - lengths
+        feasible = (slack > 1e-6 * float(robot.reach)) & (np.asarray(ends.reason) != 3)
     if np.any(feasible):
         delta = _choose_rotation(deltas, slack, feasible)
         loop = plan_reorientation_details(robot, phi, delta, settings=settings)
-        phi_after = np.asarray(integrate_joint_path(robot, jnp.asarray(phi), jnp.asarray(loop.waypoints)))
-        return finish(MODE_REORIENT, loop.waypoints, phi_after, delta, loop.loops)
+        postures, tips = _loop_history(robot, phi, loop)
+        return finish(MODE_REORIENT, loop.waypoints, [(PHASE_LOOP, postures, tips)], postures[-1], delta, loop.loops)
 
     # No rotation of the current workspace covers the target's radius: move the joints.
+    if MODE_REPOSITION not in modes:
+        raise ConfigError(
+            f"target: ({target[0]:.6g}, {target[1]:.6g}) m is not reachable from this posture with the modes {modes!r}"
+        )
     q1 = _reposition_joints(robot, q0, distance_from_centroid)
     segment = np.stack([q0, q1])
-    phi_mid = np.asarray(integrate_joint_path(robot, jnp.asarray(phi), jnp.asarray(segment)))
-    tip_mid = np.asarray(tip_position(robot, jnp.asarray(phi_mid)))
+    move_postures, move_tips = (np.asarray(x) for x in joint_path_history(robot, phi, segment, 16))
+    phi_mid = move_postures[-1]
+    tip_mid = move_tips[-1]
     delta = float(_wrap(np.arctan2(target[1], target[0]) - np.arctan2(tip_mid[1], tip_mid[0])))
     loop = plan_reorientation_details(robot, phi_mid, delta, settings=settings)
+    postures, tips = _loop_history(robot, phi_mid, loop)
     waypoints = np.concatenate([segment, loop.waypoints[1:]])
-    phi_after = np.asarray(integrate_joint_path(robot, jnp.asarray(phi), jnp.asarray(waypoints)))
-    return finish(MODE_REPOSITION, waypoints, phi_after, delta, loop.loops)
+    parts = [(PHASE_REPOSITION, move_postures, move_tips), (PHASE_LOOP, postures[1:], tips[1:])]
+    return finish(MODE_REPOSITION, waypoints, parts, postures[-1], delta, loop.loops)
 
 
 # Command line --------------------------------------------------------------------------

@@ -22,7 +22,7 @@ DEG = np.pi / 180.0
 # Fig. 3/5 initial posture and a point C for the Table 1 robot (our choice of point: the
 # paper does not print coordinates for it).
 FIG5_START = np.array([0.0, -60.0, 120.0]) * DEG
-FIG5_POINT_C = np.array([0.0, -3.0])
+FIG5_POINT_C = np.array([-2.5, -3.0])
 
 
 def robot_outline(robot, phi) -> tuple[np.ndarray, np.ndarray]:
@@ -45,8 +45,8 @@ def robot_outline(robot, phi) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _base_box(robot, base, phi0):
-    """Corners of a square base drawn about its centroid, side 2 b0 (at least 0.6 m)."""
-    half = max(float(robot.base_attach), 0.3)
+    """Corners of a square base drawn about its centroid, side b0 (at least 0.6 m)."""
+    half = max(0.5 * float(robot.base_attach), 0.3)
     corners = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1], [1, 1]]) * half
     c, s = np.cos(phi0), np.sin(phi0)
     return base + corners @ np.array([[c, s], [-s, c]])
@@ -66,7 +66,7 @@ def _atomic_save(fig, path: Path) -> Path:
     handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
     os.close(handle)
     try:
-        fig.savefig(temporary, dpi=130)
+        fig.savefig(temporary, dpi=130, bbox_inches="tight")
         os.replace(temporary, path)
     finally:
         if os.path.exists(temporary):
@@ -94,7 +94,7 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
 
     phi_start = np.asarray(phi_start, float)
     inner, outer = reachable_bounds(robot)
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13.0, 6.2), gridspec_kw={"width_ratios": [1.15, 1.0]})
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13.0, 7.4), gridspec_kw={"width_ratios": [1.15, 1.0]})
 
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     ring = np.stack([np.cos(circle), np.sin(circle)], axis=-1)
@@ -141,7 +141,7 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
         f"joint travel {plan.joint_travel:.1f} rad, tip error {plan.error:.1e} m",
         fontsize=10,
     )
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3, fontsize=7.5, frameon=False)
     lim = outer * 1.08
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
