@@ -51,12 +51,10 @@ __all__ = [
 # Sweep file schema -----------------------------------------------------------------
 
 _TOP_KEYS = {
-    "name", "description", "robot", "axes", "combine", "metrics", "grid", "output",
-    "chunk_size", "report", "figures",
+    "name", "description", "robot", "axes", "combine", "metrics", "output", "chunk_size", "report",
 }
 _AXIS_KEYS = {"field", "values", "range", "relative", "unit"}
 _RANGE_KEYS = {"start", "stop", "num", "step"}
-_GRID_KEYS = {"phi1", "phi2"}
 
 _LINK_FIELD = re.compile(r"^links\[(\d+|\*)\]\.(mass|inertia|a|b|length)$")
 _SIMPLE_FIELDS = {
@@ -103,7 +101,6 @@ class SweepSpec:
     axes: tuple[Axis, ...]
     combine: str
     metrics: tuple[MetricSpec, ...]
-    grid: dict
     chunk_size: int
     output: str
     report: str | None
@@ -227,7 +224,7 @@ def _apply_overrides(config: dict, overrides: Sequence[str]) -> dict:
     config = copy.deepcopy(config)
     for item in overrides:
         if "=" not in item:
-            raise ConfigError(f"--set {item}: expected KEY=VALUE, e.g. --set grid.phi1=128")
+            raise ConfigError(f"--set {item}: expected KEY=VALUE, e.g. --set chunk_size=64")
         key, raw = item.split("=", 1)
         try:
             value = yaml.safe_load(raw)
@@ -315,13 +312,6 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         raise ConfigError(f"{where}: combine: zip needs axes of equal length ({sizes})")
 
     metrics = _metric_specs(f"{where}: metrics", config.get("metrics"))
-    grid = config.get("grid", {}) or {}
-    if not isinstance(grid, Mapping):
-        raise ConfigError(f"{where}: grid: must be a mapping, e.g. {{phi1: 256, phi2: 128}}")
-    _unknown(f"{where}: grid: ", grid, _GRID_KEYS)
-    for key, value in grid.items():
-        if not isinstance(value, int) or isinstance(value, bool) or value < 8:
-            raise ConfigError(f"{where}: grid.{key}: must be an integer >= 8, got {value!r}")
     chunk_size = config.get("chunk_size", 256)
     if not isinstance(chunk_size, int) or isinstance(chunk_size, bool) or chunk_size < 1:
         raise ConfigError(f"{where}: chunk_size: must be a positive integer, got {chunk_size!r}")
@@ -342,14 +332,13 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         "axes": {a.name: {"field": a.field, "relative": a.relative, "values": a.values.tolist()} for a in axes},
         "combine": combine,
         "metrics": [{"name": m.name, **m.options} for m in metrics],
-        "grid": dict(grid),
         "chunk_size": chunk_size,
         "output": output,
         "report": report,
     }
     spec = SweepSpec(
         name=name, config=resolved, robot=robot, axes=tuple(axes), combine=combine, metrics=metrics,
-        grid=dict(grid), chunk_size=chunk_size, output=output, report=report, source=where,
+        chunk_size=chunk_size, output=output, report=report, source=where,
     )
     build_designs(spec)  # validates every sweep point before anything is written
     return spec
@@ -454,9 +443,9 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot, dict[str, np.ndarray]]:
 
 @dataclasses.dataclass(frozen=True)
 class Metric:
-    """A per-design scalar: ``fn(robot, options, grid) -> {column: value}``, traceable."""
+    """Per-design scalars: ``fn(robot, options) -> {column: value}``, traceable."""
 
-    fn: Callable[[PlanarRobot, dict, dict], dict]
+    fn: Callable[[PlanarRobot, dict], dict]
     columns: Callable[[dict], list[str]]
     check: Callable[[str, dict], None] = lambda where, options: _no_options(where, options)
     description: str = ""
@@ -467,24 +456,40 @@ def _no_options(where: str, options: dict) -> None:
         raise ConfigError(f"{where}: this metric takes no options, got {', '.join(options)}")
 
 
-def _grid_kwargs(grid: dict) -> dict:
-    return {key: value for key, value in grid.items()}
+_WBAR_OPTIONS = {
+    "measure": ("area", "joint"),
+    "elbow": ("down", "up", "both"),
+    "phi1_panels": int,
+    "phi2_panels": int,
+    "order": int,
+    "n_points_joint": int,
+}
 
 
-def _wbar(robot, options, grid):
+def _check_wbar(where: str, options: dict) -> None:
+    _unknown(f"{where}: ", options, set(_WBAR_OPTIONS))
+    for key, value in options.items():
+        rule = _WBAR_OPTIONS[key]
+        if rule is int and (not isinstance(value, int) or isinstance(value, bool) or value < 1):
+            raise ConfigError(f"{where}.{key}: must be a positive integer, got {value!r}")
+        if isinstance(rule, tuple) and value not in rule:
+            raise ConfigError(f"{where}.{key}: must be one of {', '.join(rule)}, got {value!r}")
+
+
+def _wbar(robot, options):
     from .metrics import average_manipulability
 
-    return {"wbar": average_manipulability(robot, **_grid_kwargs(grid))}
+    return {"wbar": average_manipulability(robot, **options)}
 
 
-def _areas(robot, options, grid):
+def _areas(robot, options):
     from .metrics import normalized_areas
 
     s_m, s_g = normalized_areas(robot)
     return {"S_M": s_m, "S_G": s_g}
 
 
-def _radii(robot, options, grid):
+def _radii(robot, options):
     from .kinematics import tip_coefficients
 
     K = tip_coefficients(robot)
@@ -509,7 +514,7 @@ def _check_straight(where: str, options: dict) -> None:
         raise ConfigError(f"{where}.n_directions: must be an integer >= 8, got {count!r}")
 
 
-def _straight_area(robot, options, grid):
+def _straight_area(robot, options):
     from .workspace import straight_path_workspace
 
     phi = jnp.radians(jnp.asarray(options.get("phi_start_deg", [0.0, -60.0, 120.0]), dtype=float))
@@ -520,7 +525,7 @@ def _straight_area(robot, options, grid):
 
 
 METRICS: dict[str, Metric] = {
-    "wbar": Metric(_wbar, lambda o: ["wbar"], description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
+    "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
     "S_M": Metric(_areas, lambda o: ["S_M"], description="Maximum Reachable area / (pi L^2)"),
     "S_G": Metric(_areas, lambda o: ["S_G"], description="Guaranteed Workspace area / (pi L^2) (eq. 8)"),
     "radii": Metric(_radii, lambda o: ["K0_m", "R_attitude_m", "R_max_m", "R_guaranteed_m", "L_m"],
@@ -551,7 +556,7 @@ def design_function(spec: SweepSpec) -> Callable[[PlanarRobot], dict]:
             if entry.fn in done:
                 continue
             done.add(entry.fn)
-            values.update(entry.fn(robot, metric.options, spec.grid))
+            values.update(entry.fn(robot, metric.options))
         return {column: values[column] for column in wanted}
 
     return evaluate
@@ -772,7 +777,7 @@ def add_sweep_command(subparsers) -> None:
         epilog=(
             "examples:\n"
             "  spacearm sweep sweeps/table2.yaml\n"
-            "  spacearm sweep sweeps/link-lengths.yaml --set grid.phi1=64 --out /tmp/quick\n"
+            "  spacearm sweep sweeps/masses.yaml --set chunk_size=64 --out /tmp/quick\n"
             f"design fields for axes: {FIELD_HELP}\n"
             f"metrics: {', '.join(sorted(METRICS))}"
         ),
