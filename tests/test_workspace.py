@@ -11,6 +11,9 @@ from . import reference
 from .conftest import random_robot
 
 
+GRID = dict(n_phi1=360, n_phi2=64)  # one compiled singular-set shape for every test
+
+
 def _random_postures(rng, count, n):
     return rng.uniform(-np.pi, np.pi, (count, n + 1))
 
@@ -116,7 +119,7 @@ def test_maximum_reachable_radii_under_joint_limits():
 
 def test_dynamic_singular_set_table1():
     robot = sa.umetani1990()
-    s = ws.dynamic_singularities(robot, n_phi1=360, n_phi2=128)
+    s = ws.dynamic_singularities(robot, **GRID)
     phi1, phi2 = np.asarray(s.phi1), np.asarray(s.phi2)
     found = np.isfinite(phi2)
     assert np.all(found.sum(axis=1) == 2)  # one stretched and one folded root for each phi1
@@ -136,7 +139,7 @@ def test_dynamic_singular_set_table1():
     assert np.nanmin(np.where(folded, np.nan, radius)) == pytest.approx(2.5, abs=1e-9)
     assert np.nanmax(radius) == pytest.approx(float(ws.maximum_reachable_radius(robot)), abs=1e-9)
     # The folded branch, which eq. (8) ignores, comes to 1.0 m of the centroid.
-    assert float(ws.path_independent_radius(robot, n_phi1=360, n_phi2=128)) == pytest.approx(1.0, abs=1e-9)
+    assert float(ws.path_independent_radius(robot, **GRID)) == pytest.approx(1.0, abs=1e-9)
     # Robot-frame tips are the fixed-base tips of those postures.
     np.testing.assert_allclose(
         np.linalg.norm(np.asarray(s.tip_robot)[found], axis=-1),
@@ -148,17 +151,17 @@ def test_dynamic_singular_set_table1():
 def test_singular_set_with_base_at_centroid_is_kinematic():
     # b0 = 0: det J* = (1 - I_M1/I_S) K1 K2 sin(phi2) (J_S equals J_M's first column).
     robot = random_robot(np.random.default_rng(3), 2).replace(base_attach=np.float64(0.0))
-    s = ws.dynamic_singularities(robot, n_phi1=90, n_phi2=64)
+    s = ws.dynamic_singularities(robot, **GRID)
     phi2 = np.asarray(s.phi2)[np.isfinite(np.asarray(s.phi2))]
     assert np.allclose(np.minimum(np.abs(phi2), np.pi - np.abs(phi2)), 0.0, atol=1e-12)
     K = np.asarray(sa.tip_coefficients(robot))
-    assert float(ws.path_independent_radius(robot, n_phi1=90, n_phi2=64)) == pytest.approx(abs(K[1] - K[2]), abs=1e-12)
+    assert float(ws.path_independent_radius(robot, **GRID)) == pytest.approx(abs(K[1] - K[2]), abs=1e-12)
 
 
 def test_path_independent_radius_never_exceeds_collinear_bound():
     rng = np.random.default_rng(11)
-    designs = sa.stack_robots([random_robot(rng, 2) for _ in range(12)])
-    piw = np.asarray(ws.path_independent_radius(designs, n_phi1=180, n_phi2=64))
+    designs = sa.stack_robots([random_robot(rng, 2) for _ in range(4)])
+    piw = np.asarray(ws.path_independent_radius(designs, **GRID))
     kin = np.asarray(ws.kinematic_singularity_radius(designs))
     assert np.all(piw <= kin + 1e-9)
     assert np.all(kin <= np.asarray(ws.guaranteed_radius(designs)) + 1e-12)
@@ -167,3 +170,125 @@ def test_path_independent_radius_never_exceeds_collinear_bound():
 def test_dynamic_singularities_rejects_n3():
     with pytest.raises(sa.ConfigError, match="links"):
         ws.dynamic_singularities(random_robot(np.random.default_rng(0), 3))
+
+
+# Straight-Path workspaces (on motion.straight_tip_path) ---------------------------------
+
+N_DIRECTIONS = 144
+
+
+def _starts_inside_piw(robot, count, seed=5):
+    """Fig. 3's posture first, then random postures whose tips lie inside the 1.0 m
+    singularity-free disk of Table 1."""
+    phis = ws.random_joint_postures(robot, 4000, seed)
+    radii = np.linalg.norm(np.asarray(sa.tip_position(robot, phis)), axis=-1)
+    chosen = phis[radii < 0.98][: count - 1]
+    return np.concatenate([np.radians([[0.0, -60.0, 120.0]]), chosen])
+
+
+@pytest.fixture(scope="module")
+def table1_paths():
+    robot = sa.umetani1990()
+    phis = _starts_inside_piw(robot, 8)
+    return robot, phis, ws.straight_path_ends(robot, phis, N_DIRECTIONS)
+
+
+def test_end_points_lie_on_their_lines_at_singularities(table1_paths):
+    robot, phis, ends = table1_paths
+    start = np.asarray(sa.tip_position(robot, phis))[:, None, :]
+    end = np.asarray(ends.end_tip)
+    d = np.asarray(ws.evenly_spaced_directions(N_DIRECTIONS))
+    offset = end - start
+    off_line = np.abs(offset[..., 0] * d[:, 1] - offset[..., 1] * d[:, 0])
+    # At the default step a handful of paths grazing det J* = 0 end up to ~0.5 mm off.
+    assert np.quantile(off_line, 0.99) < 1e-9 and off_line.max() < 1e-3
+    # The integrated length agrees with the geometric distance (a few paths that graze
+    # det J* = 0 are less accurate at the default step; see the convergence test).
+    length_error = np.abs(np.sum(offset * d, -1) - np.asarray(ends.length))
+    assert np.quantile(length_error, 0.99) < 1e-6 and length_error.max() < 1e-3
+    assert np.all(np.asarray(ends.reason) == 0)
+    w_end = np.asarray(sa.manipulability(robot, ends.end_posture)) / float(robot.reach) ** 2
+    assert w_end.max() < 1e-8
+    # The first direction is the inertial x axis (Fig. 3a): the tip keeps its y.
+    np.testing.assert_allclose(end[:, 0, 1], start[:, 0, 1], atol=1e-10)
+    assert np.all(end[:, 0, 0] > start[:, 0, 0])
+    np.testing.assert_allclose(np.asarray(ws.straight_path_workspace(robot, phis[0], N_DIRECTIONS)), end[0], atol=1e-12)
+
+
+def test_fig3_workspace_reaches_area3_and_guaranteed_disk_is_not_safe(table1_paths):
+    robot, phis, ends = table1_paths
+    radius = np.linalg.norm(np.asarray(ends.end_tip), axis=-1)
+    r3, r_g = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
+    assert radius[0].max() <= r3 + 1e-9 and radius[0].max() > r3 - 1e-3
+    # Paths that start inside the eq. (8) disk (rows 1..) can end inside it: at the
+    # folded-arm singularity, whose tips lie 1.0-1.54 m from the centroid.
+    inside = radius[1:] < r_g
+    assert inside.mean() > 0.05
+    folded = np.abs(np.asarray(ends.end_posture)[1:, :, 2]) > np.pi / 2
+    np.testing.assert_array_equal(inside, folded)
+    assert radius[1:][inside].min() >= 1.0 - 1e-9 and radius[1:][inside].max() <= 1.55
+
+
+def test_paths_starting_in_the_singularity_free_disk_leave_it(table1_paths):
+    robot, phis, ends = table1_paths
+    r_piw = float(ws.path_independent_radius(robot, **GRID))
+    starts = np.asarray(sa.tip_position(robot, phis))
+    end_radius = np.linalg.norm(np.asarray(ends.end_tip), axis=-1)
+    assert end_radius[1:].min() >= r_piw - 1e-9
+    clearance = np.asarray(ws.clearance_radius(starts, np.asarray(ends.end_tip)))
+    assert clearance[1:].min() >= r_piw - 1e-9
+    assert float(ws.straight_path_intersection_radius(starts[1:], np.asarray(ends.end_tip)[1:])) >= r_piw - 1e-9
+
+
+def test_boundary_converges_with_step_and_directions(table1_paths):
+    robot, phis, ends = table1_paths
+    finer = ws.straight_path_ends(robot, phis, N_DIRECTIONS, max_step=0.025, tol=1e-13)
+    change = np.linalg.norm(np.asarray(finer.end_tip) - np.asarray(ends.end_tip), axis=-1)
+    # All but a handful of the paths agree to 1e-6 m when the step halves; the
+    # outliers approach det J* = 0 almost tangentially on the folded branch (up to ~2 cm).
+    assert np.quantile(change, 0.99) < 1e-6 and np.mean(change > 1e-6) < 0.01 and change.max() < 0.05
+    # Polygon area and clearance as the directions double (subsets of the 144 evenly
+    # spaced directions are the 36- and 72-direction sets).
+    start = np.asarray(sa.tip_position(robot, phis))
+    end = np.asarray(ends.end_tip)
+
+    def area(points):
+        x, y = points[..., 0], points[..., 1]
+        return 0.5 * np.abs(np.sum(x * np.roll(y, -1, -1) - np.roll(x, -1, -1) * y, axis=-1))
+
+    areas = [area(end[:, ::step]) for step in (4, 2, 1)]
+    gaps = [np.abs(areas[1] - areas[0]).max(), np.abs(areas[2] - areas[1]).max()]
+    # First order only: the radial function jumps where neighbouring paths end on
+    # different singular branches (the slits of Fig. 3b).
+    assert gaps[1] < 0.7 * gaps[0]
+    clear = [np.asarray(ws.clearance_radius(start, end[:, ::step])) for step in (4, 2, 1)]
+    assert np.all(clear[2] <= clear[1] + 1e-12) and np.all(clear[1] <= clear[0] + 1e-12)
+
+
+def test_straight_paths_respect_joint_limits(table1_paths):
+    robot = table1_paths[0]
+    limited = robot.replace(
+        joint_lower=np.radians(np.array([-200.0, 0.0])), joint_upper=np.radians(np.array([200.0, 135.0]))
+    )
+    rng = np.random.default_rng(2)
+    phis = np.stack([np.zeros(8), rng.uniform(-np.pi, np.pi, 8), np.radians(rng.uniform(20, 120, 8))], -1)
+    ends = ws.straight_path_ends(limited, phis, N_DIRECTIONS)
+    reason = np.asarray(ends.reason)
+    assert np.any(reason == 2) and np.any(reason == 0)
+    q2 = np.asarray(ends.end_posture)[..., 2]
+    assert q2.min() >= -1e-9 and q2.max() <= np.radians(135.0) + 1e-9
+    # Every path stopped by a limit ends on one of the four limit values.
+    joints = np.asarray(ends.end_posture)[..., 1:][reason == 2]
+    gap = np.minimum(np.abs(joints - np.asarray(limited.joint_lower)), np.abs(joints - np.asarray(limited.joint_upper)))
+    assert np.all(gap.min(axis=-1) < 1e-9)
+
+
+def test_clearance_of_synthetic_star_sets():
+    d = np.asarray(ws.evenly_spaced_directions(360))
+    for center, radius in (((0.0, 0.0), 2.0), ((0.5, -0.3), 2.0), ((3.0, 0.0), 1.0)):
+        c = np.array(center)
+        ends = c + radius * d
+        expected = max(radius - np.linalg.norm(c), 0.0)
+        assert float(ws.clearance_radius(c, ends)) == pytest.approx(expected, abs=5e-4)
+        inside = np.asarray(ws.inside_straight_path_workspace(c, ends, c + np.array([[0.99 * radius, 0.0], [0.0, -1.01 * radius]])))
+        np.testing.assert_array_equal(inside, [True, False])

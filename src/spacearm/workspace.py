@@ -81,6 +81,9 @@ __all__ = [
     "straight_path_intersection_radius",
     "clearance_radius",
     "inside_straight_path_workspace",
+    "random_joint_postures",
+    "straight_path_study",
+    "summarize_straight_paths",
 ]
 
 
@@ -518,3 +521,93 @@ def inside_straight_path_workspace(start_tip: jax.Array, end_tip: jax.Array, poi
     frac = angle - jnp.floor(angle)
     radius = (1.0 - frac) * reach[k] + frac * reach[(k + 1) % n_directions]
     return jnp.linalg.norm(offset, axis=-1) <= radius
+
+
+def random_joint_postures(robot: PlanarRobot, count: int, seed: int = 0) -> np.ndarray:
+    """``(count, n+1)`` postures with phi0 = 0 and joints uniform in the joint box, rad."""
+    lower, upper = (np.asarray(x) for x in _box(robot))
+    rng = np.random.default_rng(seed)
+    joints = lower + rng.uniform(size=(count, robot.n_links)) * (upper - lower)
+    return np.concatenate([np.zeros((count, 1)), joints], axis=1)
+
+
+def straight_path_study(
+    robot: PlanarRobot,
+    n_postures: int = 1000,
+    n_directions: int = 180,
+    seed: int = 0,
+    conditioning: float = 0.01,
+    **path_options,
+) -> dict[str, float]:
+    """Areas 3 and 5 measured as the union and intersection of Straight-Path Workspaces (sec. 3.2).
+
+    One batched call integrates ``n_postures x n_directions`` straight tip paths from
+    random joint postures (phi0 = 0; a change of phi0 only turns each workspace about
+    the centroid, which :func:`clearance_radius` accounts for exactly).
+
+    Args:
+        robot: a single design.
+        conditioning: starts with w*/L^2 below this count as near-singular, reported apart.
+
+    Returns:
+        Radii in m (closed forms beside measured ones) and fractions:
+        ``union_radius`` vs ``maximum_reachable_radius``; ``intersection_radius`` (all
+        starts), ``intersection_radius_conditioned`` (w*/L^2 >= conditioning) and the
+        median clearance vs ``guaranteed_radius`` (eq. 8) and ``path_independent_radius``;
+        for starts inside the eq. (8) disk: how many, the fraction of their paths that end
+        inside it, and the smallest end radius; for n = 2 the intersection over starts
+        inside the path-independent disk (at least its radius: a straight path between two
+        points of a disk free of singular postures stays in it) and inside the eq. (8) disk.
+    """
+    phis = random_joint_postures(robot, n_postures, seed)
+    ends = straight_path_ends(robot, phis, n_directions, **path_options)
+    return summarize_straight_paths(robot, phis, ends, conditioning)
+
+
+def summarize_straight_paths(robot: PlanarRobot, phis, ends, conditioning: float = 0.01) -> dict[str, float]:
+    """The numbers of :func:`straight_path_study` from already integrated paths.
+
+    Args:
+        phis: ``(P, n+1)`` initial postures, rad.
+        ends: ``motion.StraightPath`` of batch shape ``(P, D)`` (evenly spaced directions).
+    """
+    n_postures, n_directions = np.asarray(ends.length).shape
+    starts = np.asarray(tip_position(robot, phis))
+    end_tip = np.asarray(ends.end_tip)
+    clearance = np.asarray(clearance_radius(starts, end_tip))
+    from .kinematics import manipulability
+
+    w = np.asarray(manipulability(robot, phis)) / float(robot.reach) ** 2
+    conditioned = w >= conditioning
+    r_g = float(guaranteed_radius(robot))
+    inside = np.linalg.norm(starts, axis=-1) < r_g
+    end_radius = np.linalg.norm(end_tip, axis=-1)
+    result = {
+        "n_postures": n_postures,
+        "n_directions": n_directions,
+        "maximum_reachable_radius": float(maximum_reachable_radius(robot)),
+        "union_radius": float(end_radius.max()),
+        "guaranteed_radius_eq8": r_g,
+        "kinematic_singularity_radius": float(kinematic_singularity_radius(robot)),
+        "intersection_radius": float(clearance.min()),
+        "intersection_radius_conditioned": float(clearance[conditioned].min()) if conditioned.any() else math.nan,
+        "conditioned_fraction": float(conditioned.mean()),
+        "median_clearance": float(np.median(clearance)),
+        "starts_inside_guaranteed": int(inside.sum()),
+        "paths_from_inside_ending_inside": float((end_radius[inside] < r_g).mean()) if inside.any() else math.nan,
+        "min_end_radius_from_inside": float(end_radius[inside].min()) if inside.any() else math.nan,
+        "singular_end_fraction": float((np.asarray(ends.reason) == 0).mean()),
+        "folded_end_fraction": float((np.abs(np.asarray(ends.end_posture)[..., 2]) > np.pi / 2).mean())
+        if robot.n_links == 2
+        else math.nan,
+    }
+    if robot.n_links == 2:
+        r_piw = float(path_independent_radius(robot))
+        inside_piw = np.linalg.norm(starts, axis=-1) < r_piw
+        result["path_independent_radius"] = r_piw
+        result["starts_inside_path_independent"] = int(inside_piw.sum())
+        result["intersection_radius_inside_path_independent"] = (
+            float(clearance[inside_piw].min()) if inside_piw.any() else math.nan
+        )
+        result["intersection_radius_inside_guaranteed"] = float(clearance[inside].min()) if inside.any() else math.nan
+    return result
