@@ -67,6 +67,7 @@ def _atomic_save(fig, path: Path) -> Path:
     os.close(handle)
     try:
         fig.savefig(temporary, dpi=130, bbox_inches="tight")
+        os.chmod(temporary, 0o644)
         os.replace(temporary, path)
     finally:
         if os.path.exists(temporary):
@@ -211,6 +212,7 @@ def animate_reach(robot, plan, path: Path, *, frames: int = 120, fps: int = 20) 
     os.close(handle)
     try:
         animation.save(temporary, writer=PillowWriter(fps=fps))
+        os.chmod(temporary, 0o644)
         os.replace(temporary, path)
     finally:
         plt.close(fig)
