@@ -53,6 +53,9 @@ _LAZY = {
     "workspace_relations": "workspace",
     "plan_reorientation": "planning",
     "plan_reach": "planning",
+    "load_problem": "design",
+    "pareto_search": "design",
+    "hypervolume_2d": "design",
 }
 
 
