@@ -581,7 +581,7 @@ def plan_reach(
     phi_start,
     target,
     *,
-    rotation_grid: int = 360,
+    rotation_grid: int = 180,
     history_samples: int = 101,
     tolerance: float = 1e-6,
     settings: LoopSettings = LoopSettings(),
