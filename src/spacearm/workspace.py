@@ -412,6 +412,7 @@ def _straight_path_ends(robot, phi_start, n_directions, options):
 
     phi_start = jnp.asarray(phi_start)
     directions = evenly_spaced_directions(n_directions, phi_start.dtype)
+    # One vmapped batch: measured faster than lax.map over chunks of 512-16384 paths.
     return straight_tip_path(robot, phi_start[..., None, :], directions, **dict(options))
 
 
