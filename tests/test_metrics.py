@@ -1,0 +1,209 @@
+"""w-bar (eq. 12), S_M and S_G (Table 2), manipulability maps: against closed forms,
+finite differences, brute-force quadrature and the paper's printed areas."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import spacearm as sa
+from spacearm.kinematics import manipulability
+from spacearm.metrics import (
+    average_manipulability,
+    fixed_base_average_manipulability,
+    grid_average,
+    inverse_kinematics,
+    manipulability_map,
+    normalized_areas,
+    workspace_map,
+)
+from spacearm.robot import ConfigError
+
+from .conftest import random_robot
+
+B0 = 1.4
+RATIOS = (0.0, 0.5, 1.0, 1.5, 2.0)
+PRINTED_S_M = (0.84, 1.13, 1.46, 1.83, 2.25)
+PRINTED_S_G = (0.84, 0.59, 0.39, 0.23, 0.11)
+
+
+def _with_b0(robot, ratio):
+    return robot.replace(base_attach=np.float64(B0 * ratio))
+
+
+def test_normalized_areas_match_closed_form_and_table2(table1):
+    for ratio, s_m_printed, s_g_printed in zip(RATIOS, PRINTED_S_M, PRINTED_S_G):
+        robot = _with_b0(table1, ratio)
+        s_m, s_g = normalized_areas(robot)
+        # Closed form from Table 1: w = 1200 kg, K0 = 1000 b0 / 1200, K1 = (1000*2 + 100*1) / 1200,
+        # K2 = (1100*2 + 100*1) / 1200, L = 4 m.
+        k0, k1, k2 = 1000 * B0 * ratio / 1200, 2100 / 1200, 2300 / 1200
+        assert float(s_m) == pytest.approx((k0 + k1 + k2) ** 2 / 16, rel=1e-14)
+        assert float(s_g) == pytest.approx((k0 - k1 - k2) ** 2 / 16, rel=1e-14)
+        assert round(float(s_m), 2) == s_m_printed
+        assert round(float(s_g), 2) == s_g_printed
+
+
+def _brute_force_wbar(robot, n1=720, n2=360):
+    """Midpoint rule on the elbow-down strip with w* from the public kernel (no shared code)."""
+    phi1 = -math.pi + 2 * math.pi * (np.arange(n1) + 0.5) / n1
+    phi2 = math.pi * (np.arange(n2) + 0.5) / n2
+    p1, p2 = np.meshgrid(phi1, phi2, indexing="ij")
+    phi = np.stack([np.zeros_like(p1), p1, p2], axis=-1)
+    w = np.asarray(manipulability(robot, phi)) / float(robot.reach) ** 2
+    l1, l2 = np.asarray(robot.link_length)
+    ds = l1 * l2 * np.abs(np.sin(p2))
+    return float(np.sum(w * ds) / np.sum(ds))
+
+
+def test_wbar_agrees_with_brute_force_midpoint_rule(table1):
+    for ratio in (0.0, 1.0, 2.0):
+        robot = _with_b0(table1, ratio)
+        # The midpoint rule is second order at the kinks: 720 x 360 points leave ~1e-6.
+        assert float(average_manipulability(robot)) == pytest.approx(_brute_force_wbar(robot), rel=2e-5)
+
+
+def test_wbar_reproduces_faithful_values(table1):
+    # Regression on the faithful reading (eq. 12): converged to ~1e-14 (see the convergence test).
+    expected = (0.0876862727874975, 0.0907243239426461, 0.0970120167785581, 0.1014599860992248, 0.1023088639013738)
+    batch = sa.stack_robots([_with_b0(table1, r) for r in RATIOS])
+    values = np.asarray(jax.jit(average_manipulability)(batch))
+    np.testing.assert_allclose(values, expected, rtol=1e-12)
+
+
+def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1):
+    robot = _with_b0(table1, 2.0)
+    reference = float(average_manipulability(robot, phi1_panels=16, phi2_panels=8, order=16))
+    errors = [abs(float(average_manipulability(robot, order=q)) - reference) for q in (2, 4, 6, 8)]
+    # Gauss-Legendre with splits at det J* = 0: the error falls by orders of magnitude per step.
+    assert errors[0] > 1e-6 and errors[1] < 1e-7 and errors[2] < 1e-10 and errors[3] < 1e-13
+    plain = [
+        abs(float(average_manipulability(robot, phi1_panels=p, phi2_panels=p // 2, order=8, rule="product")) - reference)
+        for p in (8, 16, 32)
+    ]
+    orders = [math.log2(plain[i] / plain[i + 1]) for i in range(2)]
+    # The plain product rule sees the kinks of |det J*|: observed order ~2 (2.1 and 2.1-2.5 here).
+    assert all(1.5 < k < 3.0 for k in orders), orders
+
+
+def test_elbow_sheets_agree_by_mirror_symmetry(table1):
+    robot = _with_b0(table1, 1.0)
+    down = float(average_manipulability(robot))
+    assert float(average_manipulability(robot, elbow="up")) == pytest.approx(down, rel=1e-12)
+    assert float(average_manipulability(robot, elbow="both")) == pytest.approx(down, rel=1e-12)
+
+
+def test_ground_robot_limit_matches_closed_form(table1):
+    # An (almost) immovable base turns J* into the fixed-base Jacobian, w = l1 l2 |sin phi2|;
+    # its area average is (l1 l2 / L^2) pi / 4 (the issue's formula, verified:
+    # int (l1 l2 sin)^2 dphi / (4 pi l1 l2 L^2) = 2 pi (pi/2) l1^2 l2^2 / (4 pi l1 l2 L^2)).
+    heavy = table1.replace(base_mass=np.float64(1e15), base_inertia=np.float64(1e17))
+    closed = float(fixed_base_average_manipulability(heavy))
+    assert closed == pytest.approx(4.0 / 16.0 * math.pi / 4.0, rel=1e-15)
+    assert float(average_manipulability(heavy)) == pytest.approx(closed, rel=1e-9)
+    joint = float(fixed_base_average_manipulability(heavy, measure="joint"))
+    assert joint == pytest.approx(4.0 / 16.0 * 2.0 / math.pi, rel=1e-15)
+    assert float(average_manipulability(heavy, measure="joint")) == pytest.approx(joint, rel=1e-9)
+
+
+def test_ground_robot_closed_form_for_unequal_links():
+    robot = random_robot(np.random.default_rng(3), 2).replace(
+        base_mass=np.float64(1e15), base_inertia=np.float64(1e17)
+    )
+    l1, l2 = np.asarray(robot.link_length)
+    expected = l1 * l2 / (l1 + l2) ** 2 * math.pi / 4
+    assert float(average_manipulability(robot)) == pytest.approx(expected, rel=1e-9)
+
+
+def test_gradient_wrt_b0_matches_finite_differences(table1):
+    def wbar(b0):
+        return average_manipulability(table1.replace(base_attach=b0))
+
+    value_and_grad = jax.jit(jax.value_and_grad(wbar))
+    f = jax.jit(wbar)
+    for b0 in (0.7, 1.4, 2.8):
+        _, grad = value_and_grad(jnp.float64(b0))
+        h = 1e-4
+        # Fourth-order central difference; the quadrature error (~1e-15) is far below h^4.
+        fd = (-f(b0 + 2 * h) + 8 * f(b0 + h) - 8 * f(b0 - h) + f(b0 - 2 * h)) / (12 * h)
+        assert float(grad) == pytest.approx(float(fd), rel=1e-7, abs=1e-11)
+    # w-bar is even in b0 (mirror symmetry), so its slope vanishes at b0 = 0.
+    assert abs(float(value_and_grad(jnp.float64(0.0))[1])) < 1e-12
+
+
+def test_gradient_wrt_every_leaf_is_finite_and_matches_fd(table1):
+    grads = jax.grad(lambda r: average_manipulability(r))(table1)
+    for leaf in jax.tree_util.tree_leaves(grads):
+        assert np.all(np.isfinite(np.asarray(leaf)))
+    h = 1e-3
+    bumped = [table1.replace(link_inertia=table1.link_inertia + np.array([s * h, 0.0])) for s in (1, -1)]
+    fd = (float(average_manipulability(bumped[0])) - float(average_manipulability(bumped[1]))) / (2 * h)
+    assert float(grads.link_inertia[0]) == pytest.approx(fd, rel=1e-6)
+
+
+def test_vmap_over_designs_equals_loop(table1):
+    rng = np.random.default_rng(0)
+    robots = [random_robot(rng, 2) for _ in range(3)]
+    batch = sa.stack_robots(robots)
+    vmapped = jax.vmap(lambda r: average_manipulability(r))(batch)
+    mapped = average_manipulability(batch, designs_per_chunk=2)
+    singles = np.array([float(average_manipulability(r)) for r in robots])
+    np.testing.assert_allclose(np.asarray(vmapped), singles, rtol=1e-13)
+    np.testing.assert_allclose(np.asarray(mapped), singles, rtol=1e-13)
+
+
+def test_random_designs_against_brute_force():
+    rng = np.random.default_rng(7)
+    for _ in range(2):
+        robot = random_robot(rng, 2)
+        assert float(average_manipulability(robot)) == pytest.approx(_brute_force_wbar(robot), rel=5e-5)
+
+
+def test_joint_measure_for_three_links_matches_dense_grid():
+    robot = random_robot(np.random.default_rng(11), 3)
+    coarse = float(average_manipulability(robot, measure="joint", n_points_joint=24))
+    fine = float(average_manipulability(robot, measure="joint", n_points_joint=48))
+    assert coarse == pytest.approx(fine, rel=1e-3)
+    # Same numbers from the unchunked public kernel.
+    axis = np.linspace(-math.pi, math.pi, 24, endpoint=False)
+    grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1)
+    phi = np.concatenate([np.zeros(grid.shape[:-1] + (1,)), grid], axis=-1)
+    direct = float(np.mean(np.asarray(manipulability(robot, phi)))) / float(robot.reach) ** 2
+    assert coarse == pytest.approx(direct, rel=1e-12)
+    assert float(grid_average(robot, 24, rows_per_chunk=5)) == pytest.approx(direct, rel=1e-12)
+
+
+def test_bad_options_raise_config_error(table1):
+    with pytest.raises(ConfigError, match="measure"):
+        average_manipulability(table1, measure="volume")
+    with pytest.raises(ConfigError, match="elbow"):
+        average_manipulability(table1, elbow="sideways")
+    with pytest.raises(ConfigError, match="phi1_panels"):
+        average_manipulability(table1, phi1_panels=3)
+    three = random_robot(np.random.default_rng(1), 3)
+    with pytest.raises(ConfigError, match="n = 3"):
+        average_manipulability(three)
+
+
+def test_manipulability_map_chunks_equal_direct(table1):
+    axes = [np.linspace(-math.pi, math.pi, 37), np.linspace(0, math.pi, 19)]
+    chunked = manipulability_map(table1, axes, rows_per_chunk=5)
+    p1, p2 = np.meshgrid(*axes, indexing="ij")
+    direct = np.asarray(manipulability(table1, np.stack([0 * p1, p1, p2], -1))) / 16.0
+    np.testing.assert_allclose(np.asarray(chunked), direct, rtol=1e-12, atol=1e-15)
+
+
+def test_workspace_map_inverse_kinematics_round_trip(table1):
+    points = np.array([[1.0, 2.0], [-3.0, 0.5], [0.2, -3.9]])
+    for elbow in ("down", "up"):
+        phi_arm, ok = inverse_kinematics(table1, points, elbow=elbow)
+        assert np.all(np.asarray(ok))
+        np.testing.assert_allclose(np.asarray(sa.robot_frame_tip_position(table1, phi_arm)), points, atol=1e-12)
+        assert np.all(np.asarray(phi_arm[:, 1]) * (1 if elbow == "down" else -1) >= 0)
+    x, y, w = workspace_map(table1, 41)
+    assert np.isnan(np.asarray(w)[0, 0])  # the corner (-L, -L) is out of reach
+    _, _, ground = workspace_map(table1, 41, ground=True)
+    # Ground robot: w/L^2 = l1 l2 |sin phi2| / L^2 is at most 1/4 (at r^2 = l1^2 + l2^2).
+    assert float(np.nanmax(np.asarray(ground))) <= 0.25 + 1e-12
