@@ -29,6 +29,7 @@ def _save(fig, path: Path) -> Path:
     handle, temporary = tempfile.mkstemp(suffix=".png", dir=path.parent)
     os.close(handle)
     fig.savefig(temporary, dpi=130, bbox_inches="tight")
+    os.chmod(temporary, 0o644)  # mkstemp creates 0600
     os.replace(temporary, path)
     return path
 
