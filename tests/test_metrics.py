@@ -75,16 +75,17 @@ def test_wbar_reproduces_faithful_values(table1):
 
 def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1):
     robot = _with_b0(table1, 2.0)
-    reference = float(average_manipulability(robot, phi1_panels=16, phi2_panels=8, order=16))
-    errors = [abs(float(average_manipulability(robot, order=q)) - reference) for q in (2, 4, 6, 8)]
-    # Gauss-Legendre with splits at det J* = 0: the error falls by orders of magnitude per step.
-    assert errors[0] > 1e-6 and errors[1] < 1e-7 and errors[2] < 1e-10 and errors[3] < 1e-13
+    reference = float(average_manipulability(robot, order=16))
+    errors = [abs(float(average_manipulability(robot, order=q)) - reference) for q in (4, 8)]
+    # Gauss-Legendre split at det J* = 0: 7e-6 (2 points), 4e-10 (4), 1e-13 (6), 1e-15 (8) in
+    # the study of the README; here the two ends of that range.
+    assert 1e-11 < errors[0] < 1e-8 and errors[1] < 1e-13, errors
     plain = [
         abs(float(average_manipulability(robot, phi1_panels=p, phi2_panels=p // 2, order=8, rule="product")) - reference)
         for p in (8, 16, 32)
     ]
     orders = [math.log2(plain[i] / plain[i + 1]) for i in range(2)]
-    # The plain product rule sees the kinks of |det J*|: observed order ~2 (2.1 and 2.1-2.5 here).
+    # The plain product rule sees the kinks of |det J*|: observed order ~2.
     assert all(1.5 < k < 3.0 for k in orders), orders
 
 
@@ -92,7 +93,6 @@ def test_elbow_sheets_agree_by_mirror_symmetry(table1):
     robot = _with_b0(table1, 1.0)
     down = float(average_manipulability(robot))
     assert float(average_manipulability(robot, elbow="up")) == pytest.approx(down, rel=1e-12)
-    assert float(average_manipulability(robot, elbow="both")) == pytest.approx(down, rel=1e-12)
 
 
 def test_ground_robot_limit_matches_closed_form(table1):
@@ -117,41 +117,32 @@ def test_ground_robot_closed_form_for_unequal_links():
     assert float(average_manipulability(robot)) == pytest.approx(expected, rel=1e-9)
 
 
-def test_gradient_wrt_b0_matches_finite_differences(table1):
-    def wbar(b0):
-        return average_manipulability(table1.replace(base_attach=b0))
-
-    value_and_grad = jax.jit(jax.value_and_grad(wbar))
-    f = jax.jit(wbar)
-    for b0 in (0.7, 1.4, 2.8):
-        _, grad = value_and_grad(jnp.float64(b0))
+def test_gradient_wrt_design_matches_finite_differences(table1):
+    grad_fn = jax.grad(average_manipulability)
+    for b0 in (1.4, 2.8):
+        robot = table1.replace(base_attach=np.float64(b0))
+        grads = grad_fn(robot)
+        for leaf in jax.tree_util.tree_leaves(grads):
+            assert np.all(np.isfinite(np.asarray(leaf)))
         h = 1e-4
-        # Fourth-order central difference; the quadrature error (~1e-15) is far below h^4.
-        fd = (-f(b0 + 2 * h) + 8 * f(b0 + h) - 8 * f(b0 - h) + f(b0 - 2 * h)) / (12 * h)
-        assert float(grad) == pytest.approx(float(fd), rel=1e-7, abs=1e-11)
+        # Fourth-order central difference in b0; the quadrature error (~1e-15) is far below h^4.
+        f = [float(average_manipulability(table1.replace(base_attach=np.float64(b0 + k * h)))) for k in (-2, -1, 1, 2)]
+        fd = (f[0] - 8 * f[1] + 8 * f[2] - f[3]) / (12 * h)
+        assert float(grads.base_attach) == pytest.approx(fd, rel=1e-7)
+        h = 1e-3
+        bumped = [robot.replace(link_inertia=robot.link_inertia + np.array([s * h, 0.0])) for s in (1, -1)]
+        fd = (float(average_manipulability(bumped[0])) - float(average_manipulability(bumped[1]))) / (2 * h)
+        assert float(grads.link_inertia[0]) == pytest.approx(fd, rel=1e-6)
     # w-bar is even in b0 (mirror symmetry), so its slope vanishes at b0 = 0.
-    assert abs(float(value_and_grad(jnp.float64(0.0))[1])) < 1e-12
-
-
-def test_gradient_wrt_every_leaf_is_finite_and_matches_fd(table1):
-    grads = jax.grad(lambda r: average_manipulability(r))(table1)
-    for leaf in jax.tree_util.tree_leaves(grads):
-        assert np.all(np.isfinite(np.asarray(leaf)))
-    h = 1e-3
-    bumped = [table1.replace(link_inertia=table1.link_inertia + np.array([s * h, 0.0])) for s in (1, -1)]
-    fd = (float(average_manipulability(bumped[0])) - float(average_manipulability(bumped[1]))) / (2 * h)
-    assert float(grads.link_inertia[0]) == pytest.approx(fd, rel=1e-6)
+    assert abs(float(grad_fn(table1.replace(base_attach=np.float64(0.0))).base_attach)) < 1e-12
 
 
 def test_vmap_over_designs_equals_loop(table1):
     rng = np.random.default_rng(0)
-    robots = [random_robot(rng, 2) for _ in range(3)]
-    batch = sa.stack_robots(robots)
-    vmapped = jax.vmap(lambda r: average_manipulability(r))(batch)
-    mapped = average_manipulability(batch, designs_per_chunk=2)
+    robots = [random_robot(rng, 2) for _ in range(2)]
+    vmapped = jax.vmap(lambda r: average_manipulability(r))(sa.stack_robots(robots))
     singles = np.array([float(average_manipulability(r)) for r in robots])
     np.testing.assert_allclose(np.asarray(vmapped), singles, rtol=1e-13)
-    np.testing.assert_allclose(np.asarray(mapped), singles, rtol=1e-13)
 
 
 def test_random_designs_against_brute_force():
@@ -164,8 +155,6 @@ def test_random_designs_against_brute_force():
 def test_joint_measure_for_three_links_matches_dense_grid():
     robot = random_robot(np.random.default_rng(11), 3)
     coarse = float(average_manipulability(robot, measure="joint", n_points_joint=24))
-    fine = float(average_manipulability(robot, measure="joint", n_points_joint=48))
-    assert coarse == pytest.approx(fine, rel=1e-3)
     # Same numbers from the unchunked public kernel.
     axis = np.linspace(-math.pi, math.pi, 24, endpoint=False)
     grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1)
@@ -188,8 +177,8 @@ def test_bad_options_raise_config_error(table1):
 
 
 def test_manipulability_map_chunks_equal_direct(table1):
-    axes = [np.linspace(-math.pi, math.pi, 37), np.linspace(0, math.pi, 19)]
-    chunked = manipulability_map(table1, axes, rows_per_chunk=5)
+    axes = [np.linspace(-math.pi, math.pi, 12), np.linspace(0, math.pi, 7)]
+    chunked = manipulability_map(table1, axes, rows_per_chunk=5)  # 12 rows: chunks of 5, 5, 2
     p1, p2 = np.meshgrid(*axes, indexing="ij")
     direct = np.asarray(manipulability(table1, np.stack([0 * p1, p1, p2], -1))) / 16.0
     np.testing.assert_allclose(np.asarray(chunked), direct, rtol=1e-12, atol=1e-15)
