@@ -36,6 +36,8 @@ from .robot import (
 # Public names from the higher layers, imported on first use (keeps `import spacearm`
 # light). Each entry: public name -> module under spacearm.
 _LAZY = {
+    "average_manipulability": "metrics",
+    "normalized_areas": "metrics",
     "integrate_joint_path": "motion",
     "joint_path_history": "motion",
     "straight_tip_path": "motion",
