@@ -89,6 +89,18 @@ def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1
     assert all(1.5 < k < 3.0 for k in orders), orders
 
 
+def test_written_out_determinant_matches_generic_kernel():
+    from spacearm.kinematics import design_coefficients, generalized_jacobian
+    from spacearm.metrics import _signed_determinant
+
+    rng = np.random.default_rng(5)
+    for robot in (sa.umetani1990(), random_robot(rng, 2)):
+        phi = rng.uniform(-4, 4, (50, 2))
+        det = _signed_determinant(design_coefficients(robot), np.cos(phi[:, 0]), np.sin(phi[:, 0]), phi[:, 1])
+        full = np.concatenate([np.zeros((50, 1)), phi], axis=1)
+        np.testing.assert_allclose(np.asarray(det), np.linalg.det(np.asarray(generalized_jacobian(robot, full))), atol=1e-13)
+
+
 def test_elbow_sheets_agree_by_mirror_symmetry(table1):
     robot = _with_b0(table1, 1.0)
     down = float(average_manipulability(robot))

@@ -248,10 +248,22 @@ def _gauss_legendre(order: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _signed_determinant(coeffs: DesignCoefficients, cos1, sin1, phi2):
-    """det J* (n = 2) at phi0 = 0, phi1 given by its cosine and sine, phi2 in rad."""
-    c2, s2 = jnp.cos(phi2), jnp.sin(phi2)
-    gx, gy = _generalized_columns(coeffs, [1.0, cos1, cos1 * c2 - sin1 * s2], [0.0, sin1, sin1 * c2 + cos1 * s2])
-    return gx[0] * gy[1] - gx[1] * gy[0]
+    """det J* (n = 2) at phi0 = 0, phi1 given by its cosine and sine, phi2 in rad.
+
+    The 2 x 2 case of eq. (6) written out (tested against the generic kernel): with
+    t_j the tip columns of eq. (2) and H_j the momentum rows of eq. (5),
+    det J* = det(t1, t2) + (H2 det(t0, t1) - H1 det(t0, t2)) / H0, where
+    det(t1, t2) = K1 K2 sin phi2, det(t0, t1) = K0 (K1 sin phi1 + K2 sin phi12) and
+    det(t0, t2) = K2 (K0 sin phi12 + K1 sin phi2). Few operations keep compilation short.
+    """
+    K, W, inertia = coeffs.tip, coeffs.inertia_coupling, coeffs.inertia
+    cos2, sin2 = jnp.cos(phi2), jnp.sin(phi2)
+    cos12, sin12 = cos1 * cos2 - sin1 * sin2, sin1 * cos2 + cos1 * sin2
+    h0 = inertia[0] + W[0, 0] + W[0, 1] * cos1 + W[0, 2] * cos12
+    h1 = inertia[1] + W[1, 1] + W[0, 1] * cos1 + W[1, 2] * cos2
+    h2 = inertia[2] + W[2, 2] + W[0, 2] * cos12 + W[1, 2] * cos2
+    coupled = h2 * K[0] * (K[1] * sin1 + K[2] * sin12) - (h1 + h2) * K[2] * (K[0] * sin12 + K[1] * sin2)
+    return K[1] * K[2] * sin2 + coupled / (h0 + h1 + h2)
 
 
 def _split_points(det_fn, left, right, newton_steps: int, bisection_steps: int = 6):
