@@ -129,12 +129,15 @@ class SearchSettings:
     chunk: int = 10
     learning_rate: float = 0.03
     final_learning_rate: float = 0.001
+    schedule: str = "geometric"
+    reset_adam: bool = True
     smoothing: float = 0.01
     augmentation: float = 0.001
     utopia_margin: float = 0.05
     initial_samples: int = 64
     warm_start: bool = True
     reaim: bool = True
+    densify: bool = True
     gradient: str = "reverse"
     seed: int = 0
 
@@ -398,8 +401,9 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
             if not isinstance(value, bool):
                 raise ConfigError(f"{source}: search.{key}: must be true or false, got {value!r}")
         elif isinstance(default, str):
-            if value not in ("forward", "reverse"):
-                raise ConfigError(f"{source}: search.{key}: must be 'forward' or 'reverse', got {value!r}")
+            allowed = {"gradient": ("forward", "reverse"), "schedule": ("geometric", "cosine")}[key]
+            if value not in allowed:
+                raise ConfigError(f"{source}: search.{key}: must be one of {', '.join(allowed)}, got {value!r}")
         elif isinstance(default, int):
             if isinstance(value, bool) or not isinstance(value, int) or value < (0 if key == "seed" else 1):
                 raise ConfigError(f"{source}: search.{key}: must be a positive integer, got {value!r}")
@@ -673,19 +677,25 @@ def _ray_weights(targets: np.ndarray, utopia: np.ndarray) -> np.ndarray:
     return weights
 
 
-def _front_rays(front_f: np.ndarray, front_x: np.ndarray, count: int, nadir, scale, utopia):
-    """Re-aim ``count`` rays at points evenly spaced by arc length along the current front.
+def _front_rays(front_f: np.ndarray, front_x: np.ndarray, count: int, nadir, scale, utopia,
+                blend: float = 0.25):
+    """Re-aim ``count`` rays at points spread along the current front.
 
-    The front (sorted by f1) is a polyline in normalized objective space; the k-th
-    target is the point at arc length k/(count-1) of its length, and the k-th run
-    restarts from the archived design nearest to it. A ray from the utopia point
-    through a front point p has weights 1/(u - p); if p is already Pareto-optimal it
-    is that ray's Chebyshev optimum, otherwise the run improves on it.
+    The front (sorted by f1) is a polyline in normalized objective space. Its points
+    are spread evenly in the measure sqrt(|df1 df2|) + blend * |df|: the first term is
+    the hypervolume-optimal density of a large point set on a 2-D front (proportional
+    to sqrt(|slope|), Auger, Bader, Brockhoff & Zitzler 2009), which puts the points
+    where the gaps lose hypervolume; the second, Euclidean arc length, keeps some rays
+    on flat stretches too. The k-th run restarts from the archived design nearest to
+    its target. A ray from the utopia point through a front point p has weights
+    1/(u - p); if p is already Pareto-optimal it is that ray's Chebyshev optimum,
+    otherwise the run improves on it.
     """
     normalized = (front_f - nadir) / scale
     if normalized.shape[0] == 1:
         return np.repeat(normalized, count, axis=0), np.repeat(front_x, count, axis=0)
-    steps = np.linalg.norm(np.diff(normalized, axis=0), axis=1)
+    delta = np.diff(normalized, axis=0)
+    steps = np.sqrt(np.abs(delta[:, 0] * delta[:, 1])) + blend * np.linalg.norm(delta, axis=1)
     arc = np.concatenate([[0.0], np.cumsum(steps)])
     wanted = np.linspace(0.0, arc[-1], count)
     targets = np.stack([np.interp(wanted, arc, normalized[:, i]) for i in range(normalized.shape[1])], axis=1)
@@ -693,6 +703,26 @@ def _front_rays(front_f: np.ndarray, front_x: np.ndarray, count: int, nadir, sca
     previous = np.clip(nearest - 1, 0, arc.size - 1)
     nearest = np.where(np.abs(arc[previous] - wanted) < np.abs(arc[nearest] - wanted), previous, nearest)
     return targets, front_x[nearest]
+
+
+def _densify(front_f: np.ndarray, front_x: np.ndarray, count: int) -> np.ndarray:
+    """``count`` designs interpolated between neighbouring front designs, ``(count, d)``.
+
+    The Pareto set of a 2-objective problem is a curve in design space; between two
+    neighbouring optimal designs its chord is second-order close to it. The gaps
+    between neighbouring front points (sorted by f1) lose the hypervolume
+    Delta f1 * Delta f2 / 2, and k evenly spaced new points cut that by (k + 1); points
+    go greedily to the gap whose loss is largest after the points it already has.
+    """
+    gap = np.abs(np.diff(front_f[:, 0])) * np.abs(np.diff(front_f[:, 1]))
+    allotted = np.zeros(gap.size, dtype=int)
+    for _ in range(count):
+        allotted[np.argmax(gap / (allotted + 1) ** 2)] += 1
+    rows = []
+    for i in np.flatnonzero(allotted):
+        t = np.arange(1, allotted[i] + 1)[:, None] / (allotted[i] + 1)
+        rows.append(front_x[i] + t * (front_x[i + 1] - front_x[i]))
+    return np.concatenate(rows)[:count]
 
 
 def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None) -> SearchResult:
@@ -710,10 +740,18 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
        the other starts at random designs.
     3. The steps run in jitted chunks of ``chunk`` steps (compiled once, same shapes
        every call). After each chunk the ideal point and scales are re-read from the
-       archive and, with ``reaim``, all runs are re-aimed at points evenly spaced by
-       arc length along the current front (:func:`_front_rays`) and restart from the
-       nearest archived design: rays then follow the front's shape, so a flat or
-       steep stretch of the front gets its share of points.
+       archive and, with ``reaim``, the rays are re-aimed at points evenly spaced by
+       arc length along the current front (:func:`_front_rays`); the first start of
+       each direction restarts from the archived design nearest its new target, the
+       other starts continue their own trajectories. Rays then follow the front's
+       shape, so a flat or a steep stretch of the front gets its share of points, and
+       the free starts keep exploring (on the 6-variable problem the w-bar anchor at
+       b0 = 0 is a stationary point of w-bar in b0: only a free start finds the
+       steep part of the front beyond it).
+    4. The first and last rays are one-hot anchors (each objective alone, the other
+       breaking ties through the augmentation term); objective scales never fall
+       below the spread of the initial samples, so a front first seen as a flat
+       stretch does not freeze the anchors.
 
     Every design the optimizer visits is archived (the objective values come with the
     gradient for free); the front is the non-dominated part of the archive.
@@ -735,7 +773,10 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
 
     progress = np.arange(settings.steps) / max(settings.steps - 1, 1)
     final = settings.final_learning_rate
-    step_sizes = final + 0.5 * (settings.learning_rate - final) * (1.0 + np.cos(np.pi * progress))
+    if settings.schedule == "cosine":
+        step_sizes = final + 0.5 * (settings.learning_rate - final) * (1.0 + np.cos(np.pi * progress))
+    else:  # geometric: travel early, precision soon after
+        step_sizes = settings.learning_rate * (final / settings.learning_rate) ** progress
     adam = optax.scale_by_adam()
     scalar = _scalarization_builder(objective, settings.smoothing, settings.augmentation)
     if settings.gradient == "forward":
@@ -756,15 +797,14 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
 
     batched_step = jax.vmap(one_step, in_axes=(0, 0, None, 0, None, None, None))
 
-    def run_chunk(z, step_sizes, weights, utopia, nadir, scale):
+    def run_chunk(z, state, step_sizes, weights, utopia, nadir, scale):
         def body(carry, step_size):
             z, state = carry
             z, state, z_seen, f_seen = batched_step(z, state, step_size, weights, utopia, nadir, scale)
             return (z, state), (z_seen, f_seen)
 
-        state = jax.vmap(adam.init)(z)
-        (z, _), (zs, fs) = jax.lax.scan(body, (z, state), step_sizes)
-        return z, zs, fs
+        (z, state), (zs, fs) = jax.lax.scan(body, (z, state), step_sizes)
+        return z, state, zs, fs
 
     evaluate_batch = problem.batch_function()
     z_samples = rng.uniform(size=(settings.initial_samples, d))
@@ -773,7 +813,8 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     # Compile both programs first, on the real shapes (timed apart from the run).
     start = time.perf_counter()
     jax.block_until_ready(evaluate_batch(jnp.asarray(lower_np + width_np * z_samples)))  # compiles (or hits the cache)
-    chunk_shapes = (jnp.asarray(z_runs), jnp.asarray(step_sizes[: settings.chunk]), jnp.ones((runs, m)),
+    chunk_shapes = (jnp.asarray(z_runs), jax.vmap(adam.init)(jnp.asarray(z_runs)),
+                    jnp.asarray(step_sizes[: settings.chunk]), jnp.ones((runs, m)),
                     jnp.ones(m), jnp.zeros(m), jnp.ones(m))
     run_chunk = jax.jit(run_chunk).lower(*chunk_shapes).compile()
     compile_seconds = time.perf_counter() - start
@@ -814,7 +855,8 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         score = np.max(weights[:, None, :] * shortfall, axis=-1) + settings.augmentation * shortfall.sum(-1)
         z_runs = np.where(first[:, None], z_samples[np.argmin(score, axis=1)], z_runs)
 
-    steps_done = 0
+    steps_done = densified = 0
+    state = None
     while steps_done < settings.steps:
         nadir, scale, utopia = normalization()
         if settings.reaim and steps_done > 0 and m == 2:
@@ -829,7 +871,9 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
                             settings.starts, axis=0)
         sizes = step_sizes[steps_done: steps_done + settings.chunk]
         sizes = np.concatenate([sizes, np.full(settings.chunk - sizes.size, final)])
-        z, zs, fs = run_chunk(jnp.asarray(z_runs), jnp.asarray(sizes), jnp.asarray(weights),
+        if state is None or settings.reset_adam:
+            state = jax.vmap(adam.init)(jnp.asarray(z_runs))
+        z, state, zs, fs = run_chunk(jnp.asarray(z_runs), state, jnp.asarray(sizes), jnp.asarray(weights),
                               jnp.asarray(utopia), jnp.asarray(nadir), jnp.asarray(scale))
         z_runs = np.array(z)
         fs = np.asarray(fs).reshape(-1, m)
@@ -841,6 +885,18 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         merged_f, merged_x = np.concatenate([front_f, fs]), np.concatenate([front_x, xs])
         keep = nondominated_mask(merged_f)
         front_f, front_x = merged_f[keep], merged_x[keep]
+        if settings.densify and two and front_f.shape[0] >= 2:
+            # Densify: value-only designs interpolated between neighbouring front designs.
+            order = np.argsort(front_f[:, 0])
+            x_new = _densify(front_f[order], front_x[order], settings.initial_samples)
+            f_new = np.asarray(evaluate_batch(jnp.asarray(x_new)))
+            designs.append(x_new)
+            values.append(f_new)
+            evaluations += x_new.shape[0]
+            densified += x_new.shape[0]
+            merged_f, merged_x = np.concatenate([front_f, f_new]), np.concatenate([front_x, x_new])
+            keep = nondominated_mask(merged_f)
+            front_f, front_x = merged_f[keep], merged_x[keep]
         checkpoints.append(dict(evaluations=evaluations, seconds=time.perf_counter() - start,
                                 hypervolume=hypervolume_2d(front_f, reference) if two else float("nan")))
     run_seconds = time.perf_counter() - start
@@ -853,8 +909,9 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         compile_seconds=compile_seconds,
         run_seconds=run_seconds,
         extra=dict(directions=settings.directions, starts=settings.starts, steps=steps_done,
-                   gradient=settings.gradient, value_evaluations=settings.initial_samples,
-                   value_and_gradient_evaluations=evaluations - settings.initial_samples),
+                   gradient=settings.gradient, value_evaluations=settings.initial_samples + densified,
+                   densify_evaluations=densified,
+                   value_and_gradient_evaluations=evaluations - settings.initial_samples - densified),
     )
 
 
