@@ -52,6 +52,8 @@ def test_fig2_loop_matches_scipy_quadrature_and_reverses(table1):
     assert abs(phi_end[0] - expected) < 1e-12
     np.testing.assert_allclose(phi_end[1:], LOOP[-1], atol=0)
     assert abs(expected) > 0.05  # a closed joint loop turns the base (Fig. 2)
+    increments = np.asarray(motion.joint_path_base_increments(table1, LOOP))
+    assert increments.shape == (4,) and abs(increments.sum() - phi_end[0]) < 1e-15
     # the same loop run backwards, from where the first one ended, undoes the rotation
     back = np.asarray(sa.integrate_joint_path(table1, phi_end, LOOP[::-1]))
     assert abs(back[0] - phi_start[0]) < 1e-13

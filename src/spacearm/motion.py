@@ -218,20 +218,34 @@ def integrate_joint_path(
     return out.reshape(batch + (robot.n_links + 1,))
 
 
+@functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
+def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
+    t, w = _composite_gauss(nodes, pieces)
+    t, w = jnp.asarray(t, waypoints.dtype), jnp.asarray(w, waypoints.dtype)
+
+    def one(robot, wp):
+        return _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
+
+    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0))(robot, waypoints)
+
+
 def joint_path_base_increments(
     robot: PlanarRobot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int = 8
 ) -> jax.Array:
-    """Base rotation over each segment of a joint polyline, ``(..., k-1)`` rad (eq. 5)."""
+    """Base rotation over each segment of a joint polyline (eq. 5).
+
+    Args:
+        joint_waypoints: ``(..., k, n)`` joint angles, rad.
+
+    Returns:
+        ``(..., k-1)`` increments of phi0, rad.
+    """
     joint_waypoints = jnp.asarray(joint_waypoints, jnp.result_type(float))
     _check_arm_axis(robot, "joint_waypoints", joint_waypoints, robot.n_links)
+    if joint_waypoints.ndim < 2 or joint_waypoints.shape[-2] < 2:
+        raise ConfigError(f"joint_waypoints: expected shape (..., k, n) with k >= 2, got {joint_waypoints.shape}")
     batch, flat_robot, batched, (wp_flat,) = _flatten_batch(robot, [(joint_waypoints, 2)])
-    t, w = _composite_gauss(nodes, pieces)
-
-    @functools.partial(jax.vmap, in_axes=(0 if batched else None, 0))
-    def one(robot, wp):
-        return _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], jnp.asarray(t), jnp.asarray(w))
-
-    out = jax.jit(one)(flat_robot, wp_flat)
+    out = _increments_flat(flat_robot, wp_flat, batched, nodes, pieces)
     return out.reshape(batch + (joint_waypoints.shape[-2] - 1,))
 
 

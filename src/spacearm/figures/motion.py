@@ -34,6 +34,7 @@ def _save(fig, path: Path) -> Path:
     os.close(handle)
     try:
         fig.savefig(temporary, dpi=130, bbox_inches="tight")
+        os.chmod(temporary, 0o644)  # mkstemp creates 0600
         os.replace(temporary, path)
     finally:
         if os.path.exists(temporary):
@@ -133,7 +134,7 @@ def fig2(out_dir: Path) -> list[Path]:
         ax_joint.annotate(str(k + 1), corner, textcoords="offset points", xytext=(6, 6), fontsize=11)
     ax_joint.set_xlabel(r"$\phi_1$ [deg]")
     ax_joint.set_ylabel(r"$\phi_2$ [deg]")
-    ax_joint.set_title("(a) cyclic operation in joint space")
+    ax_joint.set_title("(a) cyclic operation in joint space (loops drawn 3 deg apart)")
     ax_joint.set_aspect("equal")
     ax_joint.grid(alpha=0.3)
     ax_joint.legend(loc="center")
