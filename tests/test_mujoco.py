@@ -64,7 +64,6 @@ def simulate_loop(robot, waypoints, segment_time=1.0, dt=2e-3):
     """Drive the arm through the waypoints; returns (base yaw history, max |L|, final data)."""
     model = mujoco.MjModel.from_xml_string(planar_mjcf(robot))
     data = mujoco.MjData(model)
-    n = robot.n_links
     full_mass = np.zeros((model.nv, model.nv))
 
     def arm(t):
