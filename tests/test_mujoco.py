@@ -61,7 +61,8 @@ def quintic(tau):
 
 
 def simulate_loop(robot, waypoints, segment_time=1.0, dt=2e-3):
-    """Drive the arm through the waypoints; returns (base yaw history, max |L|, final data)."""
+    """Drive the arm through the waypoints; returns (final base state [x, y, yaw, vx, vy, wz],
+    largest |angular momentum| seen, MjData at the end)."""
     model = mujoco.MjModel.from_xml_string(planar_mjcf(robot))
     data = mujoco.MjData(model)
     full_mass = np.zeros((model.nv, model.nv))
