@@ -84,9 +84,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    from .config import enable_x64
+    from .config import enable_compilation_cache, enable_x64
 
     enable_x64(not args.float32)
+    enable_compilation_cache()
     try:
         return int(args.func(args) or 0)
     except ConfigError as error:

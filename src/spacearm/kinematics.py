@@ -10,7 +10,8 @@ The angular momentum about the system centroid is then
 with the design-only matrix W_kl = sum_i m_i R_ik R_il. :func:`design_coefficients`
 computes K, W and the inertias once per design; the per-posture work is n sines and
 cosines, a few products and the reverse sums that turn absolute rates into joint
-rates. Kernels are written for any leading batch shape of the posture (and of the
+rates. Public kernels are jitted at the entry point (nested calls inline), so a
+plain call from Python costs one dispatch, not one per operation. Kernels are written for any leading batch shape of the posture (and of the
 design, where it broadcasts), unrolled over the small static link count.
 
 Postures are ``phi = [phi0, phi1, ..., phin]`` (base attitude, joint angles), rad.
@@ -84,6 +85,7 @@ def _chain_offsets(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
     return rows, spans
 
 
+@jax.jit
 def design_coefficients(robot: PlanarRobot) -> DesignCoefficients:
     """K, R, W and the inertias of a design (or a batch of designs).
 
@@ -102,11 +104,13 @@ def design_coefficients(robot: PlanarRobot) -> DesignCoefficients:
     return DesignCoefficients(tip=tip, centroids=centroids, inertia_coupling=coupling, inertia=inertia)
 
 
+@jax.jit
 def tip_coefficients(robot: PlanarRobot) -> jax.Array:
     """``(..., n+1)`` K_0..K_n of eq. (1), m; for n = 2 these are the paper's K0, K1, K2."""
     return design_coefficients(robot).tip
 
 
+@jax.jit
 def centroid_coefficients(robot: PlanarRobot) -> jax.Array:
     """``(..., n+1, n+1)`` R_ik: centroid of body i = sum_k R_ik u(theta_k), m."""
     return design_coefficients(robot).centroids
@@ -199,6 +203,7 @@ def _manipulability_from_columns(gx, gy):
 # Public kernels -----------------------------------------------------------------------
 
 
+@jax.jit
 def tip_position(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """Tip position in the inertial frame, origin at the system centroid (eq. 1).
 
@@ -213,6 +218,7 @@ def tip_position(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     return _tip_from(design_coefficients(robot), c, s)
 
 
+@jax.jit
 def robot_frame_tip_position(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
     """Tip in the robot frame Sigma_R (origin at joint 1, axes along the base), m.
 
@@ -232,6 +238,7 @@ def robot_frame_tip_position(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Arra
 fixed_base_tip_position = robot_frame_tip_position
 
 
+@jax.jit
 def centroid_positions(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """``(..., n+1, 2)`` centroids r_0..r_n in the inertial frame (origin at the system centroid), m."""
     theta = jnp.cumsum(jnp.asarray(phi), axis=-1)
@@ -239,6 +246,7 @@ def centroid_positions(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     return jnp.einsum("...ik,...kd->...id", design_coefficients(robot).centroids, u)
 
 
+@jax.jit
 def base_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """J_S of eq. (2): ``(..., 2)`` tip velocity per unit base rate, m/rad."""
     c, s = _unit_vectors(phi)
@@ -246,6 +254,7 @@ def base_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     return jnp.stack(jnp.broadcast_arrays(xs[0], ys[0]), axis=-1)
 
 
+@jax.jit
 def arm_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """J_M of eq. (2): ``(..., 2, n)`` tip velocity per unit joint rate (base held), m/rad."""
     c, s = _unit_vectors(phi)
@@ -253,6 +262,7 @@ def arm_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     return _stack_matrix(xs[1:], ys[1:])
 
 
+@jax.jit
 def momentum_inertias(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, jax.Array]:
     """I_S ``(...)`` and I_M ``(..., n)`` of eq. (5), kg m^2.
 
@@ -265,6 +275,7 @@ def momentum_inertias(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, ja
     return H[0], jnp.stack(H[1:], axis=-1)
 
 
+@jax.jit
 def base_rate(robot: PlanarRobot, phi: jax.Array, joint_rates: jax.Array) -> jax.Array:
     """dphi0 = -(I_M . dphi_M) / I_S (eq. 5, zero angular momentum), rad per unit time.
 
@@ -276,6 +287,7 @@ def base_rate(robot: PlanarRobot, phi: jax.Array, joint_rates: jax.Array) -> jax
     return -jnp.sum(i_m * joint_rates, axis=-1) / i_s
 
 
+@jax.jit
 def angular_momentum(robot: PlanarRobot, phi: jax.Array, phi_rates: jax.Array) -> jax.Array:
     """``(...)`` angular momentum about the system centroid, I_S dphi0 + I_M . dphi_M (eq. 4, 5)."""
     i_s, i_m = momentum_inertias(robot, phi)
@@ -287,6 +299,7 @@ def _stack_matrix(xs, ys):
     return jnp.stack([jnp.stack(xs, axis=-1), jnp.stack(ys, axis=-1)], axis=-2)
 
 
+@jax.jit
 def generalized_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """The Generalized Jacobian J* = J_M - J_S I_M / I_S (eq. 6), inertial frame.
 
@@ -301,6 +314,7 @@ def generalized_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     return _stack_matrix(*_generalized_columns(design_coefficients(robot), c, s))
 
 
+@jax.jit
 def manipulability(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """w* = sqrt(det(J* J*^T)) (eq. 10), m^2 (not normalized; divide by L^2 for eq. 11).
 
@@ -328,6 +342,7 @@ def manipulability_from_angles(coeffs: DesignCoefficients, cos_theta, sin_theta)
     return _manipulability_from_columns(*_generalized_columns(coeffs, c, s))
 
 
+@jax.jit
 def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) -> jax.Array:
     """w* on the outer-product grid of 1-D joint-angle axes, robot frame.
 
@@ -357,6 +372,7 @@ def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) 
     return jnp.broadcast_to(w, tuple(jnp.shape(a)[0] for a in joint_axes))
 
 
+@jax.jit
 def manipulability_ellipse(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Principal axes of the manipulability ellipse {J* q : |q| <= 1} (section 4.1).
 
@@ -381,6 +397,7 @@ def manipulability_ellipse(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Arra
     return major, minor, angle
 
 
+@jax.jit
 def fixed_base_jacobian(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
     """Jacobian of the same arm on a fixed (ground) base, robot frame (Fig. 7b).
 
@@ -402,6 +419,7 @@ def fixed_base_jacobian(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
     return _stack_matrix(xs, ys)
 
 
+@jax.jit
 def fixed_base_manipulability(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
     """Yoshikawa's w = sqrt(det(J J^T)) of the ground robot, m^2 (for n = 2, l1 l2 |sin phi2|).
 

@@ -1,4 +1,4 @@
-"""Validation of YAML inputs by kind: a robot file, or a sweep file (when it names a robot)."""
+"""Validation of YAML inputs by kind: a robot file, a sweep file or a design problem."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ def read_yaml(path: str | os.PathLike) -> object:
 
 
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:
-    """Validate a robot or sweep file; return (kind, one-line summary) or raise ConfigError."""
+    """Validate a robot, sweep or design-problem file; return (kind, one-line summary) or raise ConfigError."""
     path = os.fspath(path)
     config = read_yaml(path)
     if isinstance(config, dict) and ("links" in config or "base" in config):
@@ -37,6 +37,13 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
 
         spec = load_sweep(path)
         return "sweep", spec.summary()
+    if isinstance(config, dict) and ("variables" in config or "objectives" in config):
+        from .design import load_problem  # the design module validates its own schema
+
+        problem = load_problem(path)
+        names = ", ".join(getattr(problem, "variable_names", ()) or [])
+        return "design problem", f"{config.get('name', path)}" + (f": variables {names}" if names else "")
     raise ConfigError(
-        f"{path}: neither a robot file (needs 'base' and 'links') nor a sweep file (needs 'robot' and 'axes')"
+        f"{path}: neither a robot file (needs 'base' and 'links'), a sweep file (needs 'robot' and 'axes') "
+        "nor a design problem (needs 'variables' and 'objectives')"
     )
