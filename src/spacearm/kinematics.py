@@ -48,6 +48,7 @@ __all__ = [
     "fixed_base_manipulability",
     "fixed_base_tip_position",
     "manipulability_on_grid",
+    "grid_angle_tables",
     "robot_frame_tip_position",
 ]
 
@@ -342,16 +343,16 @@ def manipulability_from_angles(coeffs: DesignCoefficients, cos_theta, sin_theta)
     return _manipulability_from_columns(*_generalized_columns(coeffs, c, s))
 
 
-@jax.jit
-def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) -> jax.Array:
-    """w* on the outer-product grid of 1-D joint-angle axes, robot frame.
+def grid_angle_tables(joint_axes: Sequence[jax.Array]) -> tuple[list, list]:
+    """cos and sin of the absolute link angles on the outer-product grid of joint axes.
 
     Args:
-        joint_axes: n arrays of joint angles phi_1..phi_n, rad, of sizes (A_1, ..., A_n).
+        joint_axes: n 1-D arrays of joint angles phi_1..phi_n, rad.
 
     Returns:
-        ``(A_1, ..., A_n)`` w*, m^2. The absolute link angles come from the 1-D sine
-        and cosine tables by angle addition: cos(a+b) = cos a cos b - sin a sin b.
+        Two lists of n arrays, broadcastable to ``(A_1, ..., A_n)``: cos theta_k and
+        sin theta_k with theta_k = phi_1 + ... + phi_k, built from the 1-D tables by
+        angle addition, so no grid point needs its own transcendental.
     """
     n = len(joint_axes)
     cos_theta, sin_theta = [], []
@@ -368,7 +369,21 @@ def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) 
         cos_theta.append(c_k)
         sin_theta.append(s_k)
         c_prev, s_prev = c_k, s_k
-    w = manipulability_from_angles(design_coefficients(robot), cos_theta, sin_theta)
+    return cos_theta, sin_theta
+
+
+@jax.jit
+def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) -> jax.Array:
+    """w* on the outer-product grid of 1-D joint-angle axes, robot frame.
+
+    Args:
+        joint_axes: n arrays of joint angles phi_1..phi_n, rad, of sizes (A_1, ..., A_n).
+
+    Returns:
+        ``(A_1, ..., A_n)`` w*, m^2. The absolute link angles come from the 1-D sine
+        and cosine tables by angle addition: cos(a+b) = cos a cos b - sin a sin b.
+    """
+    w = manipulability_from_angles(design_coefficients(robot), *grid_angle_tables(joint_axes))
     return jnp.broadcast_to(w, tuple(jnp.shape(a)[0] for a in joint_axes))
 
 

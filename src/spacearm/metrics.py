@@ -51,6 +51,7 @@ from .kinematics import (
     _generalized_columns,
     design_coefficients,
     fixed_base_manipulability,
+    grid_angle_tables,
     manipulability_from_angles,
 )
 from .robot import ConfigError, PlanarRobot
@@ -100,26 +101,6 @@ def joint_grid(n_points: int, *, lower: float = -math.pi, upper: float = math.pi
     return jnp.linspace(lower, upper, n_points, endpoint=not periodic)
 
 
-def _angle_tables(joint_axes: Sequence[jax.Array]):
-    """cos and sin of the absolute link angles on the outer-product grid, by angle addition."""
-    n = len(joint_axes)
-    cos_theta, sin_theta = [], []
-    c_prev = s_prev = None
-    for k, axis in enumerate(joint_axes):
-        shape = [1] * n
-        shape[k] = -1
-        axis = jnp.reshape(jnp.asarray(axis), shape)
-        ca, sa = jnp.cos(axis), jnp.sin(axis)
-        if c_prev is None:
-            c_k, s_k = ca, sa
-        else:
-            c_k, s_k = c_prev * ca - s_prev * sa, s_prev * ca + c_prev * sa
-        cos_theta.append(c_k)
-        sin_theta.append(s_k)
-        c_prev, s_prev = c_k, s_k
-    return cos_theta, sin_theta
-
-
 @functools.partial(jax.jit, static_argnames=("normalized", "rows_per_chunk"))
 def manipulability_map(
     robot: PlanarRobot,
@@ -151,7 +132,7 @@ def manipulability_map(
     scale = 1.0 / robot.reach**2 if normalized else 1.0
 
     def row(phi1):
-        w = manipulability_from_angles(coeffs, *_angle_tables([phi1[None], *rest]))
+        w = manipulability_from_angles(coeffs, *grid_angle_tables([phi1[None], *rest]))
         return jnp.broadcast_to(w, (1, *shape[1:]))[0] * scale
 
     return jax.lax.map(row, first, batch_size=max(1, min(rows_per_chunk, shape[0])))
@@ -172,7 +153,7 @@ def grid_average(robot: PlanarRobot, n_points: int, *, rows_per_chunk: int = 16)
     chunks = axis.reshape(-1, _divisor(n_points, rows_per_chunk))
 
     def chunk_sum(total, phi1_chunk):
-        w = manipulability_from_angles(coeffs, *_angle_tables([phi1_chunk, *rest]))
+        w = manipulability_from_angles(coeffs, *grid_angle_tables([phi1_chunk, *rest]))
         full = jnp.broadcast_to(w, (phi1_chunk.shape[0],) + (n_points,) * (n - 1))
         return total + jnp.sum(full), None
 
