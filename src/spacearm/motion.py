@@ -638,8 +638,8 @@ def straight_tip_path(
     *,
     max_length=None,
     max_step: float = 0.25,
-    tol: float = 1e-12,
-    rtol: float = 1e-12,
+    tol: float | None = None,
+    rtol: float | None = None,
     max_steps: int = 4096,
     tableau: str = "dop853",
     lanes: int = 512,
@@ -658,9 +658,10 @@ def straight_tip_path(
         direction: ``(..., 2)`` direction of travel in the inertial frame (normalized here).
         max_length: scalar or ``(...)`` length limit, m (None: none).
         max_step: largest integration step, rad of joint arc.
-        tol: event location tolerance, rad of joint arc.
+        tol: event location tolerance, rad of joint arc (None: 1e-12 in float64,
+            1e-5 in float32, where 1e-12 is below rounding and no step would pass).
         rtol: local error tolerance of the DOP853 step controller (relative to 1 + |y|);
-            ignored by "rk4", which takes fixed steps of ``max_step``.
+            ignored by "rk4", which takes fixed steps of ``max_step`` (None: as ``tol``).
         max_steps: step budget (static); paths that exhaust it get reason 3.
         tableau: "dop853" (8th order with its embedded error control, default) or "rk4"
             (fixed steps, a baseline; static).
@@ -675,6 +676,9 @@ def straight_tip_path(
         robot, [(phi_start, 1), (direction, 1), (max_length, 0)]
     )
     dtype = phi_flat.dtype
+    default_tol = 1e-12 if jnp.finfo(dtype).bits >= 64 else 1e-5
+    tol = default_tol if tol is None else tol
+    rtol = default_tol if rtol is None else rtol
     out = _straight_flat(
         flat_robot, phi_flat, dir_flat, len_flat, jnp.asarray(max_step, dtype), jnp.asarray(tol, dtype),
         jnp.asarray(rtol, dtype), batched, int(min(lanes, max(1, phi_flat.shape[0]))), int(max_steps), tableau,
