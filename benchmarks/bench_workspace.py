@@ -21,48 +21,12 @@ jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
 from spacearm import workspace as ws  # noqa: E402
 
+from bench_motion import scipy_straight  # noqa: E402  (same folder: one SciPy baseline for both)
+
 
 def scipy_straight_path(coeffs, phi_start, direction, max_arc=60.0, rtol=1e-10, atol=1e-12):
-    """Reference straight tip path for n = 2 in NumPy + solve_ivp.
-
-    The same regularized formulation as the package (joint-space arc length sigma as
-    the variable, joint direction adj(J*) d, base from eq. 5, tip advance
-    ds/dsigma = det J* / |adj(J*) d|), with a terminal event where ds/dsigma = 0.
-    """
-    from scipy.integrate import solve_ivp
-
-    K, W, inertia = coeffs
-    dx, dy = direction
-
-    def columns(phi):
-        theta = np.cumsum(phi)
-        c, s = np.cos(theta), np.sin(theta)
-        xs = -np.cumsum((K * s)[::-1])[::-1]
-        ys = np.cumsum((K * c)[::-1])[::-1]
-        h = inertia + np.sum(W * (np.outer(c, c) + np.outer(s, s)), axis=0)
-        H = np.cumsum(h[::-1])[::-1]
-        gx = xs[1:] - xs[0] * H[1:] / H[0]
-        gy = ys[1:] - ys[0] * H[1:] / H[0]
-        return gx, gy, H
-
-    gx, gy, _ = columns(phi_start)
-    sign0 = -1.0 if gx[0] * gy[1] - gx[1] * gy[0] < 0 else 1.0
-
-    def field(_, y):
-        gx, gy, H = columns(y[:3])
-        det = gx[0] * gy[1] - gx[1] * gy[0]
-        v = sign0 * np.array([gy[1] * dx - gx[1] * dy, -gy[0] * dx + gx[0] * dy])
-        norm = np.hypot(*v)
-        dq = v / norm
-        return [-(H[1] * dq[0] + H[2] * dq[1]) / H[0], dq[0], dq[1], sign0 * det / norm]
-
-    def singular(_, y):
-        return field(0.0, y)[3]
-
-    singular.terminal = True
-    singular.direction = -1
-    sol = solve_ivp(field, (0.0, max_arc), np.r_[phi_start, 0.0], method="DOP853", rtol=rtol, atol=atol, events=singular)
-    return sol.y[:3, -1]
+    """End posture of the SciPy reference straight path (the motion benchmark's baseline)."""
+    return scipy_straight(coeffs, phi_start, direction, rtol=rtol, atol=atol, max_arc=max_arc)[:3]
 
 
 def main() -> None:
