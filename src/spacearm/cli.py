@@ -65,8 +65,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     validate = sub.add_parser(
         "validate",
-        help="check a robot or sweep YAML file",
-        description="Check a robot (or sweep) YAML file. Exit 0 when valid, 2 with the reason when not.",
+        help="check a robot, sweep or design-problem YAML file",
+        description="Check a robot, sweep or design-problem YAML file. Exit 0 when valid, 2 with the reason when not.",
     )
     validate.add_argument("file", help="path to the YAML file, e.g. configs/umetani1990.yaml")
     validate.set_defaults(func=_cmd_validate)
