@@ -73,6 +73,7 @@ _ELBOWS = ("down", "up", "both")
 # Areas (Table 2) ---------------------------------------------------------------------
 
 
+@jax.jit
 def normalized_areas(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
     """Maximum Reachable and Guaranteed areas normalized by pi L^2 (Table 2).
 
