@@ -48,7 +48,6 @@ import numpy as np
 
 from .kinematics import (
     DesignCoefficients,
-    _generalized_columns,
     design_coefficients,
     fixed_base_manipulability,
     grid_angle_tables,

@@ -53,7 +53,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from .kinematics import momentum_inertias, tip_coefficients, tip_position
+from .kinematics import momentum_inertias, tip_position
 from .robot import ConfigError, PlanarRobot
 
 __all__ = [

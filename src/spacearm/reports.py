@@ -8,14 +8,14 @@ w-bar column we tried) and ``fig10.png``.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+
+from . import results
 
 from .kinematics import manipulability_on_grid
 from .robot import PlanarRobot, stack_robots, umetani1990
@@ -34,13 +34,7 @@ PAPER_TABLE2 = {
 
 
 def _write_text(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temp = tempfile.mkstemp(prefix=f".{path.name}-", dir=path.parent)
-    with os.fdopen(handle, "w", encoding="utf-8") as stream:
-        stream.write(text)
-    os.replace(temp, path)
-    return path
-
+    return results.write_text(path, text)
 
 # Readings of the w-bar column -------------------------------------------------------------
 

@@ -7,12 +7,11 @@ the robot frame's. Contour labels are w*/L^2 x 40, as printed in the paper.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from . import figure
 
 ELLIPSE_SCALE = 0.2  # drawn semi-axis per unit singular value of J*, m / (m/rad)
@@ -29,18 +28,9 @@ def _plt():
 
 
 def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".png", dir=path.parent)
-    os.close(handle)
-    try:
-        fig.savefig(temp, dpi=130, bbox_inches="tight")
-        os.replace(temp, path)
-    finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+    results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
     _plt().close(fig)
     return path
-
 
 def _table1(ratio: float = 1.0):
     from ..robot import umetani1990

@@ -13,12 +13,11 @@ values below are ours and are stated in the figures.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from . import figure
 
 DEG = np.pi / 180.0
@@ -29,18 +28,7 @@ FIG9_DISTANCE = 0.2  # m, each way
 
 
 def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    os.close(handle)
-    try:
-        fig.savefig(temporary, dpi=130, bbox_inches="tight")
-        os.chmod(temporary, 0o644)  # mkstemp creates 0600
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.remove(temporary)
-    return path
-
+    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
 
 def _pyplot():
     import matplotlib

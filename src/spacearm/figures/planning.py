@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from . import figure
 
 DEG = np.pi / 180.0
@@ -62,18 +63,7 @@ def _draw_robot(ax, robot, phi, color, label, alpha=1.0):
 
 
 def _atomic_save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    os.close(handle)
-    try:
-        fig.savefig(temporary, dpi=130, bbox_inches="tight")
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.remove(temporary)
-    return path
-
+    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
 
 def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -> Path:
     """Draw a reach plan (PNG, written atomically).

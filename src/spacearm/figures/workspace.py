@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from .. import results
 
 from . import figure
 
@@ -25,14 +25,7 @@ def _setup():
 
 
 def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(suffix=".png", dir=path.parent)
-    os.close(handle)
-    fig.savefig(temporary, dpi=130, bbox_inches="tight")
-    os.chmod(temporary, 0o644)  # mkstemp creates 0600
-    os.replace(temporary, path)
-    return path
-
+    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
 
 def _circle(ax, center, radius, **style):
     angle = np.linspace(0.0, 2.0 * np.pi, 361)
