@@ -91,6 +91,20 @@ def test_table_matches_single_design_functions(tmp_path):
     assert result.manifest["n_designs"] == 5
 
 
+def test_wbar_options_reach_the_quadrature(tmp_path):
+    """A sweep's wbar options (here the fixed-node product rule) are those of average_manipulability."""
+    options = {"rule": "product", "phi1_panels": 8, "phi2_panels": 4, "order": 4}
+    spec = load_sweep(sweep_config(metrics=[{"name": "wbar", **options}]))
+    table = run_sweep(spec, tmp_path / "out", progress=False).table
+    for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
+        robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
+        coarse = float(sa.average_manipulability(robot, **options))
+        np.testing.assert_allclose(table["wbar"][i], coarse, rtol=1e-13)
+        if ratio > 0:  # at b0 = 0 the kinks lie on the strip's edges and both rules are exact
+            exact = float(sa.average_manipulability(robot))
+            assert 1e-7 < abs(coarse - exact) / exact < 1e-2  # second order at the kinks
+
+
 def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     spec = load_sweep(sweep_config())
     run_sweep(spec, tmp_path / "full", progress=False)
@@ -117,6 +131,10 @@ def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
         (dict(axes={"x": {"field": "base.attach", "values": ["far"]}}), r"axes\.x\.values\[0\]: must be a finite number"),
         (dict(axes={"x": {"field": "links[2].mass", "values": [1.0]}}), r"link index 2 out of range"),
         (dict(chunk_size=0), r"chunk_size: must be a positive integer"),
+        (dict(metrics=[{"name": "wbar", "phi1_panels": 7}]), r"metrics\[0\]\.phi1_panels: must be even"),
+        (dict(metrics=[{"name": "wbar", "rule": "simpson"}]), r"metrics\[0\]\.rule: must be one of adaptive, product"),
+        (dict(metrics=[{"name": "wbar", "order": True}]), r"metrics\[0\]\.order: must be an integer >= 1"),
+        (dict(metrics=[{"name": "wbar", "ordre": 4}]), r"unknown key 'ordre' \(did you mean 'order'\?\)"),
         (
             dict(axes={"m1": {"field": "links[0].mass", "values": [100.0, -5.0]}}),
             r"sweep point 1 \(m1=-5\) gives an invalid robot: links\[0\]\.mass: must be positive",

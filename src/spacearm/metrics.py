@@ -67,6 +67,9 @@ __all__ = [
 
 _MEASURES = ("area", "joint")
 _ELBOWS = ("down", "up", "both")
+_RULES = ("adaptive", "product")
+# Smallest allowed value of each integer option of average_manipulability.
+_INTEGER_OPTIONS = {"phi1_panels": 2, "phi2_panels": 1, "order": 1, "newton_steps": 0, "designs_per_chunk": 1, "n_points_joint": 2}
 
 
 # Areas (Table 2) ---------------------------------------------------------------------
@@ -355,6 +358,27 @@ def _wbar_two_link(robot: PlanarRobot, measure: str, elbow: str, phi1_panels: in
     return total / denominator / robot.reach**2
 
 
+def check_average_options(*, where: str = "", **options) -> None:
+    """Raise :class:`ConfigError` naming the first bad option of :func:`average_manipulability`.
+
+    Shared with the sweep files' ``wbar`` metric, so ``spacearm validate`` catches what a
+    run would reject. ``where`` prefixes the field names (``"metrics[0]."``).
+    """
+    measure, elbow, rule = options.get("measure", "area"), options.get("elbow", "down"), options.get("rule", "adaptive")
+    if measure not in _MEASURES:
+        raise ConfigError(f"{where}measure: must be one of {', '.join(_MEASURES)}, got {measure!r}")
+    if elbow not in _ELBOWS:
+        raise ConfigError(f"{where}elbow: must be one of {', '.join(_ELBOWS)}, got {elbow!r}")
+    if rule not in _RULES:
+        raise ConfigError(f"{where}rule: must be one of {', '.join(_RULES)}, got {rule!r}")
+    for name, least in _INTEGER_OPTIONS.items():
+        value = options.get(name, least)
+        if not isinstance(value, int) or isinstance(value, bool) or value < least:
+            raise ConfigError(f"{where}{name}: must be an integer >= {least}, got {value!r}")
+    if options.get("phi1_panels", 2) % 2:
+        raise ConfigError(f"{where}phi1_panels: must be even so that phi1 = 0 is a panel edge, got {options['phi1_panels']}")
+
+
 def average_manipulability(
     robot: PlanarRobot,
     *,
@@ -404,24 +428,10 @@ def average_manipulability(
     Raises:
         ConfigError: for an unknown option, or measure="area" with n != 2.
     """
-    if measure not in _MEASURES:
-        raise ConfigError(f"measure: must be one of {', '.join(_MEASURES)}, got {measure!r}")
-    if elbow not in _ELBOWS:
-        raise ConfigError(f"elbow: must be one of {', '.join(_ELBOWS)}, got {elbow!r}")
-    if rule not in ("adaptive", "product"):
-        raise ConfigError(f"rule: must be 'adaptive' or 'product', got {rule!r}")
-    for name, value, least in (
-        ("phi1_panels", phi1_panels, 2),
-        ("phi2_panels", phi2_panels, 1),
-        ("order", order, 1),
-        ("newton_steps", newton_steps, 0),
-        ("designs_per_chunk", designs_per_chunk, 1),
-        ("n_points_joint", n_points_joint, 2),
-    ):
-        if not isinstance(value, int) or value < least:
-            raise ConfigError(f"{name}: must be an integer >= {least}, got {value!r}")
-    if phi1_panels % 2:
-        raise ConfigError(f"phi1_panels: must be even so that phi1 = 0 is a panel edge, got {phi1_panels}")
+    check_average_options(
+        measure=measure, elbow=elbow, phi1_panels=phi1_panels, phi2_panels=phi2_panels, order=order,
+        newton_steps=newton_steps, rule=rule, designs_per_chunk=designs_per_chunk, n_points_joint=n_points_joint,
+    )
     n = robot.n_links
     if n != 2 and measure == "area":
         raise ConfigError(
