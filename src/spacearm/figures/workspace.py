@@ -248,6 +248,7 @@ def singularities(out_dir: Path) -> list[Path]:
     det = (J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]) / float(robot.reach) ** 2
 
     fig, axes = plt.subplots(2, 2, figsize=(13, 11.5), layout="constrained")
+    fig.get_layout_engine().set(wspace=0.1)  # room between (a)'s colour bar and (b)'s axis label
     ax = axes[0, 0]
     levels = np.linspace(-np.abs(det).max(), np.abs(det).max(), 21)
     mesh = ax.contourf(np.degrees(Q1), np.degrees(Q2), det, levels=levels, cmap="RdBu_r")
