@@ -105,6 +105,23 @@ def test_wbar_options_reach_the_quadrature(tmp_path):
             assert 1e-7 < abs(coarse - exact) / exact < 1e-2  # second order at the kinks
 
 
+def test_workspace_areas_metric(tmp_path):
+    from spacearm import workspace as ws
+
+    spec = load_sweep(sweep_config(metrics=["workspace_areas", "S_M", "S_G"]))
+    table = run_sweep(spec, tmp_path / "out", progress=False).table
+    for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
+        robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
+        areas = ws.normalized_areas(robot)
+        for column, key in [("S_fixed_vehicle", "fixed_vehicle"), ("S_attitude_constraint", "attitude_constraint"),
+                            ("S_maximum_reachable", "maximum_reachable"), ("S_guaranteed", "guaranteed")]:
+            np.testing.assert_allclose(table[column][i], float(areas[key]), rtol=1e-14)
+        np.testing.assert_allclose(table["S_guaranteed"][i], table["S_G"][i], rtol=1e-14)
+        assert table["eq9_holds"][i] == float(ws.attachment_condition(robot))
+    # Table 1: eq. 9 fails with the arm on the base centroid and holds at b0 = 2 B0.
+    assert table["eq9_holds"][0] == 0.0 and table["eq9_holds"][-1] == 1.0
+
+
 def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     spec = load_sweep(sweep_config())
     run_sweep(spec, tmp_path / "full", progress=False)

@@ -499,6 +499,19 @@ def _radii(robot, options):
     }
 
 
+def _workspace_areas(robot, options):
+    from .workspace import attachment_condition, normalized_areas
+
+    areas = normalized_areas(robot)
+    return {
+        "S_fixed_vehicle": areas["fixed_vehicle"],
+        "S_attitude_constraint": areas["attitude_constraint"],
+        "S_maximum_reachable": areas["maximum_reachable"],
+        "S_guaranteed": areas["guaranteed"],
+        "eq9_holds": attachment_condition(robot).astype(areas["guaranteed"].dtype),
+    }
+
+
 def _check_straight(where: str, options: dict) -> None:
     allowed = {"phi_start_deg", "n_directions"}
     _unknown(f"{where}: ", options, allowed)
@@ -526,6 +539,9 @@ METRICS: dict[str, Metric] = {
     "S_G": Metric(_areas, lambda o: ["S_G"], description="Guaranteed Workspace area / (pi L^2) (eq. 8)"),
     "radii": Metric(_radii, lambda o: ["K0_m", "R_attitude_m", "R_max_m", "R_guaranteed_m", "L_m"],
                     description="K0, the Attitude-Constraint, Maximum-Reachable and Guaranteed radii, and L, in m"),
+    "workspace_areas": Metric(_workspace_areas, lambda o: ["S_fixed_vehicle", "S_attitude_constraint",
+                                                          "S_maximum_reachable", "S_guaranteed", "eq9_holds"],
+                              description="Areas 1-3 and 5 with their holes removed / (pi L^2), and eq. 9 (1 or 0)"),
     "straight_path_area": Metric(_straight_area, lambda o: ["S_straight"], check=_check_straight,
                                  description="Straight-Path workspace area from phi_start_deg / (pi L^2)"),
 }
