@@ -122,6 +122,25 @@ def test_workspace_areas_metric(tmp_path):
     assert table["eq9_holds"][0] == 0.0 and table["eq9_holds"][-1] == 1.0
 
 
+def test_straight_path_area_metric(tmp_path):
+    """The sweep column is the area enclosed by the straight-path ends (trapezoid formula here)."""
+    from spacearm import workspace as ws
+
+    phi_deg = [0.0, -60.0, 120.0]
+    spec = load_sweep(sweep_config(
+        axes={"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.5, 1.5]}},
+        metrics=[{"name": "straight_path_area", "phi_start_deg": phi_deg, "n_directions": 24}],
+    ))
+    table = run_sweep(spec, tmp_path / "out", progress=False).table
+    for i, ratio in enumerate([0.5, 1.5]):
+        robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
+        ends = np.asarray(ws.straight_path_workspace(robot, np.radians(phi_deg), 24))
+        x, y = ends[:, 0], ends[:, 1]
+        area = 0.5 * abs(np.sum((x + np.roll(x, -1)) * (np.roll(y, -1) - y)))
+        np.testing.assert_allclose(table["S_straight"][i], area / (np.pi * 4.0**2), rtol=1e-10)
+        assert 0.05 < table["S_straight"][i] < 2.25  # inside Area 3 (S_M <= 2.25 for b0 <= 2 B0)
+
+
 def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     spec = load_sweep(sweep_config())
     run_sweep(spec, tmp_path / "full", progress=False)
