@@ -18,6 +18,10 @@ from spacearm.sweep import build_designs, load_sweep, run_sweep
 ROBOT = str(Path("configs/umetani1990.yaml").resolve())
 
 
+ROBOT_MAPPING = sa.robot.robot_to_mapping(sa.umetani1990())
+THREE_LINKS = {**ROBOT_MAPPING, "links": ROBOT_MAPPING["links"] + [ROBOT_MAPPING["links"][-1]]}
+
+
 def sweep_config(**changes):
     config = {
         "name": "unit",
@@ -141,6 +145,25 @@ def test_straight_path_area_metric(tmp_path):
         assert 0.05 < table["S_straight"][i] < 2.25  # inside Area 3 (S_M <= 2.25 for b0 <= 2 B0)
 
 
+def test_axes_apply_in_a_fixed_order():
+    """arm.mass_ratio is taken against the final base mass, whichever axis the file lists first."""
+    axes = {"ratio": {"field": "arm.mass_ratio", "values": [0.2]}, "m0": {"field": "base.mass", "values": [500.0, 2000.0]}}
+    robot, _ = build_designs(load_sweep(sweep_config(axes=axes)))
+    reordered, _ = build_designs(load_sweep(sweep_config(axes=dict(reversed(list(axes.items()))))))
+    np.testing.assert_allclose(np.asarray(robot.link_mass).sum(axis=1) / np.asarray(robot.base_mass), [0.2, 0.2], rtol=1e-15)
+    np.testing.assert_allclose(np.sort(np.asarray(reordered.link_mass).sum(axis=1)), [100.0, 400.0], rtol=1e-15)
+
+
+def test_manifest_config_is_a_sweep_file_that_reruns(tmp_path):
+    spec = load_sweep(sweep_config(metrics=["S_M"]))
+    result = run_sweep(spec, tmp_path / "out", progress=False)
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert manifest["robot_file"] == ROBOT
+    again = load_sweep(write(tmp_path, manifest["config"], "again.yaml"))
+    assert results.config_hash(again.config) == manifest["config_sha256"]
+    assert run_sweep(again, tmp_path / "again", progress=False).table["S_M"].tolist() == result.table["S_M"].tolist()
+
+
 def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     spec = load_sweep(sweep_config())
     run_sweep(spec, tmp_path / "full", progress=False)
@@ -175,6 +198,27 @@ def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
             dict(axes={"m1": {"field": "links[0].mass", "values": [100.0, -5.0]}}),
             r"sweep point 1 \(m1=-5\) gives an invalid robot: links\[0\]\.mass: must be positive",
         ),
+        (
+            dict(axes={"r": {"field": "base.attach", "values": [1.0]}, "q": {"field": "base.attach", "values": [2.0]}}),
+            r"axes\.r \(base\.attach\) and axes\.q \(base\.attach\) both set base\.attach",
+        ),
+        (
+            dict(axes={"i0": {"field": "links[0].inertia", "values": [9.0]}, "m": {"field": "arm.mass", "values": [300.0]}}),
+            r"both set links\[0\]\.inertia; give each design number one axis",
+        ),
+        (dict(report="table2", metrics=["S_M", "S_G"]), r"report: table2 needs the metrics wbar, S_M and S_G \(missing: wbar\)"),
+        (dict(report="table2", metrics=["wbar", "S_M", "S_G"], axes={"b0": {"field": "base.attach", "values": [0.0]}}),
+         r"report: table2 needs exactly one axis, b0_over_B0"),
+        (dict(report="table2", metrics=["wbar", "S_M", "S_G"], robot={**ROBOT_MAPPING, "base": {**ROBOT_MAPPING["base"], "mass": 900.0}}),
+         r"report: table2 compares with the paper's Table 1 robot; this robot's base_mass differs"),
+        (dict(metrics=[{"name": "straight_path_area", "phi_start_deg": [0, 1]}]),
+         r"metrics\[0\]\.phi_start_deg: needs 3 angles \[phi0, phi1, \.\.\., phi2\] for a 2-link robot, got 2"),
+        (dict(robot=THREE_LINKS, metrics=["wbar"]), r"metrics\[0\]: wbar's area average \(eq\. 12\) is defined for 2 links, the robot has 3"),
+        (dict(axes={"b": {"field": "base.attach", "range": {"start": 0.0, "stop": 1.0, "num": 10**12}}}),
+         r"axes\.b\.range: 1,000,000,000,000 designs \(num: 1000000000000\) need about [\d,]+ GiB"),
+        (dict(axes={a: {"field": f, "range": {"start": 0.1, "stop": 1.0, "num": 10**4}} for a, f in
+                    (("x", "base.attach"), ("y", "arm.mass_ratio"), ("z", "arm.length_split"))}),
+         r"axes: 1,000,000,000,000 designs \(10000 x 10000 x 10000\) need about"),
     ],
 )
 def test_invalid_sweeps_name_the_problem(change, message):

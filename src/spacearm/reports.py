@@ -18,7 +18,7 @@ import numpy as np
 from . import results
 
 from .kinematics import manipulability_on_grid
-from .robot import PlanarRobot, stack_robots, umetani1990
+from .robot import ConfigError, PlanarRobot, stack_robots, umetani1990
 
 __all__ = ["REPORTS", "PAPER_TABLE2", "table2_report", "wbar_readings"]
 
@@ -147,13 +147,7 @@ def table2_report(out_dir: Path, rows: list[dict], spec) -> list[Path]:
         for printed, value, digits in ((paper[0], 100 * wbar, 2), (paper[1], s_m, 3), (paper[2], s_g, 3)):
             cells += [f"{printed:.2f}", f"{value:.{digits}f}", f"{value / printed - 1:+.1%}"]
         lines.append("| " + " | ".join(cells) + " |")
-    lines += [
-        "",
-        "S_M and S_G equal the printed values to their two decimals. The w-bar column does not:",
-        "the faithful reading gives 8.8 to 10.2 (x1e-2) where the paper prints 5.59 to 8.08, and",
-        "its growth with b0 is weaker (x1.17 from b0/B0 = 0 to 2 against the paper's x1.45).",
-        "",
-    ]
+    lines += ["", *_table2_summary(rows), ""]
     if ratios:
         printed = [PAPER_TABLE2[round(r, 6)][0] for r in ratios]
         readings = wbar_readings(base, tuple(ratios))
@@ -194,4 +188,45 @@ def table2_report(out_dir: Path, rows: list[dict], spec) -> list[Path]:
     return [table, fig]
 
 
+def _table2_summary(rows: list[dict]) -> list[str]:
+    """What the comparison shows, in words, from the numbers themselves."""
+    matched = [(r, PAPER_TABLE2[round(float(r["b0_over_B0"]), 6)]) for r in rows
+               if round(float(r["b0_over_B0"]), 6) in PAPER_TABLE2]
+    if not matched:
+        return ["None of these b0/B0 values is printed in Table 2; nothing to compare."]
+    areas_agree = sum(abs(float(r[key]) - p[k]) <= 0.005 + 1e-9 for r, p in matched for k, key in ((1, "S_M"), (2, "S_G")))
+    ours = [100 * float(r["wbar"]) for r, _ in matched]
+    printed = [p[0] for _, p in matched]
+    lines = [
+        f"S_M and S_G agree with the printed values to their two decimals in {areas_agree} of {2 * len(matched)} cells.",
+        f"w-bar: ours {min(ours):.2f} to {max(ours):.2f} (x1e-2) where the paper prints {min(printed):.2f} to {max(printed):.2f}"
+        + (f"; rms relative difference {_rms_relative(ours, printed):.2f}." if matched else "."),
+    ]
+    if len(matched) > 1:
+        first, last = float(matched[0][0]["b0_over_B0"]), float(matched[-1][0]["b0_over_B0"])
+        lines.append(f"Growth from b0/B0 = {first:g} to {last:g}: x{ours[-1] / ours[0]:.2f} here, x{printed[-1] / printed[0]:.2f} in the paper.")
+    return lines
+
+
+def check_table2(spec) -> None:
+    """ConfigError unless the sweep is one the Table 2 report can compare with the paper:
+    one axis ``b0_over_B0`` on base.attach relative to Table 1's B0, the metrics wbar,
+    S_M and S_G, and the Table 1 robot."""
+    where = f"{spec.source}: report: table2"
+    axes = spec.axes
+    if len(axes) != 1 or axes[0].name != "b0_over_B0" or axes[0].field != "base.attach" or not axes[0].relative:
+        raise ConfigError(f"{where} needs exactly one axis, b0_over_B0: {{field: base.attach, relative: true, values: [...]}}")
+    missing = {"wbar", "S_M", "S_G"} - {m.name for m in spec.metrics}
+    if missing:
+        raise ConfigError(f"{where} needs the metrics wbar, S_M and S_G (missing: {', '.join(sorted(missing))})")
+    paper = umetani1990()
+    for field in ("base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b"):
+        if np.shape(getattr(spec.robot, field)) != np.shape(getattr(paper, field)) or not np.allclose(
+            getattr(spec.robot, field), getattr(paper, field), rtol=1e-12, atol=0.0
+        ):
+            raise ConfigError(f"{where} compares with the paper's Table 1 robot; this robot's {field} differs")
+
+
 REPORTS: dict[str, Callable[[Path, list[dict], object], list[Path]]] = {"table2": table2_report}
+# Checks run by load_sweep, so that `spacearm validate` refuses what a report cannot do.
+REPORT_CHECKS: dict[str, Callable[[object], None]] = {"table2": check_table2}

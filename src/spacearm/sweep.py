@@ -21,6 +21,7 @@ import copy
 import dataclasses
 import difflib
 import functools
+import json
 import math
 import os
 import re
@@ -109,6 +110,7 @@ class SweepSpec:
     output: str
     report: str | None
     source: str
+    robot_source: str = "inline"  # the robot file named by the sweep file, for the manifest
 
     @property
     def n_designs(self) -> int:
@@ -140,7 +142,7 @@ def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _axis_values(where: str, spec: Mapping) -> np.ndarray:
+def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
     if ("values" in spec) == ("range" in spec):
         raise ConfigError(f"{where}: give exactly one of 'values' (a list) or 'range' (start, stop, num | step)")
     if "values" in spec:
@@ -169,6 +171,7 @@ def _axis_values(where: str, spec: Mapping) -> np.ndarray:
         num = rng["num"]
         if not isinstance(num, int) or isinstance(num, bool) or num < 1:
             raise ConfigError(f"{where}.range.num: must be a positive integer, got {num!r}")
+        _check_size(f"{where}.range", num, f"num: {num}", n_links)
         return np.linspace(start, stop, num)
     step = rng["step"]
     if not _is_number(step) or step <= 0:
@@ -176,6 +179,7 @@ def _axis_values(where: str, spec: Mapping) -> np.ndarray:
     count = int(math.floor((stop - start) / step + 1e-9)) + 1
     if count < 1:
         raise ConfigError(f"{where}.range: stop is below start; the axis is empty")
+    _check_size(f"{where}.range", count, f"{count} steps", n_links)
     return start + step * np.arange(count)
 
 
@@ -282,10 +286,10 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         if not robot_path.exists():
             raise ConfigError(f"{where}: robot: no such robot file '{robot_entry}' (looked in {base_dir})")
         robot = load_robot(robot_path)
-        robot_config = {"file": str(robot_entry), **_robot_mapping(robot)}
+        robot_source = str(robot_entry)
     elif isinstance(robot_entry, Mapping):
         robot = robot_from_mapping(robot_entry, source=f"{where}: robot")
-        robot_config = _robot_mapping(robot)
+        robot_source = "inline"
     else:
         raise ConfigError(f"{where}: robot: must be a file path or an inline robot mapping")
 
@@ -306,7 +310,12 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         relative = spec.get("relative", False)
         if not isinstance(relative, bool):
             raise ConfigError(f"{at}.relative: must be true or false, got {relative!r}")
-        axes.append(Axis(axis_name, field, _axis_values(at, spec), relative))
+        axes.append(Axis(axis_name, field, _axis_values(at, spec, robot.n_links), relative))
+
+    _check_axes_compatible(where, axes, robot.n_links)
+    if config.get("combine", "product") == "product":
+        _check_size(f"{where}: axes", math.prod(len(a.values) for a in axes),
+                    " x ".join(str(len(a.values)) for a in axes), robot.n_links)
 
     combine = config.get("combine", "product")
     if combine not in ("product", "zip"):
@@ -332,7 +341,7 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     resolved = {
         "name": name,
         "description": config.get("description", ""),
-        "robot": robot_config,
+        "robot": _robot_mapping(robot),  # inline, so the resolved config is itself a sweep file
         "axes": {a.name: {"field": a.field, "relative": a.relative, "values": a.values.tolist()} for a in axes},
         "combine": combine,
         "metrics": [{"name": m.name, **m.options} for m in metrics],
@@ -342,10 +351,31 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     }
     spec = SweepSpec(
         name=name, config=resolved, robot=robot, axes=tuple(axes), combine=combine, metrics=metrics,
-        chunk_size=chunk_size, output=output, report=report, source=where,
+        chunk_size=chunk_size, output=output, report=report, source=where, robot_source=robot_source,
     )
+    if report is not None:
+        from .reports import REPORT_CHECKS
+
+        REPORT_CHECKS[report](spec)
+    for i, metric in enumerate(metrics):
+        METRICS[metric.name].check_robot(f"{where}: metrics[{i}]", metric.options, robot)
     build_designs(spec)  # validates every sweep point before anything is written
     return spec
+
+
+def _check_size(where: str, count: int, sizes: str, n_links: int) -> None:
+    """Refuse a sweep whose designs alone would not fit in memory (they are built at once),
+    before anything that large is allocated."""
+    need = count * 8 * (3 + 6 * n_links) * 4  # float64 leaves, with room for temporaries
+    try:
+        have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return
+    if need > have / 2:
+        raise ConfigError(
+            f"{where}: {count:,} designs ({sizes}) need about {need / 2**30:,.0f} GiB to hold, "
+            f"more than half of this machine's {have / 2**30:.0f} GiB; split the sweep into several files"
+        )
 
 
 def _robot_mapping(robot: PlanarRobot) -> dict:
@@ -418,8 +448,56 @@ def _apply(leaves: dict[str, np.ndarray], field: str, values: np.ndarray, relati
     raise ConfigError(f"unknown design field {field!r}")  # unreachable after validation
 
 
+def _stage(field: str) -> int:
+    """When an axis is applied: numbers of the base and the links first, then the arm's
+    length split (at fixed L), then the arm's mass (its ratio against the final base mass)."""
+    return {"arm.length_split": 1, "arm.mass": 2, "arm.mass_ratio": 2}.get(field, 0)
+
+
+def _writes(field: str, n_links: int) -> set[str]:
+    """The design numbers an axis sets, as ``leaf[i]`` names."""
+    links = range(n_links)
+    if field in _SIMPLE_FIELDS:
+        return {_SIMPLE_FIELDS[field][0]}
+    if field in ("arm.mass", "arm.mass_ratio"):
+        return {f"{leaf}[{i}]" for leaf in ("link_mass", "link_inertia") for i in links}
+    if field == "arm.length_split":
+        return {f"{leaf}[{i}]" for leaf in ("link_a", "link_b", "link_inertia") for i in links}
+    index, what = _LINK_FIELD.match(field).groups()
+    chosen = links if index == "*" else [int(index)]
+    leaves = {"mass": ["link_mass"], "inertia": ["link_inertia"], "a": ["link_a"], "b": ["link_b"],
+              "length": ["link_a", "link_b", "link_inertia"]}[what]
+    return {f"{leaf}[{i}]" for leaf in leaves for i in chosen}
+
+
+def _check_axes_compatible(where: str, axes: Sequence[Axis], n_links: int) -> None:
+    """Refuse two axes that set the same design number: the result would depend on the
+    order of application. The length split and the arm mass both scale the link
+    inertias, by commuting factors, so that pair is allowed."""
+    for i, first in enumerate(axes):
+        for second in axes[i + 1:]:
+            if {_stage(first.field), _stage(second.field)} == {1, 2}:
+                continue
+            shared = _writes(first.field, n_links) & _writes(second.field, n_links)
+            if shared:
+                raise ConfigError(
+                    f"{where}: axes.{first.name} ({first.field}) and axes.{second.name} ({second.field}) both set "
+                    f"{_leaf_label(sorted(shared)[0])}; give each design number one axis"
+                )
+
+
+def _leaf_label(name: str) -> str:
+    """``link_inertia[0]`` -> ``links[0].inertia``; ``base_mass`` -> ``base.mass``."""
+    match = re.fullmatch(r"link_(\w+)\[(\d+)\]", name)
+    if match:
+        return f"links[{match.group(2)}].{match.group(1)}"
+    return name.replace("_", ".", 1)
+
+
 def build_designs(spec: SweepSpec) -> tuple[PlanarRobot, dict[str, np.ndarray]]:
     """Every sweep point as one batched PlanarRobot, and the axis values per point.
+
+    Axes are applied in a fixed order whatever their order in the file (see ``_stage``).
 
     Raises:
         ConfigError: naming the first invalid sweep point, its axis values and the field.
@@ -427,7 +505,7 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot, dict[str, np.ndarray]]:
     points = axis_points(spec)
     count = spec.n_designs
     leaves = _leaves(spec.robot, count)
-    for axis in spec.axes:
+    for axis in sorted(spec.axes, key=lambda a: _stage(a.field)):
         _apply(leaves, axis.field, points[axis.name], axis.relative)
     try:
         robot = PlanarRobot(**leaves, name=spec.robot.name)
@@ -453,6 +531,8 @@ class Metric:
     columns: Callable[[dict], list[str]]
     check: Callable[[str, dict], None] = lambda where, options: _no_options(where, options)
     description: str = ""
+    # Checks that need the base robot (e.g. its number of links).
+    check_robot: Callable[[str, dict, PlanarRobot], None] = lambda where, options, robot: None
 
 
 def _no_options(where: str, options: dict) -> None:
@@ -470,6 +550,23 @@ def _check_wbar(where: str, options: dict) -> None:
 
     _unknown(f"{where}: ", options, set(_WBAR_OPTIONS))
     check_average_options(where=f"{where}.", **options)
+
+
+def _check_wbar_robot(where: str, options: dict, robot: PlanarRobot) -> None:
+    if robot.n_links != 2 and options.get("measure", "area") == "area":
+        raise ConfigError(
+            f"{where}: wbar's area average (eq. 12) is defined for 2 links, the robot has {robot.n_links}; "
+            "use {name: wbar, measure: joint}"
+        )
+
+
+def _check_straight_robot(where: str, options: dict, robot: PlanarRobot) -> None:
+    phi = options.get("phi_start_deg", [0.0, -60.0, 120.0])
+    if len(phi) != robot.n_links + 1:
+        raise ConfigError(
+            f"{where}.phi_start_deg: needs {robot.n_links + 1} angles [phi0, phi1, ..., phi{robot.n_links}] "
+            f"for a {robot.n_links}-link robot, got {len(phi)}"
+        )
 
 
 def _wbar(robot, options):
@@ -534,7 +631,7 @@ def _straight_area(robot, options):
 
 
 METRICS: dict[str, Metric] = {
-    "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
+    "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, check_robot=_check_wbar_robot, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
     "S_M": Metric(_areas, lambda o: ["S_M"], description="Maximum Reachable area / (pi L^2)"),
     "S_G": Metric(_areas, lambda o: ["S_G"], description="Guaranteed Workspace area / (pi L^2) (eq. 8)"),
     "radii": Metric(_radii, lambda o: ["K0_m", "R_attitude_m", "R_max_m", "R_guaranteed_m", "L_m"],
@@ -543,6 +640,7 @@ METRICS: dict[str, Metric] = {
                                                           "S_maximum_reachable", "S_guaranteed", "eq9_holds"],
                               description="Areas 1-3 and 5 with their holes removed / (pi L^2), and eq. 9 (1 or 0)"),
     "straight_path_area": Metric(_straight_area, lambda o: ["S_straight"], check=_check_straight,
+                                 check_robot=_check_straight_robot,
                                  description="Straight-Path workspace area from phi_start_deg / (pi L^2)"),
 }
 
@@ -652,12 +750,18 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
 
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)
+    _check_output_dir(out_dir)
     robot, points = build_designs(spec)
     total = spec.n_designs
     devices = jax.device_count()
     chunk = max(devices, int(math.ceil(min(spec.chunk_size, total) / devices)) * devices)
-    digest = results.config_hash(spec.config)
-    partial = out_dir / f".partial-{digest[:16]}"
+    # Saved chunks are reused only by a run that would compute them bit for bit alike:
+    # same resolved config, effective chunk size, precision and package versions.
+    from . import __version__
+
+    resume_key = {"config": spec.config, "chunk": chunk, "float64": bool(jax.config.jax_enable_x64),
+                  "spacearm": __version__, "jax": jax.__version__}
+    partial = out_dir / f".partial-{results.config_hash(resume_key)[:16]}"
 
     mesh = _mesh()
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("designs"))
@@ -676,8 +780,14 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     for number, (start, stop) in enumerate(spans):
         saved = partial / f"chunk_{number:06d}.npz"
         if saved.exists():
-            with np.load(saved) as data:
-                pieces[number] = {c: data[c] for c in columns}
+            try:
+                with np.load(saved) as data:
+                    piece = {c: data[c] for c in columns}
+            except Exception:  # damaged (e.g. the disk filled up): compute it again
+                saved.unlink()
+                continue
+            if all(v.shape == (stop - start,) for v in piece.values()):
+                pieces[number] = piece
     todo = [n for n in range(len(spans)) if n not in pieces]
     run_start = time.perf_counter()
     bar = tqdm(total=total, desc=f"sweep {spec.name}", unit="design", disable=not progress, file=sys.stderr,
@@ -698,6 +808,12 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
                 results.write_npz(partial / f"chunk_{number:06d}.npz", **piece)
             pieces[number] = piece
             bar.update(stop - start)
+    except KeyboardInterrupt:
+        bar.close()
+        kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
+        print(f"{kept:,} of {total:,} designs kept in {partial}; run the same command again to resume",
+              file=sys.stderr)
+        raise
     finally:
         bar.close()
     run_s = time.perf_counter() - run_start - compile_s
@@ -724,12 +840,36 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
     data = results.manifest(
         spec.config, command=command, timings=timings,
-        extra={"n_designs": total, "chunk_size": chunk, "resumed_chunks": len(spans) - len(todo),
+        extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk, "resumed_chunks": len(spans) - len(todo),
                "files": sorted(str(p.relative_to(out_dir)) for p in files)},
     )
+    previous = _previous_files(out_dir)
     files.append(results.write_json(out_dir / "manifest.json", data))
     shutil.rmtree(partial, ignore_errors=True)
+    for name in previous - {str(p.relative_to(out_dir)) for p in files}:
+        (out_dir / name).unlink(missing_ok=True)  # an earlier run's figure this run did not draw
     return SweepResult(out_dir, table, data, files)
+
+
+def _previous_files(out_dir: Path) -> set[str]:
+    """The files an earlier sweep wrote into ``out_dir`` (from its manifest), to replace them."""
+    try:
+        listed = json.loads((out_dir / "manifest.json").read_text())["files"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return set()
+    return {name for name in listed if isinstance(name, str) and "/" not in name and not name.startswith(".")}
+
+
+def _check_output_dir(out_dir: Path) -> None:
+    """ConfigError unless ``out_dir`` is, or can become, a writable folder (nothing is created)."""
+    target = out_dir.absolute()
+    existing = target
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise ConfigError(f"--out {out_dir}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out {out_dir}: cannot write into {existing} (permission denied)")
 
 
 def _sweep_figures(spec: SweepSpec, out_dir: Path, values: dict[str, np.ndarray]) -> list[Path]:
@@ -776,7 +916,10 @@ def _cmd_sweep(args) -> int:
     spec = load_sweep(args.file, overrides=args.set or [])
     out_dir = Path(args.out) if args.out else Path(spec.output)
     print(spec.summary(), file=sys.stderr)
-    result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv)
+    try:
+        result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv)
+    except OSError as error:  # e.g. a read-only file system under --out
+        raise ConfigError(f"--out {out_dir}: cannot write the results ({error.strerror or error})") from None
     timings = result.manifest["timings_s"]
     print(f"wrote {out_dir}/ ({len(result.files)} files; compile {timings['compile']:.1f} s, "
           f"run {timings['run']:.1f} s, wall {timings['wall']:.1f} s)")
