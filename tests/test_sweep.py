@@ -177,6 +177,32 @@ def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     assert (tmp_path / "full" / "table.csv").read_text() == (tmp_path / "cut" / "table.csv").read_text()
 
 
+def test_resume_ignores_chunks_of_another_chunk_size_and_damaged_chunks(tmp_path):
+    spec = load_sweep(sweep_config())
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "cut", progress=False, stop_after_chunks=2)
+    bigger = load_sweep(sweep_config(chunk_size=4))  # same designs, other chunking: start afresh
+    assert run_sweep(bigger, tmp_path / "cut", progress=False).manifest["resumed_chunks"] == 0
+    assert not any(p.name.startswith(".partial") for p in (tmp_path / "cut").iterdir())
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "again", progress=False, stop_after_chunks=2)
+    damaged = sorted((tmp_path / "again").glob(".partial-*/chunk_*.npz"))[0]
+    damaged.write_bytes(damaged.read_bytes()[:40])
+    resumed = run_sweep(spec, tmp_path / "again", progress=False)
+    assert resumed.manifest["resumed_chunks"] == 1
+    assert (tmp_path / "again" / "table.csv").read_text() == (tmp_path / "cut" / "table.csv").read_text()
+
+
+def test_rerun_into_the_same_folder_removes_its_stale_figures(tmp_path):
+    axes = {"b0": {"field": "base.attach", "values": [0.0, 1.0]}, "m0": {"field": "base.mass", "values": [500.0, 900.0]}}
+    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M", "S_G"])), tmp_path / "o", progress=False)
+    assert (tmp_path / "o" / "heatmap_S_G.png").exists()
+    (tmp_path / "o" / "mine.txt").write_text("a user's file")
+    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M"])), tmp_path / "o", progress=False)
+    assert not (tmp_path / "o" / "heatmap_S_G.png").exists()
+    assert (tmp_path / "o" / "heatmap_S_M.png").exists() and (tmp_path / "o" / "mine.txt").exists()
+
+
 @pytest.mark.parametrize(
     "change, message",
     [

@@ -845,7 +845,8 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     )
     previous = _previous_files(out_dir)
     files.append(results.write_json(out_dir / "manifest.json", data))
-    shutil.rmtree(partial, ignore_errors=True)
+    for folder in out_dir.glob(".partial-*"):  # ours, and any left by an earlier, different run here
+        shutil.rmtree(folder, ignore_errors=True)
     for name in previous - {str(p.relative_to(out_dir)) for p in files}:
         (out_dir / name).unlink(missing_ok=True)  # an earlier run's figure this run did not draw
     return SweepResult(out_dir, table, data, files)
