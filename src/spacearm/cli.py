@@ -78,6 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
         module = importlib.import_module(f"spacearm.{module_name}")
         adder: Callable = getattr(module, adder_name)
         adder(sub)
+    for command in sub.choices.values():  # also accepted after the subcommand
+        command.add_argument("--float32", action="store_true", default=argparse.SUPPRESS,
+                             help="compute in float32 (faster, less exact); default float64")
     return parser
 
 

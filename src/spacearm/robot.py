@@ -182,9 +182,9 @@ def _check_fields(robot: PlanarRobot) -> None:
         _check_values(field, np.asarray(value), rule)
     per_link = {
         "mass": (robot.link_mass, "positive"),
-        "inertia": (robot.link_inertia, "positive"),
         "a": (robot.link_a, "nonnegative"),
         "b": (robot.link_b, "nonnegative"),
+        "inertia": (robot.link_inertia, "positive"),
     }
     for field, (value, rule) in per_link.items():
         value = np.asarray(value)
@@ -192,10 +192,11 @@ def _check_fields(robot: PlanarRobot) -> None:
             raise ConfigError(f"links[*].{field}: expected {n} values, got shape {value.shape}")
         for i in range(n):
             _check_values(f"links[{i}].{field}", value[..., i], rule)
-    length = np.asarray(robot.link_a) + np.asarray(robot.link_b)
-    for i in range(n):
-        if np.any(length[..., i] <= 0):
-            raise ConfigError(f"links[{i}]: the length a + b must be positive")
+        if field == "b":  # a zero length first: it also zeroes an inertia scaled with the length
+            length = np.asarray(robot.link_a) + value
+            for i in range(n):
+                if np.any(length[..., i] <= 0):
+                    raise ConfigError(f"links[{i}]: the length a + b must be positive")
     lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
     for i in range(n):
         if np.any(np.isnan(lower[..., i])) or np.any(np.isnan(upper[..., i])):
@@ -322,6 +323,14 @@ def robot_from_mapping(config: Mapping[str, Any], *, source: str = "robot") -> P
         raise ConfigError(f"{source}: {error}") from None
 
 
+def describe_yaml_error(error: yaml.YAMLError) -> str:
+    """One line for a YAML syntax error: ``line L, column C: what is wrong``."""
+    mark = getattr(error, "problem_mark", None)
+    problem = getattr(error, "problem", None) or str(error).splitlines()[0]
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+    return f"malformed YAML at {where}{problem}"
+
+
 def load_robot(source: str | os.PathLike | Mapping[str, Any]) -> PlanarRobot:
     """Load and validate a robot from a YAML file path or an already parsed mapping.
 
@@ -339,7 +348,7 @@ def load_robot(source: str | os.PathLike | Mapping[str, Any]) -> PlanarRobot:
     except IsADirectoryError:
         raise ConfigError(f"{path}: is a directory, not a robot file") from None
     except yaml.YAMLError as error:
-        raise ConfigError(f"{path}: malformed YAML: {error}") from None
+        raise ConfigError(f"{path}: {describe_yaml_error(error)}") from None
     return robot_from_mapping(config, source=path)
 
 

@@ -38,7 +38,7 @@ import numpy as np
 import yaml
 
 from . import results
-from .robot import ConfigError, PlanarRobot, load_robot, robot_from_mapping
+from .robot import ConfigError, PlanarRobot, describe_yaml_error, load_robot, robot_from_mapping
 
 __all__ = [
     "SweepSpec",
@@ -58,7 +58,7 @@ DESIGNS_PER_STEP = 32
 _TOP_KEYS = {
     "name", "description", "robot", "axes", "combine", "metrics", "output", "chunk_size", "report",
 }
-_AXIS_KEYS = {"field", "values", "range", "relative", "unit"}
+_AXIS_KEYS = {"field", "values", "range", "relative"}
 _RANGE_KEYS = {"start", "stop", "num", "step"}
 
 _LINK_FIELD = re.compile(r"^links\[(\d+|\*)\]\.(mass|inertia|a|b|length)$")
@@ -127,7 +127,8 @@ class SweepSpec:
     def summary(self) -> str:
         axes = ", ".join(f"{a.name} ({len(a.values)})" for a in self.axes)
         names = ", ".join(m.name for m in self.metrics)
-        return f"{self.name}: {self.n_designs} designs over {axes} [{self.combine}]; metrics {names}"
+        count = f"{self.n_designs} design" + ("s" if self.n_designs != 1 else "")
+        return f"{self.name}: {count} over {axes} [{self.combine}]; metrics {names}"
 
 
 def _unknown(where: str, mapping: Mapping, allowed: set[str]) -> None:
@@ -174,11 +175,11 @@ def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
         _check_size(f"{where}.range", num, f"num: {num}", n_links)
         return np.linspace(start, stop, num)
     step = rng["step"]
-    if not _is_number(step) or step <= 0:
-        raise ConfigError(f"{where}.range.step: must be a positive number, got {step!r}")
+    if not _is_number(step) or step == 0 or not math.isfinite(step):
+        raise ConfigError(f"{where}.range.step: must be a nonzero number (negative for a descending axis), got {step!r}")
     count = int(math.floor((stop - start) / step + 1e-9)) + 1
     if count < 1:
-        raise ConfigError(f"{where}.range: stop is below start; the axis is empty")
+        raise ConfigError(f"{where}.range: stepping by {step:g} from {start:g} never reaches {stop:g}; the axis is empty")
     _check_size(f"{where}.range", count, f"{count} steps", n_links)
     return start + step * np.arange(count)
 
@@ -228,17 +229,21 @@ def _metric_specs(where: str, entries: Any) -> tuple[MetricSpec, ...]:
 
 
 def _apply_overrides(config: dict, overrides: Sequence[str]) -> dict:
-    """``--set a.b.c=value``: value parsed as YAML, path through mappings (created if missing)."""
+    """``--set a.b.c=value``: value parsed as YAML, path through mappings (created if
+    missing); ``--set a.b=null`` removes the key."""
     config = copy.deepcopy(config)
     for item in overrides:
         if "=" not in item:
             raise ConfigError(f"--set {item}: expected KEY=VALUE, e.g. --set chunk_size=64")
         key, raw = item.split("=", 1)
+        parts = key.strip().split(".")
+        if not all(parts):
+            raise ConfigError(f"--set {item}: the key must be a dotted path of names, e.g. axes.b0_over_B0.values")
+        _unknown(f"--set {key}: ", {parts[0]: None}, _TOP_KEYS)
         try:
             value = yaml.safe_load(raw)
         except yaml.YAMLError as error:
-            raise ConfigError(f"--set {key}: malformed value: {error}") from None
-        parts = key.strip().split(".")
+            raise ConfigError(f"--set {key}: {describe_yaml_error(error)}") from None
         node = config
         for part in parts[:-1]:
             if not isinstance(node, dict):
@@ -246,7 +251,10 @@ def _apply_overrides(config: dict, overrides: Sequence[str]) -> dict:
             node = node.setdefault(part, {})
         if not isinstance(node, dict):
             raise ConfigError(f"--set {key}: cannot set a key inside a non-mapping")
-        node[parts[-1]] = value
+        if value is None:
+            node.pop(parts[-1], None)
+        else:
+            node[parts[-1]] = value
     return config
 
 
@@ -285,6 +293,8 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
             robot_path = candidate if candidate.exists() or not robot_path.exists() else robot_path
         if not robot_path.exists():
             raise ConfigError(f"{where}: robot: no such robot file '{robot_entry}' (looked in {base_dir})")
+        if robot_path.is_dir():
+            raise ConfigError(f"{where}: robot: '{robot_entry}' is a folder, not a robot file")
         robot = load_robot(robot_path)
         robot_source = str(robot_entry)
     elif isinstance(robot_entry, Mapping):
@@ -873,40 +883,67 @@ def _check_output_dir(out_dir: Path) -> None:
         raise ConfigError(f"--out {out_dir}: cannot write into {existing} (permission denied)")
 
 
+def _axis_label(axis: Axis) -> str:
+    """The axis name with its unit: SI for absolute values, 'relative' otherwise."""
+    if axis.relative:
+        return f"{axis.name} (relative)"
+    if axis.field in _SIMPLE_FIELDS:
+        unit = _SIMPLE_FIELDS[axis.field][1].replace("_m2", " m^2")
+    elif axis.field in _DERIVED_FIELDS:
+        unit = _DERIVED_FIELDS[axis.field]
+    else:
+        unit = {"mass": "kg", "inertia": "kg m^2"}.get(axis.field.rsplit(".", 1)[1], "m")
+    return axis.name if unit == "1" else f"{axis.name} [{unit}]"
+
+
 def _sweep_figures(spec: SweepSpec, out_dir: Path, values: dict[str, np.ndarray]) -> list[Path]:
-    """A line plot per metric for 1-D sweeps, a heatmap per metric for 2-D product sweeps."""
+    """A heatmap per metric for 2-D product sweeps, line plots for 1-D and zipped sweeps
+    (against the first axis); none for 3 or more product axes (grids.npz holds them).
+    Columns that do not vary are left out of the figures."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    varying = {c: v for c, v in values.items() if np.ptp(v) > 1e-12 * max(1.0, float(np.max(np.abs(v))))} or values
     paths = []
     if spec.combine == "product" and len(spec.axes) == 2:
         ax0, ax1 = spec.axes
-        for column, flat in values.items():
+        for column, flat in varying.items():
             grid = flat.reshape(spec.shape)
             fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
-            mesh = ax.pcolormesh(ax1.values, ax0.values, grid, shading="nearest", cmap="viridis")
+            # Cells by index, labelled with the values, so uneven axes draw as even cells.
+            mesh = ax.pcolormesh(np.arange(len(ax1.values)), np.arange(len(ax0.values)), grid, shading="nearest",
+                                 cmap="viridis")
             fig.colorbar(mesh, ax=ax, label=column)
             if grid.size > 1 and np.ptp(grid) > 0 and min(grid.shape) > 1:
-                contours = ax.contour(ax1.values, ax0.values, grid, colors="white", linewidths=0.6)
+                contours = ax.contour(np.arange(len(ax1.values)), np.arange(len(ax0.values)), grid, colors="white",
+                                      linewidths=0.6)
                 ax.clabel(contours, fontsize=7, fmt="%.3g")
-            ax.set_xlabel(ax1.name)
-            ax.set_ylabel(ax0.name)
+            for axis, set_ticks, set_labels in ((ax1, ax.set_xticks, ax.set_xticklabels),
+                                                (ax0, ax.set_yticks, ax.set_yticklabels)):
+                ticks = np.unique(np.linspace(0, len(axis.values) - 1, min(len(axis.values), 7)).round().astype(int))
+                set_ticks(ticks)
+                set_labels([f"{axis.values[t]:.3g}" for t in ticks])
+            ax.set_xlabel(_axis_label(ax1))
+            ax.set_ylabel(_axis_label(ax0))
             ax.set_title(f"{spec.name}: {column}")
             paths.append(results.save_figure(fig, out_dir / f"heatmap_{column}.png", dpi=130))
             plt.close(fig)
-    elif len(spec.axes) == 1:
+    elif len(spec.axes) == 1 or spec.combine == "zip":
         axis = spec.axes[0]
-        fig, axes = plt.subplots(1, len(values), figsize=(3.6 * len(values), 3.2), constrained_layout=True, squeeze=False)
-        for ax, (column, flat) in zip(axes[0], values.items()):
+        fig, axes = plt.subplots(1, len(varying), figsize=(3.6 * len(varying), 3.2), constrained_layout=True,
+                                 squeeze=False)
+        for ax, (column, flat) in zip(axes[0], varying.items()):
             ax.plot(axis.values, flat, "o-")
-            ax.set_xlabel(axis.name)
+            ax.set_xlabel(_axis_label(axis) + (" (axes zipped)" if len(spec.axes) > 1 else ""))
             ax.set_ylabel(column)
             ax.grid(alpha=0.3)
         fig.suptitle(spec.name)
         paths.append(results.save_figure(fig, out_dir / "metrics.png", dpi=130))
         plt.close(fig)
+    else:
+        print(f"no figures for a {len(spec.axes)}-axis product sweep; grids.npz holds the arrays", file=sys.stderr)
     return paths
 
 
@@ -961,7 +998,9 @@ def _cmd_figures(args) -> int:
     from .figures import all_figures
 
     figures = all_figures()
-    wanted = args.only.split(",") if args.only else list(figures)
+    if args.only is not None and not args.only.strip(","):
+        raise ConfigError(f"--only: no figure named; known: {', '.join(figures)}")
+    wanted = [name for name in args.only.split(",") if name] if args.only is not None else list(figures)
     unknown = [name for name in wanted if name not in figures]
     if unknown:
         raise ConfigError(f"--only: unknown figure(s) {', '.join(unknown)}; known: {', '.join(figures)}")

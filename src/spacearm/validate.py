@@ -6,7 +6,7 @@ import os
 
 import yaml
 
-from .robot import ConfigError, robot_from_mapping
+from .robot import ConfigError, describe_yaml_error, robot_from_mapping
 
 
 def read_yaml(path: str | os.PathLike) -> object:
@@ -22,7 +22,7 @@ def read_yaml(path: str | os.PathLike) -> object:
     except UnicodeDecodeError:
         raise ConfigError(f"{path}: not a UTF-8 text file") from None
     except yaml.YAMLError as error:
-        raise ConfigError(f"{path}: malformed YAML: {error}") from None
+        raise ConfigError(f"{path}: {describe_yaml_error(error)}") from None
 
 
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:
