@@ -252,6 +252,34 @@ def test_invalid_sweeps_name_the_problem(change, message):
         load_sweep(sweep_config(**change))
 
 
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("chunksize=4", r"--set chunksize: unknown key 'chunksize' \(did you mean 'chunk_size'\?\)"),
+        ("=3", r"--set =3: the key must be a dotted path"),
+        ("a..b=3", r"--set a\.\.b=3: the key must be a dotted path"),
+        ("chunk_size=[1,", r"--set chunk_size: malformed YAML at line 1, column 4"),
+    ],
+)
+def test_bad_overrides_name_themselves(override, message):
+    with pytest.raises(sa.ConfigError, match=message):
+        load_sweep(sweep_config(), overrides=[override])
+
+
+def test_override_null_removes_a_key_and_ranges_may_descend():
+    spec = load_sweep(sweep_config(), overrides=[
+        "axes.b0_over_B0.values=null", "axes.b0_over_B0.range={start: 2.0, stop: 1.0, step: -0.5}"])
+    assert spec.axes[0].values.tolist() == [2.0, 1.5, 1.0]
+
+
+def test_malformed_yaml_is_one_line(tmp_path, capsys):
+    path = tmp_path / "broken.yaml"
+    path.write_text("name: x\nrobot: [a\n")
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "malformed YAML at line 3, column 1" in err
+
+
 def test_cli_invalid_sweep_exits_2_and_writes_nothing(tmp_path, capsys):
     path = write(tmp_path, sweep_config(axes={"m1": {"field": "links[0].mass", "values": [-1.0]}}))
     out = tmp_path / "never"
