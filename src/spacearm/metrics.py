@@ -424,24 +424,19 @@ def _wbar_two_link(robot: PlanarRobot, measure: str, elbow: str, phi1_panels: in
     nodes, weights = jnp.asarray(nodes, dtype), jnp.asarray(weights, dtype)
     lo, hi = {"down": (0.0, math.pi), "up": (-math.pi, 0.0), "both": (-math.pi, math.pi)}[elbow]
     if rule == "adaptive":
-        # Gauss-Legendre panels in phi1, each split where the zero set of det J* meets
-        # the strip's edges phi2 = 0, +-pi (phi1 = 0, +-pi, which are panel edges, and
-        # +-arccos of _edge_crossings; elsewhere than 0, +-pi only for long b0): across
-        # those phi1 the inner integral has a jump in its third derivative. A panel
-        # without a crossing is split at its midpoint.
-        phi1_edges = jnp.linspace(-jnp.pi, jnp.pi, phi1_panels + 1, dtype=dtype)
-        left, right = phi1_edges[:-1], phi1_edges[1:]
-        middle = 0.5 * (left + right)
+        # Gauss-Legendre panels in phi1, halved, and split where the zero set of det J*
+        # meets the strip's edges phi2 = 0, +-pi (phi1 = 0, +-pi, which are panel edges, and
+        # +-arccos of _edge_crossings, elsewhere only for long b0): across those phi1 the
+        # inner integral has a jump in its third derivative. An absent crossing gives a
+        # zero-width sub-panel (static shapes).
+        halves = jnp.linspace(-jnp.pi, jnp.pi, 2 * phi1_panels + 1, dtype=dtype)
         cosines, valid = _edge_crossings(coeffs)
-        angles = jnp.arccos(cosines)[:, None]  # (2, 1): phi2 = 0 and phi2 = pi
-        crossing = jnp.where(middle > 0, angles, -angles)  # in this panel's half of the circle
-        inside = valid[:, None] & (crossing > left) & (crossing < right)
-        cuts = jax.lax.stop_gradient(jnp.where(inside, crossing, middle))  # (2, phi1_panels)
-        first, second = jnp.min(cuts, axis=0), jnp.max(cuts, axis=0)
-        starts = jnp.stack([left, first, second])
-        widths = jnp.stack([first, second, right]) - starts  # (3, phi1_panels)
-        phi1 = (starts[..., None] + widths[..., None] * nodes).reshape(-1)
-        phi1_weights = (widths[..., None] * weights).reshape(-1)
+        angles = jnp.arccos(cosines)
+        crossings = jnp.where(jnp.concatenate([valid, valid]), jnp.concatenate([angles, -angles]), -jnp.pi)
+        breaks = jax.lax.stop_gradient(jnp.sort(jnp.concatenate([halves, crossings])))
+        starts, widths = breaks[:-1], breaks[1:] - breaks[:-1]  # (2 phi1_panels + 4,)
+        phi1 = (starts[:, None] + widths[:, None] * nodes).reshape(-1)
+        phi1_weights = (widths[:, None] * weights).reshape(-1)
     else:
         count = phi1_panels * order
         phi1 = -jnp.pi + 2.0 * jnp.pi * jnp.arange(count, dtype=dtype) / count
