@@ -208,3 +208,76 @@ def test_workspace_map_inverse_kinematics_round_trip(table1):
     _, _, ground = workspace_map(table1, 41, ground=True)
     # Ground robot: w/L^2 = l1 l2 |sin phi2| / L^2 is at most 1/4 (at r^2 = l1^2 + l2^2).
     assert float(np.nanmax(np.asarray(ground))) <= 0.25 + 1e-12
+
+
+def test_panel_forms_of_the_determinant_match_the_written_out_one():
+    # The adaptive rule's det J* = N / H: trigonometric forms in phi2, rotated to panel
+    # centers, and N as a quartic in t = tan((phi2 - c) / 2), against _signed_determinant.
+    from spacearm.kinematics import design_coefficients
+    from spacearm.metrics import _TO_QUARTIC, _fourier_forms, _panel_rotations, _polynomial, _signed_determinant
+
+    rng = np.random.default_rng(8)
+    centers = np.array([0.3, 2.0, -2.9])
+    rotate_n, rotate_h = _panel_rotations(centers)
+    for robot in (sa.umetani1990(), random_robot(rng, 2)):
+        coeffs = design_coefficients(robot)
+        phi1, offset = rng.uniform(-4, 4, 50), rng.uniform(-0.6, 0.6, 50)
+        numerator, total = (np.asarray(x) for x in _fourier_forms(coeffs, np.cos(phi1), np.sin(phi1)))
+        for k, c in enumerate(centers):
+            det = np.asarray(_signed_determinant(coeffs, np.cos(phi1), np.sin(phi1), c + offset))
+            n_local, h_local = numerator @ rotate_n[:, 5 * k : 5 * k + 5], total @ rotate_h[:, 3 * k : 3 * k + 3]
+            basis = np.stack([np.ones_like(offset), np.cos(offset), np.sin(offset), np.cos(2 * offset), np.sin(2 * offset)], -1)
+            h = np.sum(h_local * basis[:, :3], -1)
+            assert np.all(h > 0)
+            np.testing.assert_allclose(np.sum(n_local * basis, -1) / h, det, rtol=1e-12, atol=1e-13)
+            t = np.tan(offset / 2)
+            quartic = np.asarray(_polynomial(jnp.asarray(n_local @ _TO_QUARTIC), t)) / (1 + t * t) ** 2
+            np.testing.assert_allclose(quartic / h, det, rtol=1e-12, atol=1e-13)
+
+
+def test_closed_form_edge_crossings_are_the_sign_changes_on_the_strip_edges():
+    # phi1 splits of the adaptive rule: besides phi1 = 0, pi, det J* changes sign on
+    # phi2 = 0 (pi) exactly at +-arccos of _edge_crossings; compare with a dense scan.
+    from spacearm.kinematics import design_coefficients
+    from spacearm.metrics import _edge_crossings, _signed_determinant
+
+    rng = np.random.default_rng(9)
+    robots = [random_robot(rng, 2).replace(base_attach=np.float64(rng.uniform(0.2, 4.0))) for _ in range(12)]
+    robots += [r.replace(base_mass=np.float64(rng.uniform(20, 60)), base_inertia=np.float64(rng.uniform(2, 20))) for r in robots[:8]]
+    grid = np.linspace(1e-9, math.pi - 1e-9, 200_001)
+    found = 0
+    for robot in robots:
+        coeffs = design_coefficients(robot)
+        cosines, valid = (np.asarray(x) for x in _edge_crossings(coeffs))
+        for edge, phi2 in enumerate((0.0, math.pi)):
+            det = np.asarray(_signed_determinant(coeffs, np.cos(grid), np.sin(grid), phi2))
+            changes = grid[np.nonzero(np.sign(det[1:]) != np.sign(det[:-1]))[0]]
+            if valid[edge]:
+                found += 1
+                assert changes.shape == (1,) and abs(changes[0] - math.acos(cosines[edge])) < 1e-4, (changes, cosines)
+            else:
+                assert changes.size == 0, changes
+    assert found >= 3  # the scan does test crossings away from phi1 = 0, pi
+
+
+def test_polynomial_roots_and_taylor_cos_sin():
+    from spacearm.metrics import _cos_sin, _polynomial_roots
+
+    # (t - 0.1)(t + 2)(t^2 + 1): one root in [-0.5, 0.5]; none in [0.2, 0.5] (midpoint returned).
+    quartic = np.polynomial.polynomial.polyfromroots([0.1, -2.0, 1j, -1j]).real
+    roots = _polynomial_roots(jnp.asarray(quartic), jnp.array([-0.5, 0.2]), jnp.array([0.5, 0.5]), newton_steps=4)
+    np.testing.assert_allclose(np.asarray(roots), [0.1, 0.35], rtol=0, atol=1e-15)
+    for bound in (math.pi / 16, math.pi / 8, math.pi / 2):
+        theta = np.linspace(-bound, bound, 1001)
+        cos, sin = _cos_sin(jnp.asarray(theta), bound)
+        np.testing.assert_allclose(np.asarray(cos), np.cos(theta), rtol=0, atol=3e-16)
+        np.testing.assert_allclose(np.asarray(sin), np.sin(theta), rtol=0, atol=3e-16)
+
+
+def test_elbow_sheets_and_measures_agree_with_a_converged_reference():
+    # elbow "both" and measure="joint" through the same adaptive rule, against a finer one.
+    robot = random_robot(np.random.default_rng(12), 2).replace(base_attach=np.float64(3.0))
+    fine = {"phi1_panels": 16, "phi2_panels": 8, "order": 16, "newton_steps": 8}
+    for options in ({"elbow": "both"}, {"measure": "joint"}, {"measure": "joint", "elbow": "up"}):
+        value = float(average_manipulability(robot, **options))
+        assert value == pytest.approx(float(average_manipulability(robot, **options, **fine)), rel=1e-11), options
