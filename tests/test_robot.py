@@ -152,3 +152,20 @@ def test_fast_validity_check_agrees_with_the_detailed_one(table1):
         assert _looks_valid(robot) == valid, leaves
         seen[valid] += 1
     assert min(seen.values()) > 20  # both outcomes exercised
+
+
+def test_console_script_uses_every_cpu_core_unless_told_otherwise(monkeypatch):
+    from spacearm.config import use_every_cpu_core
+
+    monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_thunk_runtime=true")
+    count = use_every_cpu_core()
+    import os
+
+    if count > 1:
+        assert os.environ["XLA_FLAGS"] == f"--xla_cpu_use_thunk_runtime=true --xla_force_host_platform_device_count={count}"
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=3")
+    assert use_every_cpu_core() == 0 and os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=3"
+    code = "import jax; from spacearm.cli import console_main; import sys; sys.argv = ['spacearm', 'info']; console_main()"
+    monkeypatch.delenv("XLA_FLAGS")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout
+    assert f"device_count {max(1, len(os.sched_getaffinity(0)))}" in out

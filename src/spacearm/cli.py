@@ -101,5 +101,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
+def console_main() -> int:
+    """The ``spacearm`` console script: :func:`main` with one JAX device per CPU core."""
+    from .config import use_every_cpu_core
+
+    use_every_cpu_core()
+    return main()
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    sys.exit(console_main())
