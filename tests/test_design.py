@@ -292,6 +292,10 @@ def test_optimize_command_writes_front_summary_and_figures(tmp_path):
     assert summary["methods"]["grid"]["evaluations"] == 45
     assert summary["methods"]["gradient"]["value_and_gradient_cost_ratio"] > 0
     assert "value and gradient" in summary["evaluation_counting"]
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["config"] == config and manifest["float64"] is True
+    for key in ("config_sha256", "packages", "git", "device_count", "command", "timings_s"):
+        assert key in manifest
     for name in ("front.png", "designs.png", "convergence.png", "pareto_grid.csv", "pareto_nsga2.csv"):
         assert (out / name).stat().st_size > 0
     assert not list(out.glob(".*tmp"))  # atomic writes leave no temporaries

@@ -164,6 +164,14 @@ def test_manifest_config_is_a_sweep_file_that_reruns(tmp_path):
     assert run_sweep(again, tmp_path / "again", progress=False).table["S_M"].tolist() == result.table["S_M"].tolist()
 
 
+def test_manifest_git_state_is_taken_before_the_run_writes(tmp_path, monkeypatch):
+    """Regenerating committed results modifies tracked files; that must not mark the code dirty."""
+    states = iter([{"revision": "abc", "dirty": False}, {"revision": "abc", "dirty": True}])
+    monkeypatch.setattr(results, "git_state", lambda *a: next(states))
+    run_sweep(load_sweep(sweep_config(metrics=["S_M"])), tmp_path / "out", progress=False)
+    assert json.loads((tmp_path / "out" / "manifest.json").read_text())["git"] == {"revision": "abc", "dirty": False}
+
+
 def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     spec = load_sweep(sweep_config())
     run_sweep(spec, tmp_path / "full", progress=False)

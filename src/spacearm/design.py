@@ -37,6 +37,7 @@ import dataclasses
 import difflib
 import math
 import os
+import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -1146,8 +1147,10 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, baselines
     Returns:
         The summary dictionary also written to ``summary.json``.
     """
-    from .results import write_csv, write_json
+    from .results import git_state, manifest, write_csv, write_json
 
+    code_state = git_state()  # before anything under out_dir (perhaps tracked) changes
+    started = time.perf_counter()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     two = len(problem.objectives) == 2
@@ -1243,10 +1246,14 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, baselines
             written.append(write_csv(out_dir / f"pareto_{name}.csv", _front_table(problem, results[name])))
     if figures and two:
         written += plot_results(problem, results, summary, out_dir)
-    summary["files"] = [p.name for p in written] + ["summary.json"]
+    summary["files"] = [p.name for p in written] + ["summary.json", "manifest.json"]
     if config is not None:
         summary["config"] = dict(config)
     write_json(out_dir / "summary.json", summary)
+    timings = {"wall": time.perf_counter() - started}
+    write_json(out_dir / "manifest.json", manifest(dict(config) if config is not None else {"problem": problem.name},
+                                                   command=sys.argv, timings=timings, git=code_state,
+                                                   extra={"files": summary["files"]}))
     log(f"  wrote {out_dir}: {', '.join(summary['files'])}")
     return summary
 

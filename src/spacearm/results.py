@@ -171,9 +171,13 @@ def device_info() -> dict[str, Any]:
 
 
 def manifest(config: Any, *, command: Sequence[str] | None = None, timings: Mapping[str, float] | None = None,
-             extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
+             extra: Mapping[str, Any] | None = None, git: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Everything needed to rerun a result: the resolved config and its hash, versions,
-    git state, float64 flag, devices and timings."""
+    git state, float64 flag, devices and timings.
+
+    ``git``: the state taken before the run wrote anything (default: now). Regenerating
+    results that are committed changes tracked files, which must not mark the code dirty.
+    """
     import jax
 
     data = {
@@ -184,7 +188,7 @@ def manifest(config: Any, *, command: Sequence[str] | None = None, timings: Mapp
         "python": platform.python_version(),
         "platform": platform.platform(),
         "packages": package_versions(),
-        "git": git_state(),
+        "git": dict(git) if git is not None else git_state(),
         "float64": bool(jax.config.jax_enable_x64),
         **device_info(),
         "timings_s": dict(timings or {}),

@@ -761,6 +761,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)
     _check_output_dir(out_dir)
+    code_state = results.git_state()  # before this run changes any tracked result file
     robot, points = build_designs(spec)
     total = spec.n_designs
     devices = jax.device_count()
@@ -849,7 +850,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
         files.extend(REPORTS[spec.report](out_dir, rows, spec))
     timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
     data = results.manifest(
-        spec.config, command=command, timings=timings,
+        spec.config, command=command, timings=timings, git=code_state,
         extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk, "resumed_chunks": len(spans) - len(todo),
                "files": sorted(str(p.relative_to(out_dir)) for p in files)},
     )
