@@ -970,9 +970,9 @@ def add_sweep_command(subparsers) -> None:
         "sweep",
         help="run a YAML design sweep (e.g. sweeps/table2.yaml)",
         description=(
-            "Evaluate every design of a sweep file in compiled, batched chunks and write table.csv, "
-            "grids.npz, manifest.json and figures into results/<name>/ (or --out). An interrupted sweep "
-            "resumes from the finished chunks when run again."
+            "Evaluate every design of a sweep file in compiled, batched chunks and write table.csv,\n"
+            "grids.npz, manifest.json and figures into results/<name>/ (or --out). An interrupted\n"
+            "sweep resumes from the finished chunks when run again."
         ),
         epilog=(
             "examples:\n"
