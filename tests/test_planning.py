@@ -2,7 +2,6 @@
 of eq. (5) over the naive model of tests/reference.py, a MuJoCo zero-gravity simulation
 of a planned loop, and the reached targets themselves."""
 
-import jax
 import numpy as np
 import pytest
 from scipy.integrate import quad

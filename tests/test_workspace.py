@@ -1,6 +1,5 @@
 """Workspaces (sec. 3): closed forms, relations (eq. 9), dynamic singularities, straight paths."""
 
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
