@@ -172,6 +172,34 @@ def test_manifest_git_state_is_taken_before_the_run_writes(tmp_path, monkeypatch
     assert json.loads((tmp_path / "out" / "manifest.json").read_text())["git"] == {"revision": "abc", "dirty": False}
 
 
+def test_reordered_axes_never_reuse_chunks(tmp_path):
+    """The axis order decides which design is in which row, so it is part of the resume key."""
+    axes = {"r": {"field": "base.attach", "values": [0.0, 1.0, 2.0]}, "b": {"field": "base.mass", "values": [500.0, 900.0]}}
+    spec = load_sweep(sweep_config(axes=axes, metrics=["S_G"]))
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "o", progress=False, stop_after_chunks=2)
+    swapped = load_sweep(sweep_config(axes=dict(reversed(list(axes.items()))), metrics=["S_G"]))
+    assert results.config_hash(swapped.config) != results.config_hash(spec.config)
+    result = run_sweep(swapped, tmp_path / "o", progress=False)
+    assert result.manifest["resumed_chunks"] == 0
+    fresh = run_sweep(swapped, tmp_path / "fresh", progress=False)
+    assert result.table["S_G"].tolist() == fresh.table["S_G"].tolist()
+    manifest = json.loads((tmp_path / "o" / "manifest.json").read_text())
+    assert list(manifest["config"]["axes"]) == ["b", "r"]
+
+
+def test_cleanup_touches_only_what_a_sweep_wrote(tmp_path):
+    out = tmp_path / "foreign"
+    (out / ".partial-mine").mkdir(parents=True)
+    (out / ".partial-mine" / "important.txt").write_text("keep")
+    for name in ("notes.txt", "data.csv", "heatmap_x.png"):
+        (out / name).write_text("user data")
+    (out / "manifest.json").write_text(json.dumps({"name": "my-dataset", "files": ["notes.txt", "data.csv", "heatmap_x.png"]}))
+    run_sweep(load_sweep(sweep_config(metrics=["S_M"])), out, progress=False)
+    for name in ("notes.txt", "data.csv", "heatmap_x.png", ".partial-mine/important.txt"):
+        assert (out / name).exists(), name
+
+
 def test_interrupted_sweep_resumes_to_the_same_table(tmp_path):
     spec = load_sweep(sweep_config())
     run_sweep(spec, tmp_path / "full", progress=False)
@@ -189,9 +217,10 @@ def test_resume_ignores_chunks_of_another_chunk_size_and_damaged_chunks(tmp_path
     spec = load_sweep(sweep_config())
     with pytest.raises(KeyboardInterrupt):
         run_sweep(spec, tmp_path / "cut", progress=False, stop_after_chunks=2)
+    old_partial = next((tmp_path / "cut").glob(".partial-*"))
     bigger = load_sweep(sweep_config(chunk_size=4))  # same designs, other chunking: start afresh
     assert run_sweep(bigger, tmp_path / "cut", progress=False).manifest["resumed_chunks"] == 0
-    assert not any(p.name.startswith(".partial") for p in (tmp_path / "cut").iterdir())
+    assert [p.name for p in (tmp_path / "cut").glob(".partial-*")] == [old_partial.name]  # not ours to delete
     with pytest.raises(KeyboardInterrupt):
         run_sweep(spec, tmp_path / "again", progress=False, stop_after_chunks=2)
     damaged = sorted((tmp_path / "again").glob(".partial-*/chunk_*.npz"))[0]
@@ -240,6 +269,13 @@ def test_rerun_into_the_same_folder_removes_its_stale_figures(tmp_path):
             dict(axes={"i0": {"field": "links[0].inertia", "values": [9.0]}, "m": {"field": "arm.mass", "values": [300.0]}}),
             r"both set links\[0\]\.inertia; give each design number one axis",
         ),
+        (dict(axes={"b": {"field": "base.attach", "range": {"start": 0.0, "stop": 1.0, "step": 1e-300}}}),
+         r"axes\.b\.range\.step: 1e-300 from 0 to 1 gives too many values"),
+        (dict(axes={"b": {"field": "base.attach", "range": {"start": -1e308, "stop": 1e308, "num": 3}}}),
+         r"axes\.b\.range: stop - start overflows"),
+        (dict(report="table2", metrics=[{"name": "wbar", "measure": "joint"}, "S_M", "S_G"],
+              axes={"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.0]}}),
+         r"report: table2 compares the area average of eq\. 12; drop wbar's measure: joint"),
         (dict(report="table2", metrics=["S_M", "S_G"]), r"report: table2 needs the metrics wbar, S_M and S_G \(missing: wbar\)"),
         (dict(report="table2", metrics=["wbar", "S_M", "S_G"], axes={"b0": {"field": "base.attach", "values": [0.0]}}),
          r"report: table2 needs exactly one axis, b0_over_B0"),
@@ -272,6 +308,17 @@ def test_invalid_sweeps_name_the_problem(change, message):
 def test_bad_overrides_name_themselves(override, message):
     with pytest.raises(sa.ConfigError, match=message):
         load_sweep(sweep_config(), overrides=[override])
+
+
+def test_length_and_arm_mass_axes_combine():
+    axes = {"l": {"field": "links[*].length", "values": [1.5]}, "m": {"field": "arm.mass", "values": [300.0]}}
+    robot, _ = build_designs(load_sweep(sweep_config(axes=axes)))
+    # Table 1 links: 2 m, 100 kg, 33.3 kg m^2 each -> 1.5 m, 150 kg: I = 33.3 (1.5/2)^2 (150/100).
+    np.testing.assert_allclose(np.asarray(robot.link_inertia), [[33.3 * 0.75**2 * 1.5] * 2], rtol=1e-14)
+
+
+def test_override_null_of_a_missing_key_changes_nothing():
+    assert load_sweep(sweep_config(), overrides=["axes.zz.range=null"]).config == load_sweep(sweep_config()).config
 
 
 def test_override_null_removes_a_key_and_ranges_may_descend():

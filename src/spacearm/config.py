@@ -50,6 +50,18 @@ def use_every_cpu_core() -> int:
     if "xla_force_host_platform_device_count" in flags:
         return 0
     count = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    count = min(count, _cgroup_cpu_limit() or count)
     if count > 1:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()
     return count
+
+
+def _cgroup_cpu_limit() -> int | None:
+    """The CPU quota of this container (cgroup v2 ``cpu.max``), rounded up; None when unlimited."""
+    try:
+        quota, period = open("/sys/fs/cgroup/cpu.max").read().split()[:2]
+    except (OSError, ValueError):
+        return None
+    if quota == "max":
+        return None
+    return max(1, -(-int(quota) // int(period)))

@@ -219,6 +219,9 @@ def check_table2(spec) -> None:
     missing = {"wbar", "S_M", "S_G"} - {m.name for m in spec.metrics}
     if missing:
         raise ConfigError(f"{where} needs the metrics wbar, S_M and S_G (missing: {', '.join(sorted(missing))})")
+    wbar = next(m for m in spec.metrics if m.name == "wbar")
+    if wbar.options.get("measure", "area") != "area":
+        raise ConfigError(f"{where} compares the area average of eq. 12; drop wbar's measure: {wbar.options['measure']}")
     paper = umetani1990()
     for field in ("base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b"):
         if np.shape(getattr(spec.robot, field)) != np.shape(getattr(paper, field)) or not np.allclose(

@@ -54,8 +54,9 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
 
 
 def write_json(path: str | os.PathLike, data: Any) -> Path:
-    """Write JSON atomically (sorted keys, indented, NumPy scalars converted)."""
-    return write_text(path, json.dumps(data, indent=2, sort_keys=True, default=_json_default) + "\n")
+    """Write JSON atomically (keys in the order given: a sweep's axis order is meaning, not
+    presentation; indented, NumPy scalars converted)."""
+    return write_text(path, json.dumps(data, indent=2, default=_json_default) + "\n")
 
 
 def write_npz(path: str | os.PathLike, **arrays: np.ndarray) -> Path:
@@ -128,8 +129,9 @@ def _json_default(value):
 
 
 def config_hash(config: Any) -> str:
-    """SHA-256 of the canonical JSON of a resolved config (sorted keys)."""
-    text = json.dumps(config, sort_keys=True, separators=(",", ":"), default=_json_default)
+    """SHA-256 of the compact JSON of a resolved config (built in a fixed key order by the loaders)."""
+    # Key order is kept: in a sweep the order of the axes decides which design is which row.
+    text = json.dumps(config, separators=(",", ":"), default=_json_default)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 

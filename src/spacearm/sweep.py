@@ -168,6 +168,8 @@ def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
     if ("num" in rng) == ("step" in rng):
         raise ConfigError(f"{where}.range: give exactly one of 'num' or 'step'")
     start, stop = float(rng["start"]), float(rng["stop"])
+    if not math.isfinite(stop - start):
+        raise ConfigError(f"{where}.range: stop - start overflows ({start:g} to {stop:g})")
     if "num" in rng:
         num = rng["num"]
         if not isinstance(num, int) or isinstance(num, bool) or num < 1:
@@ -177,7 +179,10 @@ def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
     step = rng["step"]
     if not _is_number(step) or step == 0 or not math.isfinite(step):
         raise ConfigError(f"{where}.range.step: must be a nonzero number (negative for a descending axis), got {step!r}")
-    count = int(math.floor((stop - start) / step + 1e-9)) + 1
+    steps = (stop - start) / step
+    if not math.isfinite(steps) or steps > 2**53:
+        raise ConfigError(f"{where}.range.step: {step:g} from {start:g} to {stop:g} gives too many values")
+    count = int(math.floor(steps + 1e-9)) + 1
     if count < 1:
         raise ConfigError(f"{where}.range: stepping by {step:g} from {start:g} never reaches {stop:g}; the axis is empty")
     _check_size(f"{where}.range", count, f"{count} steps", n_links)
@@ -248,13 +253,16 @@ def _apply_overrides(config: dict, overrides: Sequence[str]) -> dict:
         for part in parts[:-1]:
             if not isinstance(node, dict):
                 raise ConfigError(f"--set {key}: '{part}' is not a mapping in the sweep file")
+            if value is None and part not in node:
+                break  # nothing to remove
             node = node.setdefault(part, {})
-        if not isinstance(node, dict):
-            raise ConfigError(f"--set {key}: cannot set a key inside a non-mapping")
-        if value is None:
-            node.pop(parts[-1], None)
         else:
-            node[parts[-1]] = value
+            if not isinstance(node, dict):
+                raise ConfigError(f"--set {key}: cannot set a key inside a non-mapping")
+            if value is None:
+                node.pop(parts[-1], None)
+            else:
+                node[parts[-1]] = value
     return config
 
 
@@ -482,18 +490,28 @@ def _writes(field: str, n_links: int) -> set[str]:
 
 def _check_axes_compatible(where: str, axes: Sequence[Axis], n_links: int) -> None:
     """Refuse two axes that set the same design number: the result would depend on the
-    order of application. The length split and the arm mass both scale the link
-    inertias, by commuting factors, so that pair is allowed."""
+    order of application. A length axis and an arm-mass axis both scale the link
+    inertias, by commuting factors, so such pairs are allowed."""
     for i, first in enumerate(axes):
         for second in axes[i + 1:]:
-            if {_stage(first.field), _stage(second.field)} == {1, 2}:
-                continue
             shared = _writes(first.field, n_links) & _writes(second.field, n_links)
+            if {_scaling(first.field), _scaling(second.field)} == {"length", "mass"}:
+                shared = {name for name in shared if not name.startswith("link_inertia")}
             if shared:
                 raise ConfigError(
                     f"{where}: axes.{first.name} ({first.field}) and axes.{second.name} ({second.field}) both set "
                     f"{_leaf_label(sorted(shared)[0])}; give each design number one axis"
                 )
+
+
+def _scaling(field: str) -> str | None:
+    """'length' or 'mass' for fields that change link inertias by a factor (length^2 or
+    mass); such factors commute, so a length axis and a mass axis may share inertias."""
+    if field == "arm.length_split" or field.endswith("].length"):
+        return "length"
+    if field in ("arm.mass", "arm.mass_ratio"):
+        return "mass"
+    return None
 
 
 def _leaf_label(name: str) -> str:
@@ -770,7 +788,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     # same resolved config, effective chunk size, precision and package versions.
     from . import __version__
 
-    resume_key = {"config": spec.config, "chunk": chunk, "float64": bool(jax.config.jax_enable_x64),
+    resume_key = {"config": spec.config, "axis_order": [a.name for a in spec.axes], "chunk": chunk, "float64": bool(jax.config.jax_enable_x64),
                   "spacearm": __version__, "jax": jax.__version__}
     partial = out_dir / f".partial-{results.config_hash(resume_key)[:16]}"
 
@@ -856,20 +874,32 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     )
     previous = _previous_files(out_dir)
     files.append(results.write_json(out_dir / "manifest.json", data))
-    for folder in out_dir.glob(".partial-*"):  # ours, and any left by an earlier, different run here
-        shutil.rmtree(folder, ignore_errors=True)
+    shutil.rmtree(partial, ignore_errors=True)
     for name in previous - {str(p.relative_to(out_dir)) for p in files}:
-        (out_dir / name).unlink(missing_ok=True)  # an earlier run's figure this run did not draw
+        try:
+            (out_dir / name).unlink(missing_ok=True)  # an earlier sweep's figure this run did not draw
+        except OSError:
+            pass
+    others = sorted(p.name for p in out_dir.glob(".partial-*") if p.is_dir())
+    if others:
+        print(f"note: {out_dir} also holds {', '.join(others)} (chunks of another sweep run into this folder; "
+              "delete them if no run needs them)", file=sys.stderr)
     return SweepResult(out_dir, table, data, files)
 
 
+# The names a sweep writes (see run_sweep and the reports): only these are ever removed.
+_OWN_FILES = re.compile(r"(table\.csv|grids\.npz|metrics\.png|table\.md|fig10\.png|heatmap_[A-Za-z0-9_.]+\.png)")
+
+
 def _previous_files(out_dir: Path) -> set[str]:
-    """The files an earlier sweep wrote into ``out_dir`` (from its manifest), to replace them."""
+    """Files an earlier sweep wrote into ``out_dir``, read from its manifest when that is a
+    spacearm sweep manifest; limited to the names a sweep writes."""
     try:
-        listed = json.loads((out_dir / "manifest.json").read_text())["files"]
+        manifest = json.loads((out_dir / "manifest.json").read_text())
+        listed = manifest["files"] if "spacearm" in manifest["packages"] and "config_sha256" in manifest else []
     except (OSError, ValueError, KeyError, TypeError):
         return set()
-    return {name for name in listed if isinstance(name, str) and "/" not in name and not name.startswith(".")}
+    return {name for name in listed if isinstance(name, str) and _OWN_FILES.fullmatch(name)}
 
 
 def _check_output_dir(out_dir: Path) -> None:
