@@ -789,21 +789,16 @@ def _cmd_reach(args: argparse.Namespace) -> int:
     ]
     if args.animate:
         lines.append(f"animation      {animate_reach(robot, plan, out / 'reach.gif')}")
-    import os
-    import tempfile
+    from .results import write_npz
 
-    handle, temporary = tempfile.mkstemp(prefix=".reach-", suffix=".npz", dir=out)
-    with os.fdopen(handle, "wb") as stream:
-        np.savez(
-            stream,
-            postures_rad=plan.postures,
-            tips_m=plan.tips,
-            phase=plan.phase,
-            joint_waypoints_rad=plan.joint_waypoints,
-            target_m=plan.target,
-        )
-    os.chmod(temporary, 0o644)
-    os.replace(temporary, out / "reach.npz")
+    write_npz(
+        out / "reach.npz",
+        postures_rad=plan.postures,
+        tips_m=plan.tips,
+        phase=plan.phase,
+        joint_waypoints_rad=plan.joint_waypoints,
+        target_m=plan.target,
+    )
     print("\n".join(lines))
     return 0
 

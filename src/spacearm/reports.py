@@ -199,8 +199,8 @@ def _table2_summary(rows: list[dict]) -> list[str]:
     printed = [p[0] for _, p in matched]
     lines = [
         f"S_M and S_G agree with the printed values to their two decimals in {areas_agree} of {2 * len(matched)} cells.",
-        f"w-bar: ours {min(ours):.2f} to {max(ours):.2f} (x1e-2) where the paper prints {min(printed):.2f} to {max(printed):.2f}"
-        + (f"; rms relative difference {_rms_relative(ours, printed):.2f}." if matched else "."),
+        f"w-bar: ours {min(ours):.2f} to {max(ours):.2f} (x1e-2) where the paper prints {min(printed):.2f} to "
+        f"{max(printed):.2f}; rms relative difference {_rms_relative(ours, printed):.2f}.",
     ]
     if len(matched) > 1:
         first, last = float(matched[0][0]["b0_over_B0"]), float(matched[-1][0]["b0_over_B0"])
