@@ -29,7 +29,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
-from spacearm.metrics import average_manipulability  # noqa: E402
+from spacearm.analysis.manipulability_average import average_manipulability  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -19,7 +19,8 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 import spacearm as sa  # noqa: E402
-from spacearm import workspace as ws  # noqa: E402
+from spacearm import analysis as ws  # noqa: E402
+from spacearm.analysis import straight_workspace as spw  # noqa: E402
 
 from bench_motion import scipy_straight  # noqa: E402  (same folder: one SciPy baseline for both)
 
@@ -42,7 +43,7 @@ def main() -> None:
     print(f"{args.postures} postures x {args.directions} directions = {n_paths} straight tip paths, {jax.devices()[0]}")
 
     t0 = time.perf_counter()
-    compiled = ws._straight_path_ends.lower(robot, phis, args.directions, ()).compile()
+    compiled = spw._straight_path_ends.lower(robot, phis, args.directions, ()).compile()
     t_compile = time.perf_counter() - t0
     t0 = time.perf_counter()
     ends = jax.block_until_ready(compiled(robot, phis))

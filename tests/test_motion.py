@@ -9,6 +9,7 @@ from scipy.integrate import quad, solve_ivp
 
 import spacearm as sa
 from spacearm import motion
+from spacearm.motion import straight_paths
 
 from . import reference as ref
 from .conftest import random_robot
@@ -279,9 +280,9 @@ def test_redundant_arm_batched_over_designs_uses_minimum_norm_rates():
 def test_no_retrace_for_new_values(fig3_paths):
     robot, _ = fig3_paths
     motion.straight_tip_path(robot, PHI_FIG3, DIRECTIONS)
-    before = motion._straight_flat._cache_size()
+    before = straight_paths._straight_flat._cache_size()
     motion.straight_tip_path(robot, PHI_FIG3 + 0.1, -DIRECTIONS, max_step=0.1, max_length=3.0)
-    assert motion._straight_flat._cache_size() == before
+    assert straight_paths._straight_flat._cache_size() == before
 
 
 def test_straight_path_errors(table1):

@@ -8,6 +8,7 @@ from scipy.integrate import quad
 
 import spacearm as sa
 from spacearm import planning
+from spacearm.planning import reorientation
 
 from . import reference as ref
 from .conftest import random_robot
@@ -106,10 +107,10 @@ def test_joint_limits_are_respected_and_the_cache_is_reused():
     assert np.all(details.waypoints >= lower) and np.all(details.waypoints <= upper)
     assert abs(details.loops * reference_loop_rotation(ref.design(robot), split_loops(details)) + 20.0 * DEG) < 1e-9
     # new limits, start and angle are new values of the same shapes: no new compilation
-    cache_size = planning._optimize_loops._cache_size()
+    cache_size = reorientation._optimize_loops._cache_size()
     other = robot.replace(joint_lower=lower - 0.1, joint_upper=upper + 0.1)
     again = planning.plan_reorientation_details(other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG)
-    assert planning._optimize_loops._cache_size() == cache_size
+    assert reorientation._optimize_loops._cache_size() == cache_size
     assert abs(again.rotation + 12.0 * DEG) < 1e-9
 
 
@@ -231,7 +232,7 @@ def test_reach_command_line(tmp_path):
     robot_file = tmp_path / "robot.yaml"
     import yaml
 
-    from spacearm.robot import robot_to_mapping
+    from spacearm.models.planar import robot_to_mapping
 
     robot_file.write_text(yaml.safe_dump(robot_to_mapping(sa.umetani1990())))
     out = tmp_path / "reach"

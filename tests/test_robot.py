@@ -126,7 +126,7 @@ def test_console_script_exit_status(tmp_path):
 
 def test_fast_validity_check_agrees_with_the_detailed_one(table1):
     """robot._looks_valid (one vectorized pass) accepts exactly the designs the named checks accept."""
-    from spacearm.robot import _check_fields, _looks_valid
+    from spacearm.models.planar.robot import _check_fields, _looks_valid
 
     rng = np.random.default_rng(3)
     fields = ["base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b",

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm import workspace as ws
+from spacearm import analysis as ws
 
 from . import reference
 from .conftest import random_robot
@@ -59,7 +59,7 @@ def test_table1_radii_and_table2_areas():
     # Table 2 of the paper, S_M and S_G to its two printed decimals.
     printed = {0.0: (0.84, 0.84), 0.5: (1.13, 0.59), 1.0: (1.46, 0.39), 1.5: (1.83, 0.23), 2.0: (2.25, 0.11)}
     for ratio, (s_m, s_g) in printed.items():
-        areas = ws.normalized_areas(robot.replace(base_attach=np.float64(1.4 * ratio)))
+        areas = ws.normalized_workspace_areas(robot.replace(base_attach=np.float64(1.4 * ratio)))
         assert float(areas["maximum_reachable_disk"]) == pytest.approx(s_m, abs=0.006)
         assert float(areas["guaranteed"]) == pytest.approx(s_g, abs=0.006)
 

@@ -3,62 +3,95 @@
 Starts from Umetani & Yoshida, "Workspace and Manipulability Analysis of Space
 Manipulator", Trans. SICE 26(2), 1990. Importing the package changes no global JAX
 setting; call :func:`enable_x64` once for float64 (the command line does).
+
+The names below are the public API (DESIGN.md, "Public API"). The kernels of the
+lower layers are imported at once; the higher layers (analysis, motion, planning,
+design, io) on first use, so ``import spacearm`` stays light.
 """
 
+from typing import TYPE_CHECKING
+
+from ._core.errors import ConfigError as ConfigError
+from ._core.numeric import enable_x64 as enable_x64
 from ._version import __version__ as __version__
-from .config import enable_x64 as enable_x64
 from .kinematics import (
-    angular_momentum as angular_momentum,
-    arm_jacobian as arm_jacobian,
-    base_jacobian as base_jacobian,
     base_rate as base_rate,
-    centroid_positions as centroid_positions,
-    design_coefficients as design_coefficients,
+    base_rate_matrix as base_rate_matrix,
     fixed_base_jacobian as fixed_base_jacobian,
     fixed_base_manipulability as fixed_base_manipulability,
     generalized_jacobian as generalized_jacobian,
     manipulability as manipulability,
+    manipulability_ellipsoid as manipulability_ellipsoid,
+    tip_position as tip_position,
+)
+from .models import family_of as family_of, load_robot as load_robot
+from .models.planar import PlanarRobot as PlanarRobot, stack_robots as stack_robots, umetani1990 as umetani1990
+from .models.planar.closed_forms import (
+    angular_momentum as angular_momentum,
+    arm_jacobian as arm_jacobian,
+    base_jacobian as base_jacobian,
+    centroid_positions as centroid_positions,
+    design_coefficients as design_coefficients,
     manipulability_ellipse as manipulability_ellipse,
     manipulability_on_grid as manipulability_on_grid,
     momentum_inertias as momentum_inertias,
     robot_frame_tip_position as robot_frame_tip_position,
     tip_coefficients as tip_coefficients,
-    tip_position as tip_position,
-)
-from .robot import (
-    ConfigError as ConfigError,
-    PlanarRobot as PlanarRobot,
-    load_robot as load_robot,
-    stack_robots as stack_robots,
-    umetani1990 as umetani1990,
 )
 
-# Public names from the higher layers, imported on first use (keeps `import spacearm`
-# light). Each entry: public name -> module under spacearm.
+# Public names from the higher layers, imported on first use. Each entry: public name ->
+# module under spacearm.
 _LAZY = {
-    "average_manipulability": "metrics",
-    "normalized_areas": "metrics",
+    "average_manipulability": "analysis",
+    "normalized_areas": "analysis",
+    "straight_path_workspace": "analysis",
+    "fixed_vehicle_radius": "analysis",
+    "attitude_constraint": "analysis",
+    "maximum_reachable_radius": "analysis",
+    "guaranteed_radius": "analysis",
+    "path_independent_radius": "analysis",
+    "dynamic_singularities": "analysis",
+    "maximum_reachable_radii": "analysis",
+    "workspace_relations": "analysis",
     "integrate_joint_path": "motion",
     "joint_path_history": "motion",
     "straight_tip_path": "motion",
     "straight_tip_path_history": "motion",
     "StraightPath": "motion",
     "go_and_back": "motion",
-    "straight_path_workspace": "workspace",
-    "fixed_vehicle_radius": "workspace",
-    "attitude_constraint": "workspace",
-    "maximum_reachable_radius": "workspace",
-    "guaranteed_radius": "workspace",
-    "path_independent_radius": "workspace",
-    "dynamic_singularities": "workspace",
-    "maximum_reachable_radii": "workspace",
-    "workspace_relations": "workspace",
     "plan_reorientation": "planning",
     "plan_reach": "planning",
     "load_problem": "design",
     "pareto_search": "design",
     "hypervolume_2d": "design",
+    "open_results": "io",
 }
+
+if TYPE_CHECKING:  # the same names, visible to type checkers and the API reference
+    from .analysis import (
+        attitude_constraint,
+        average_manipulability,
+        dynamic_singularities,
+        fixed_vehicle_radius,
+        guaranteed_radius,
+        maximum_reachable_radii,
+        maximum_reachable_radius,
+        normalized_areas,
+        path_independent_radius,
+        straight_path_workspace,
+        workspace_relations,
+    )
+    from .design import hypervolume_2d, load_problem, pareto_search
+    from .io import open_results
+    from .motion import (
+        StraightPath,
+        go_and_back,
+        integrate_joint_path,
+        joint_path_history,
+        straight_tip_path,
+        straight_tip_path_history,
+    )
+    from .planning import plan_reach, plan_reorientation
 
 
 def __getattr__(name):

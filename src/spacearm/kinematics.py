@@ -1,446 +1,233 @@
-"""Kinematics of the free-floating planar arm: eq. (1), (2), (5), (6), (10).
+"""Kernels written once over the robot-family primitives: tip, J*, w*, ellipsoids, base rates.
 
-The virtual-manipulator split. Every body centroid and the tip is a fixed linear
-combination of the unit vectors u(theta_k) = (cos theta_k, sin theta_k), with
-coefficients that depend on the design alone (for the tip these are eq. 1's K_k).
-The angular momentum about the system centroid is then
+Each public kernel takes a robot of any family and a posture with any leading batch
+shape (planar ``phi (..., n+1)``; spatial ``q (..., n)`` with an optional
+``base_rotation (..., 3, 3)``). A family's closed form, where it registered one, is
+chosen by type at trace time; otherwise the generic formula runs per posture under
+``vmap``. The planar closed forms equal the generic path to ~1e-15 (tests/test_seam.py).
 
-    L = sum_l h_l(theta) dtheta_l,   h_l = I_l + sum_k W_kl cos(theta_k - theta_l),
+Generalized Jacobian (Umetani & Yoshida 1990, eq. 6, in any dimension):
 
-with the design-only matrix W_kl = sum_i m_i R_ik R_il. :func:`design_coefficients`
-computes K, W and the inertias once per design; the per-posture work is n sines and
-cosines, a few products and the reverse sums that turn absolute rates into joint
-rates. Public kernels are jitted at the entry point (nested calls inline), so a
-plain call from Python costs one dispatch, not one per operation. Kernels are written for any leading batch shape of the posture (and of the
-design, where it broadcasts), unrolled over the small static link count.
+    J* = J_M - J_S I_S^-1 I_M,
 
-Postures are ``phi = [phi0, phi1, ..., phin]`` (base attitude, joint angles), rad.
-The inertial frame has its origin at the system centroid.
+the tip twist per joint rate at zero momentum. Spatial J* is expressed in inertial axes
+as blkdiag(R, R) J*_bus (SPATIAL.md).
 """
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Sequence
-
 import jax
 import jax.numpy as jnp
 
-from .robot import PlanarRobot
+from ._core.batching import map_leading
+from .models.family import RobotFamily, family_of
 
 __all__ = [
-    "DesignCoefficients",
-    "design_coefficients",
-    "tip_coefficients",
-    "centroid_coefficients",
     "tip_position",
-    "centroid_positions",
-    "base_jacobian",
-    "arm_jacobian",
-    "momentum_inertias",
-    "base_rate",
-    "angular_momentum",
     "generalized_jacobian",
     "manipulability",
-    "manipulability_from_angles",
-    "manipulability_ellipse",
+    "manipulability_ellipsoid",
+    "base_rate_matrix",
+    "base_rate",
     "fixed_base_jacobian",
     "fixed_base_manipulability",
-    "fixed_base_tip_position",
-    "manipulability_on_grid",
-    "grid_angle_tables",
-    "robot_frame_tip_position",
+    "generic_generalized_jacobian",
+    "generic_manipulability",
+    "generic_tip_position",
+    "gram_root_determinant",
 ]
 
 
-@jax.tree_util.register_dataclass
-@dataclasses.dataclass(frozen=True)
-class DesignCoefficients:
-    """Design-only arrays of the virtual-manipulator view (computed once per design).
+# One posture -----------------------------------------------------------------------------
 
-    Attributes:
-        tip: ``(..., n+1)`` K_k, tip = sum_k K_k u(theta_k) (eq. 1), m.
-        centroids: ``(..., n+1, n+1)`` R_ik, centroid of body i = sum_k R_ik u(theta_k), m.
-        inertia_coupling: ``(..., n+1, n+1)`` W_kl = sum_i m_i R_ik R_il, kg m^2.
-        inertia: ``(..., n+1)`` I_0..I_n about the body centroids, kg m^2.
+
+def _jstar_one(family: RobotFamily, robot, posture):
+    J_S, J_M = family.jacobians(robot, posture)
+    I_S, I_M = family.momentum_map(robot, posture)
+    return J_M - J_S @ jnp.linalg.solve(I_S, I_M)
+
+
+def _base_matrix_one(family: RobotFamily, robot, posture):
+    I_S, I_M = family.momentum_map(robot, posture)
+    return -jnp.linalg.solve(I_S, I_M)
+
+
+def gram_root_determinant(J: jax.Array) -> jax.Array:
+    """sqrt(det(J J^T)) of ``(..., t, n)`` matrices (t <= n), 0 at rank loss with finite gradients.
+
+    For t = 2 the determinant is the sum of squared 2 x 2 minors (Cauchy-Binet), which
+    avoids the cancellation of det(J J^T) near singular postures.
     """
-
-    tip: jax.Array
-    centroids: jax.Array
-    inertia_coupling: jax.Array
-    inertia: jax.Array
-
-
-def _chain_offsets(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
-    """Offsets from the base centroid as coefficients of u(theta_k), before the shift to
-    the system centroid: centroid rows ``(..., n+1, n+1)`` and the tip row ``(..., n+1)``."""
-    n = robot.n_links
-    b0 = jnp.asarray(robot.base_attach)
-    lengths = robot.link_length
-    # spans[k] is the length along u(theta_k) passed on the way to anything beyond body k.
-    spans = jnp.concatenate([b0[..., None], lengths], axis=-1)  # (..., n+1)
-    k = jnp.arange(n + 1)
-    before = (k[None, :] < k[:, None]).astype(spans.dtype)  # [i, k]: k < i
-    own = jnp.concatenate([jnp.zeros_like(b0)[..., None], robot.link_a], axis=-1)
-    rows = spans[..., None, :] * before + jnp.eye(n + 1, dtype=spans.dtype) * own[..., None, :]
-    return rows, spans
-
-
-@jax.jit
-def design_coefficients(robot: PlanarRobot) -> DesignCoefficients:
-    """K, R, W and the inertias of a design (or a batch of designs).
-
-    Shifting the origin to the system centroid subtracts the mass-weighted mean of
-    the body offsets (eq. 3 integrated, zero initial linear momentum).
-    """
-    rows, tip_row = _chain_offsets(robot)
-    masses = jnp.concatenate([jnp.asarray(robot.base_mass)[..., None], robot.link_mass], axis=-1)
-    mean = jnp.einsum("...i,...ik->...k", masses, rows) / jnp.sum(masses, axis=-1)[..., None]
-    centroids = rows - mean[..., None, :]
-    tip = tip_row - mean
-    coupling = jnp.einsum("...i,...ik,...il->...kl", masses, centroids, centroids)
-    inertia = jnp.concatenate(
-        [jnp.asarray(robot.base_inertia)[..., None], robot.link_inertia], axis=-1
-    )
-    return DesignCoefficients(tip=tip, centroids=centroids, inertia_coupling=coupling, inertia=inertia)
-
-
-@jax.jit
-def tip_coefficients(robot: PlanarRobot) -> jax.Array:
-    """``(..., n+1)`` K_0..K_n of eq. (1), m; for n = 2 these are the paper's K0, K1, K2."""
-    return design_coefficients(robot).tip
-
-
-@jax.jit
-def centroid_coefficients(robot: PlanarRobot) -> jax.Array:
-    """``(..., n+1, n+1)`` R_ik: centroid of body i = sum_k R_ik u(theta_k), m."""
-    return design_coefficients(robot).centroids
-
-
-# Unit vectors ------------------------------------------------------------------------
-
-
-def _unit_vectors(phi: jax.Array, with_base: bool = True):
-    """cos and sin of the absolute angles theta_k = phi0 + ... + phik as lists of arrays.
-
-    With ``with_base=False`` the base attitude is taken as zero (the robot frame):
-    the base entries are the Python constants 1 and 0, which cost nothing.
-    """
-    phi = jnp.asarray(phi)
-    theta = jnp.cumsum(phi, axis=-1) if with_base else jnp.cumsum(phi[..., 1:], axis=-1)
-    cos, sin = jnp.cos(theta), jnp.sin(theta)
-    count = theta.shape[-1]
-    c = [cos[..., k] for k in range(count)]
-    s = [sin[..., k] for k in range(count)]
-    if not with_base:
-        c, s = [1.0] + c, [0.0] + s
-    return c, s
-
-
-def _tip_from(coeffs: DesignCoefficients, c, s):
-    K = coeffs.tip
-    x = sum(K[..., k] * c[k] for k in range(len(c)))
-    y = sum(K[..., k] * s[k] for k in range(len(c)))
-    return jnp.stack(jnp.broadcast_arrays(x, y), axis=-1)
-
-
-def _tip_columns(coeffs: DesignCoefficients, c, s):
-    """d tip / d phi_j as lists (x_j, y_j), j = 0..n: reverse sums of K_k u_perp(theta_k)."""
-    K = coeffs.tip
-    count = len(c)
-    xs, ys = [None] * count, [None] * count
-    acc_x = acc_y = 0.0
-    for k in reversed(range(count)):
-        acc_x = acc_x - K[..., k] * s[k]
-        acc_y = acc_y + K[..., k] * c[k]
-        xs[k], ys[k] = acc_x, acc_y
-    return xs, ys
-
-
-def _momentum_rows(coeffs: DesignCoefficients, c, s):
-    """Reverse sums H_j = sum_{l>=j} h_l: H_0 = I_S and H_1..H_n = I_M (eq. 5)."""
-    W, inertia = coeffs.inertia_coupling, coeffs.inertia
-    count = len(c)
-    h = []
-    for l in range(count):
-        total = inertia[..., l] + W[..., l, l]
-        for k in range(count):
-            if k != l:
-                # cos(theta_k - theta_l); W is symmetric, so each pair is used twice.
-                total = total + W[..., k, l] * (c[k] * c[l] + s[k] * s[l])
-        h.append(total)
-    rows, acc = [None] * count, 0.0
-    for j in reversed(range(count)):
-        acc = acc + h[j]
-        rows[j] = acc
-    return rows
-
-
-def _generalized_columns(coeffs: DesignCoefficients, c, s):
-    """Columns of J* = J_M - J_S I_M / I_S (eq. 6) as lists (x_j, y_j), j = 1..n."""
-    xs, ys = _tip_columns(coeffs, c, s)
-    H = _momentum_rows(coeffs, c, s)
-    inv_is = 1.0 / H[0]
-    gx = [xs[j] - xs[0] * (H[j] * inv_is) for j in range(1, len(c))]
-    gy = [ys[j] - ys[0] * (H[j] * inv_is) for j in range(1, len(c))]
-    return gx, gy
-
-
-def _manipulability_from_columns(gx, gy):
-    """sqrt(det(J J^T)) of a 2 x n matrix by Cauchy-Binet: the norm of its 2 x 2 minors.
-
-    Summing squares of minors avoids the cancellation of det(J J^T) near singular
-    postures; the guarded square root keeps the gradient finite where w* = 0.
-    """
-    n = len(gx)
-    minors = [gx[i] * gy[j] - gx[j] * gy[i] for i in range(n) for j in range(i + 1, n)]
-    if len(minors) == 1:
-        return jnp.abs(minors[0])
-    squares = sum(m * m for m in minors)
+    t, n = J.shape[-2], J.shape[-1]
+    if t == 1:
+        return jnp.sqrt(jnp.sum(J[..., 0, :] ** 2, axis=-1))
+    if t == 2:
+        x, y = J[..., 0, :], J[..., 1, :]
+        minors = x[..., :, None] * y[..., None, :] - x[..., None, :] * y[..., :, None]
+        if n == 2:
+            return jnp.abs(minors[..., 0, 1])
+        squares = 0.5 * jnp.sum(minors * minors, axis=(-2, -1))
+    else:
+        squares = jnp.linalg.det(J @ jnp.swapaxes(J, -1, -2))
     positive = squares > 0
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, squares, 1.0)), 0.0)
 
 
-# Public kernels -----------------------------------------------------------------------
+# Batched over leading axes -------------------------------------------------------------
+
+
+def _rotate_vector(family: RobotFamily, value, base_rotation):
+    if base_rotation is None:
+        return value
+    if not family.rotates_with_base:
+        raise TypeError(f"base_rotation applies to spatial robots; a {family.name} posture carries its base attitude")
+    return jnp.einsum("...ij,...j->...i", base_rotation, value)
+
+
+def _rotate_twist_rows(family: RobotFamily, J, base_rotation):
+    """blkdiag(R, R) J for spatial twists [v; w] (SPATIAL.md: J*_inertial = blkdiag(R, R) J*_bus)."""
+    if base_rotation is None:
+        return J
+    if not family.rotates_with_base:
+        raise TypeError(f"base_rotation applies to spatial robots; a {family.name} posture carries its base attitude")
+    R = jnp.asarray(base_rotation)
+    top = jnp.einsum("...ij,...jk->...ik", R, J[..., :3, :])
+    bottom = jnp.einsum("...ij,...jk->...ik", R, J[..., 3:, :])
+    return jnp.concatenate([top, bottom], axis=-2)
+
+
+def generic_tip_position(robot, posture: jax.Array) -> jax.Array:
+    """:func:`tip_position` through the family's ``tip`` primitive only (no closed form)."""
+    family = family_of(robot)
+    return map_leading(lambda p: family.tip(robot, p), posture, core_ndims=(1,))
+
+
+def generic_generalized_jacobian(robot, posture: jax.Array) -> jax.Array:
+    """J* = J_M - J_S I_S^-1 I_M (eq. 6) from the family's primitives only, ``(..., m, n)``."""
+    family = family_of(robot)
+    return map_leading(lambda p: _jstar_one(family, robot, p), posture, core_ndims=(1,))
+
+
+def generic_manipulability(robot, posture: jax.Array) -> jax.Array:
+    """w* = sqrt det(J*_v J*_v^T) (eq. 10) from the generic J*."""
+    family = family_of(robot)
+    J = generic_generalized_jacobian(robot, posture)
+    return gram_root_determinant(J[..., : family.translational_rows, :])
 
 
 @jax.jit
-def tip_position(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """Tip position in the inertial frame, origin at the system centroid (eq. 1).
+def tip_position(robot, posture: jax.Array, base_rotation: jax.Array | None = None) -> jax.Array:
+    """Tip position about the system centroid, inertial axes (eq. 1), m.
 
     Args:
-        robot: the design.
-        phi: ``(..., n+1)`` posture [phi0, phi1..phin], rad.
+        robot: a design of either family.
+        posture: planar ``(..., n+1)`` [phi0, phi1..phin], rad; spatial ``(..., n)`` joints.
+        base_rotation: spatial only, ``(..., 3, 3)`` bus attitude R (default identity).
 
     Returns:
-        ``(..., 2)`` tip position, m.
+        ``(..., 2)`` planar or ``(..., 3)`` spatial, m.
     """
-    c, s = _unit_vectors(phi)
-    return _tip_from(design_coefficients(robot), c, s)
+    family = family_of(robot)
+    fast = family.fast_paths.get("tip_position")
+    p = fast(robot, posture) if fast is not None else generic_tip_position(robot, posture)
+    return _rotate_vector(family, p, base_rotation)
 
 
 @jax.jit
-def robot_frame_tip_position(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
-    """Tip in the robot frame Sigma_R (origin at joint 1, axes along the base), m.
+def generalized_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None = None) -> jax.Array:
+    """The Generalized Jacobian J* = J_M - J_S I_S^-1 I_M (eq. 6), inertial axes.
 
     Args:
-        phi_arm: ``(..., n)`` joint angles, rad.
+        robot: a design of either family.
+        posture: planar ``(..., n+1)``, rad; spatial ``(..., n)`` joint positions.
+        base_rotation: spatial only, ``(..., 3, 3)`` bus attitude (default identity).
 
     Returns:
-        ``(..., 2)``; this is also the fixed-base (ground robot) tip.
+        Planar ``(..., 2, n)``: tip velocity (m/s) per joint rate. Spatial ``(..., 6, n)``:
+        rows [v; w] of the tip-frame origin, inertial axes, per joint rate.
     """
-    theta = jnp.cumsum(jnp.asarray(phi_arm), axis=-1)
-    lengths = robot.link_length
-    return jnp.stack(
-        [jnp.sum(lengths * jnp.cos(theta), -1), jnp.sum(lengths * jnp.sin(theta), -1)], axis=-1
-    )
-
-
-fixed_base_tip_position = robot_frame_tip_position
+    family = family_of(robot)
+    fast = family.fast_paths.get("generalized_jacobian")
+    J = fast(robot, posture) if fast is not None else generic_generalized_jacobian(robot, posture)
+    return _rotate_twist_rows(family, J, base_rotation)
 
 
 @jax.jit
-def centroid_positions(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """``(..., n+1, 2)`` centroids r_0..r_n in the inertial frame (origin at the system centroid), m."""
-    theta = jnp.cumsum(jnp.asarray(phi), axis=-1)
-    u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)  # (..., n+1, 2)
-    return jnp.einsum("...ik,...kd->...id", design_coefficients(robot).centroids, u)
+def manipulability(robot, posture: jax.Array) -> jax.Array:
+    """Translational w* = sqrt(det(J*_v J*_v^T)) (eq. 10): m^2 planar, m^3 spatial.
 
-
-@jax.jit
-def base_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """J_S of eq. (2): ``(..., 2)`` tip velocity per unit base rate, m/rad."""
-    c, s = _unit_vectors(phi)
-    xs, ys = _tip_columns(design_coefficients(robot), c, s)
-    return jnp.stack(jnp.broadcast_arrays(xs[0], ys[0]), axis=-1)
-
-
-@jax.jit
-def arm_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """J_M of eq. (2): ``(..., 2, n)`` tip velocity per unit joint rate (base held), m/rad."""
-    c, s = _unit_vectors(phi)
-    xs, ys = _tip_columns(design_coefficients(robot), c, s)
-    return _stack_matrix(xs[1:], ys[1:])
-
-
-@jax.jit
-def momentum_inertias(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """I_S ``(...)`` and I_M ``(..., n)`` of eq. (5), kg m^2.
-
-    Angular momentum about the system centroid is I_S dphi0 + I_M . dphi_M when the
-    linear momentum is zero. Depends on the joint angles only, not on phi0.
-    """
-    c, s = _unit_vectors(phi, with_base=False)
-    H = _momentum_rows(design_coefficients(robot), c, s)
-    H = jnp.broadcast_arrays(*H)
-    return H[0], jnp.stack(H[1:], axis=-1)
-
-
-@jax.jit
-def base_rate(robot: PlanarRobot, phi: jax.Array, joint_rates: jax.Array) -> jax.Array:
-    """dphi0 = -(I_M . dphi_M) / I_S (eq. 5, zero angular momentum), rad per unit time.
+    Independent of the base attitude. Exactly 0 at singular postures, with finite
+    gradients there.
 
     Args:
-        phi: ``(..., n+1)`` posture, rad.
-        joint_rates: ``(..., n)`` joint rates dphi_M.
+        posture: planar ``(..., n+1)`` (phi0 ignored); spatial ``(..., n)``.
     """
-    i_s, i_m = momentum_inertias(robot, phi)
-    return -jnp.sum(i_m * joint_rates, axis=-1) / i_s
+    family = family_of(robot)
+    fast = family.fast_paths.get("manipulability")
+    return fast(robot, posture) if fast is not None else generic_manipulability(robot, posture)
 
 
 @jax.jit
-def angular_momentum(robot: PlanarRobot, phi: jax.Array, phi_rates: jax.Array) -> jax.Array:
-    """``(...)`` angular momentum about the system centroid, I_S dphi0 + I_M . dphi_M (eq. 4, 5)."""
-    i_s, i_m = momentum_inertias(robot, phi)
-    return i_s * phi_rates[..., 0] + jnp.sum(i_m * phi_rates[..., 1:], axis=-1)
-
-
-def _stack_matrix(xs, ys):
-    xs, ys = jnp.broadcast_arrays(*xs), jnp.broadcast_arrays(*ys)
-    return jnp.stack([jnp.stack(xs, axis=-1), jnp.stack(ys, axis=-1)], axis=-2)
-
-
-@jax.jit
-def generalized_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """The Generalized Jacobian J* = J_M - J_S I_M / I_S (eq. 6), inertial frame.
-
-    Args:
-        robot: the design.
-        phi: ``(..., n+1)`` posture, rad.
+def manipulability_ellipsoid(robot, posture: jax.Array, base_rotation: jax.Array | None = None):
+    """Principal semi-axes and directions of {J*_v q_dot : |q_dot| <= 1} (section 4.1).
 
     Returns:
-        ``(..., 2, n)``: tip velocity (m/s) per joint rate (rad/s) under zero momentum.
+        ``(semi_axes (..., t), directions (..., t, t))``: singular values of the
+        translational J*, largest first (m/rad; their product is w*), and the unit
+        axis directions as columns, inertial axes.
     """
-    c, s = _unit_vectors(phi)
-    return _stack_matrix(*_generalized_columns(design_coefficients(robot), c, s))
+    family = family_of(robot)
+    J = generalized_jacobian(robot, posture, base_rotation)[..., : family.translational_rows, :]
+    directions, semi_axes, _ = jnp.linalg.svd(J, full_matrices=False)
+    return semi_axes, directions
 
 
 @jax.jit
-def manipulability(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """w* = sqrt(det(J* J*^T)) (eq. 10), m^2 (not normalized; divide by L^2 for eq. 11).
-
-    Independent of phi0 (a rotation of the whole system), so it is evaluated in the
-    robot frame. Exactly 0 at singular postures, with finite gradients there.
-
-    Args:
-        phi: ``(..., n+1)`` posture, rad (phi0 is accepted and ignored).
-    """
-    c, s = _unit_vectors(phi, with_base=False)
-    return _manipulability_from_columns(*_generalized_columns(design_coefficients(robot), c, s))
-
-
-def manipulability_from_angles(coeffs: DesignCoefficients, cos_theta, sin_theta) -> jax.Array:
-    """w* from precomputed coefficients and absolute link angles (robot frame).
-
-    Args:
-        coeffs: from :func:`design_coefficients` of one design.
-        cos_theta, sin_theta: sequences of n arrays (links 1..n), broadcastable.
-
-    The entry point for structured grids, where the unit vectors come from 1-D
-    tables by angle addition rather than from a transcendental per posture.
-    """
-    c, s = [1.0] + list(cos_theta), [0.0] + list(sin_theta)
-    return _manipulability_from_columns(*_generalized_columns(coeffs, c, s))
-
-
-def grid_angle_tables(joint_axes: Sequence[jax.Array]) -> tuple[list, list]:
-    """cos and sin of the absolute link angles on the outer-product grid of joint axes.
-
-    Args:
-        joint_axes: n 1-D arrays of joint angles phi_1..phi_n, rad.
+def base_rate_matrix(robot, posture: jax.Array) -> jax.Array:
+    """C = -I_S^-1 I_M: base velocity per joint rate at zero momentum (eq. 5).
 
     Returns:
-        Two lists of n arrays, broadcastable to ``(A_1, ..., A_n)``: cos theta_k and
-        sin theta_k with theta_k = phi_1 + ... + phi_k, built from the 1-D tables by
-        angle addition, so no grid point needs its own transcendental.
+        Planar ``(..., 1, n)`` (dphi0 per joint rate). Spatial ``(..., 6, n)``: the
+        family's base twist coordinates per joint rate, bus axes.
     """
-    n = len(joint_axes)
-    cos_theta, sin_theta = [], []
-    c_prev = s_prev = None
-    for k, axis in enumerate(joint_axes):
-        shape = [1] * n
-        shape[k] = -1
-        axis = jnp.reshape(jnp.asarray(axis), shape)
-        ca, sa = jnp.cos(axis), jnp.sin(axis)
-        if c_prev is None:
-            c_k, s_k = ca, sa
-        else:
-            c_k, s_k = c_prev * ca - s_prev * sa, s_prev * ca + c_prev * sa
-        cos_theta.append(c_k)
-        sin_theta.append(s_k)
-        c_prev, s_prev = c_k, s_k
-    return cos_theta, sin_theta
+    family = family_of(robot)
+    return map_leading(lambda p: _base_matrix_one(family, robot, p), posture, core_ndims=(1,))
 
 
 @jax.jit
-def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) -> jax.Array:
-    """w* on the outer-product grid of 1-D joint-angle axes, robot frame.
-
-    Args:
-        joint_axes: n arrays of joint angles phi_1..phi_n, rad, of sizes (A_1, ..., A_n).
+def base_rate(robot, posture: jax.Array, joint_rates: jax.Array) -> jax.Array:
+    """Base velocity for given joint rates at zero momentum (eq. 5).
 
     Returns:
-        ``(A_1, ..., A_n)`` w*, m^2. The absolute link angles come from the 1-D sine
-        and cosine tables by angle addition: cos(a+b) = cos a cos b - sin a sin b.
+        Planar ``(...)`` dphi0 = -(I_M . dphi_M) / I_S, rad per unit time. Spatial
+        ``(..., 6)`` base twist (family coordinates, bus axes).
     """
-    w = manipulability_from_angles(design_coefficients(robot), *grid_angle_tables(joint_axes))
-    return jnp.broadcast_to(w, tuple(jnp.shape(a)[0] for a in joint_axes))
+    family = family_of(robot)
+    fast = family.fast_paths.get("base_rate")
+    if fast is not None:
+        return fast(robot, posture, joint_rates)
+    return jnp.einsum("...ij,...j->...i", base_rate_matrix(robot, posture), joint_rates)
 
 
 @jax.jit
-def manipulability_ellipse(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """Principal axes of the manipulability ellipse {J* q : |q| <= 1} (section 4.1).
+def fixed_base_jacobian(robot, joints: jax.Array) -> jax.Array:
+    """Jacobian of the same arm on a fixed base (Fig. 7b), ``(..., m, n)``, base axes.
 
     Args:
-        phi: ``(..., n+1)`` posture, rad.
-
-    Returns:
-        ``(major, minor, angle)``: the singular values of J* (m/rad, major >= minor)
-        and the inertial angle of the major axis, rad. major * minor = w*.
+        joints: ``(..., n)`` joint positions (no base attitude).
     """
-    J = generalized_jacobian(robot, phi)
-    a = jnp.sum(J[..., 0, :] ** 2, axis=-1)
-    b = jnp.sum(J[..., 0, :] * J[..., 1, :], axis=-1)
-    d = jnp.sum(J[..., 1, :] ** 2, axis=-1)
-    mean, half = 0.5 * (a + d), jnp.sqrt(0.25 * (a - d) ** 2 + b * b)
-    major = jnp.sqrt(mean + half)
-    w = manipulability(robot, phi)
-    # minor = w / major avoids the cancellation of sqrt(mean - half) near singularity.
-    safe_major = jnp.where(major > 0, major, 1.0)
-    minor = jnp.where(major > 0, w / safe_major, 0.0)
-    angle = 0.5 * jnp.arctan2(2.0 * b, a - d)
-    return major, minor, angle
+    family = family_of(robot)
+    fast = family.fast_paths.get("fixed_base_jacobian")
+    if fast is not None:
+        return fast(robot, joints)
+    return map_leading(lambda q: family.fixed_base_jacobian(robot, q), joints, core_ndims=(1,))
 
 
 @jax.jit
-def fixed_base_jacobian(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
-    """Jacobian of the same arm on a fixed (ground) base, robot frame (Fig. 7b).
-
-    Args:
-        phi_arm: ``(..., n)`` joint angles, rad.
-
-    Returns:
-        ``(..., 2, n)``, m/rad.
-    """
-    theta = jnp.cumsum(jnp.asarray(phi_arm), axis=-1)
-    lengths = robot.link_length
-    n = theta.shape[-1]
-    xs, ys = [None] * n, [None] * n
-    acc_x = acc_y = 0.0
-    for k in reversed(range(n)):
-        acc_x = acc_x - lengths[..., k] * jnp.sin(theta[..., k])
-        acc_y = acc_y + lengths[..., k] * jnp.cos(theta[..., k])
-        xs[k], ys[k] = acc_x, acc_y
-    return _stack_matrix(xs, ys)
-
-
-@jax.jit
-def fixed_base_manipulability(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
-    """Yoshikawa's w = sqrt(det(J J^T)) of the ground robot, m^2 (for n = 2, l1 l2 |sin phi2|).
-
-    Args:
-        phi_arm: ``(..., n)`` joint angles, rad.
-    """
-    J = fixed_base_jacobian(robot, phi_arm)
-    n = J.shape[-1]
-    return _manipulability_from_columns([J[..., 0, j] for j in range(n)], [J[..., 1, j] for j in range(n)])
+def fixed_base_manipulability(robot, joints: jax.Array) -> jax.Array:
+    """Yoshikawa's w = sqrt(det(J_v J_v^T)) of the fixed-base arm (for n = 2 planar, l1 l2 |sin phi2|)."""
+    family = family_of(robot)
+    fast = family.fast_paths.get("fixed_base_manipulability")
+    if fast is not None:
+        return fast(robot, joints)
+    return gram_root_determinant(fixed_base_jacobian(robot, joints)[..., : family.translational_rows, :])

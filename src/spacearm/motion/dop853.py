@@ -1,10 +1,17 @@
-"""Butcher tableau of the 8th-order Runge-Kutta method of Dormand & Prince (DOP853).
+"""The 8th-order Runge-Kutta method of Dormand & Prince (DOP853): tableau, step, error.
 
 The 12-stage, 8th-order solution weights of Hairer, Norsett & Wanner, "Solving Ordinary
 Differential Equations I", 2nd ed., section II.10 (the coefficients of Hairer's DOP853 code,
 as also used by SciPy), with the embedded 5th- and 3rd-order error estimators. No
 dense output. Generated once from SciPy's table; kept literal so the package needs no SciPy.
 """
+
+import jax.numpy as jnp
+import numpy as np
+
+from .._core.errors import ConfigError
+
+__all__ = ["STAGE_TIMES", "STAGE_WEIGHTS", "SOLUTION_WEIGHTS", "tableau_arrays", "rk_step", "error_norm"]
 
 STAGE_TIMES = (
     0.0,
@@ -84,3 +91,46 @@ ERROR_WEIGHTS_3 = (
     0.02265179219836082,
     0.0,
 )
+
+
+def tableau_arrays(tableau: str):
+    """(stage weights (S, S) lower triangular, solution weights (S,)) as NumPy arrays."""
+    if tableau == "rk4":
+        a = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]])
+        return a, np.array([1.0, 2.0, 2.0, 1.0]) / 6.0
+    if tableau == "dop853":
+        stages = len(STAGE_WEIGHTS)
+        a = np.zeros((stages, stages))
+        for i, row in enumerate(STAGE_WEIGHTS):
+            a[i, : len(row)] = row
+        return a, np.asarray(SOLUTION_WEIGHTS)
+    raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
+
+
+def rk_step(field, y, h, tableau="dop853", return_slopes=False):
+    """One explicit Runge-Kutta step of size h (may be negative) of y' = field(y).
+
+    The stages are unrolled at trace time: under vmap on CPU this runs about 5x faster
+    than a ``lax.scan`` over the stages (which carries and updates a stage array), at
+    the price of a longer compile (measured in benchmarks/bench_motion.py).
+    """
+    a, b = tableau_arrays(tableau)
+    slopes = []
+    for row in a:
+        increment = sum((w * k for w, k in zip(row, slopes) if w != 0.0), jnp.zeros_like(y))
+        slopes.append(field(y + h * increment))
+    y_new = y + h * sum(w * k for w, k in zip(b, slopes) if w != 0.0)
+    return (y_new, slopes) if return_slopes else y_new
+
+
+def error_norm(h, slopes, slope_new, y, y_new, rtol):
+    """Hairer's DOP853 error norm of one step (<= 1: accept), from the stage slopes."""
+    every = list(slopes) + [slope_new]  # 13 slopes (m,)
+    scale = rtol * (1.0 + jnp.maximum(jnp.abs(y), jnp.abs(y_new)))
+    err5 = sum(w * k for w, k in zip(ERROR_WEIGHTS_5, every) if w != 0.0) / scale
+    err3 = sum(w * k for w, k in zip(ERROR_WEIGHTS_3, every) if w != 0.0) / scale
+    e5, e3 = jnp.sum(err5**2), jnp.sum(err3**2)
+    denom = e5 + 0.01 * e3
+    safe = jnp.where(denom > 0, denom, 1.0)
+    return jnp.where(denom > 0, jnp.abs(h) * e5 / jnp.sqrt(safe * y.shape[0]), 0.0)
+

@@ -1,4 +1,4 @@
-"""Motion of the free-floating arm: the nonholonomic base attitude along paths (eq. 5, 6).
+"""Straight tip paths and go-and-back motions of the free-floating arm (eq. 5, 6).
 
 With zero momentum the base turns as the joints move, I_S dphi0 + I_M . dphi_M = 0
 (Umetani & Yoshida 1990, eq. 5). I_S and I_M depend on the joint angles only, so the
@@ -7,9 +7,6 @@ relation is driftless: along a joint-space path the base rotation is the line in
     Delta phi0 = - integral (I_M(q) . dq) / I_S(q)
 
 and does not depend on the timing. Three families of motion are integrated here:
-
-- joint-space polylines (cyclic loops, Fig. 2): Gauss-Legendre quadrature of the line
-  integral per straight segment, exact to rounding for these analytic integrands;
 - straight inertial tip paths (Fig. 3a): joint rates from inverting J* (eq. 6),
   minimum-norm for redundant arms, integrated until J* loses rank, a joint limit, or
   a length limit (the end is located by Newton steps on the event functions);
@@ -35,31 +32,30 @@ measured comparison with diffrax and with fixed-step RK4.
 
 from __future__ import annotations
 
+from __future__ import annotations
+
 import dataclasses
 import functools
-import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _dop853
-from .kinematics import (
+from .._core.errors import ConfigError
+from ..models.planar.closed_forms import (
     _momentum_rows,
     _tip_columns,
     _unit_vectors,
     design_coefficients,
     fixed_base_manipulability,
-    momentum_inertias,
     tip_position,
 )
-from .robot import ConfigError, PlanarRobot
+from ..models.planar.robot import PlanarRobot
+from . import dop853
+from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = [
     "StraightPath",
-    "integrate_joint_path",
-    "joint_path_history",
-    "joint_path_base_increments",
     "straight_tip_path",
     "straight_tip_path_history",
     "go_and_back",
@@ -73,236 +69,6 @@ REASON_SINGULAR = 0
 REASON_MAX_LENGTH = 1
 REASON_JOINT_LIMIT = 2
 REASON_STEP_BUDGET = 3
-
-
-# Batching helpers ----------------------------------------------------------------------
-
-
-def _is_traced(*xs) -> bool:
-    return any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(xs))
-
-
-def _flatten_batch(robot: PlanarRobot, arrays: list[tuple[jax.Array, int]]):
-    """Broadcast the design batch and the leading axes of ``arrays`` together and flatten them.
-
-    Args:
-        arrays: pairs (array, number of trailing core axes).
-
-    Returns:
-        (batch_shape, flat robot, robot_batched flag, list of flat arrays (size, *core)).
-    """
-    robot_batch = robot.batch_shape
-    shapes = [robot_batch] + [tuple(jnp.shape(a))[: jnp.ndim(a) - core] for a, core in arrays]
-    try:
-        batch = tuple(np.broadcast_shapes(*shapes))
-    except ValueError:
-        raise ConfigError(f"batch axes do not broadcast together: {shapes}") from None
-    size = math.prod(batch)
-    flat = []
-    for a, core in arrays:
-        a = jnp.asarray(a)
-        core_shape = a.shape[a.ndim - core :]
-        flat.append(jnp.broadcast_to(a, batch + core_shape).reshape((size,) + core_shape))
-    if robot_batch:
-        nb = len(robot_batch)
-
-        def spread(x):
-            x = jnp.asarray(x)
-            core_shape = x.shape[nb:]
-            return jnp.broadcast_to(x, batch + core_shape).reshape((size,) + core_shape)
-
-        robot = jax.tree_util.tree_map(spread, robot)
-    return batch, robot, bool(robot_batch), flat
-
-
-def _check_arm_axis(robot: PlanarRobot, name: str, array, expected: int) -> None:
-    if jnp.ndim(array) < 1 or jnp.shape(array)[-1] != expected:
-        raise ConfigError(
-            f"{name}: expected a trailing axis of {expected} for a {robot.n_links}-link arm, "
-            f"got shape {jnp.shape(array)}"
-        )
-
-
-# Joint-space paths -----------------------------------------------------------------------
-
-
-@functools.lru_cache(maxsize=None)
-def _composite_gauss(nodes: int, pieces: int) -> tuple[np.ndarray, np.ndarray]:
-    """Composite Gauss-Legendre rule on [0, 1]: ``pieces`` equal panels of ``nodes`` points."""
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    starts = np.arange(pieces)[:, None] / pieces
-    t = (starts + (x[None, :] + 1.0) / (2.0 * pieces)).reshape(-1)
-    weights = np.tile(w / (2.0 * pieces), pieces)
-    return t, weights
-
-
-def _segment_integrals(robot: PlanarRobot, starts: jax.Array, steps: jax.Array, t, weights) -> jax.Array:
-    """Base rotation over straight joint segments q(t) = start + t step, t in [t_a, t_b].
-
-    Args:
-        starts, steps: ``(m, n)`` segment start points and displacements, rad.
-        t: ``(m, Q)`` or ``(Q,)`` quadrature nodes in segment parameter; weights the same shape.
-
-    Returns:
-        ``(m,)`` increments of phi0, rad: sum_q w_q * (-(I_M . step) / I_S)(q(t_q)).
-    """
-    t = jnp.broadcast_to(jnp.asarray(t), (starts.shape[0],) + jnp.shape(t)[-1:])
-    q = starts[:, None, :] + t[..., None] * steps[:, None, :]
-    phi = jnp.concatenate([jnp.zeros(q.shape[:-1] + (1,), q.dtype), q], axis=-1)
-    i_s, i_m = momentum_inertias(robot, phi)
-    integrand = -jnp.sum(i_m * steps[:, None, :], axis=-1) / i_s
-    return jnp.sum(integrand * weights, axis=-1)
-
-
-@functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
-def _joint_path_flat(robot, phi_start, waypoints, robot_batched, nodes, pieces):
-    t, w = _composite_gauss(nodes, pieces)
-    t, w = jnp.asarray(t, phi_start.dtype), jnp.asarray(w, phi_start.dtype)
-
-    def one(robot, phi, wp):
-        increments = _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
-        return jnp.concatenate([phi[:1] + jnp.sum(increments), wp[-1]])
-
-    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, phi_start, waypoints)
-
-
-def _prepare_joint_path(robot, phi_start, joint_waypoints):
-    n = robot.n_links
-    dtype = jnp.result_type(float)
-    phi_start = jnp.asarray(phi_start, dtype)
-    joint_waypoints = jnp.asarray(joint_waypoints, dtype)
-    _check_arm_axis(robot, "phi_start", phi_start, n + 1)
-    _check_arm_axis(robot, "joint_waypoints", joint_waypoints, n)
-    if joint_waypoints.ndim < 2 or joint_waypoints.shape[-2] < 2:
-        raise ConfigError(f"joint_waypoints: expected shape (..., k, {n}) with k >= 2, got {joint_waypoints.shape}")
-    if not _is_traced(phi_start, joint_waypoints):
-        gap = np.max(np.abs(np.asarray(joint_waypoints[..., 0, :]) - np.asarray(phi_start[..., 1:])), initial=0.0)
-        if not gap <= 1e-9:
-            raise ConfigError(
-                f"joint_waypoints: the first row must equal phi_start[..., 1:] (largest gap {gap:.3g} rad)"
-            )
-    return phi_start, joint_waypoints
-
-
-def integrate_joint_path(
-    robot: PlanarRobot,
-    phi_start: jax.Array,
-    joint_waypoints: jax.Array,
-    *,
-    nodes: int = 24,
-    pieces: int = 8,
-) -> jax.Array:
-    """Posture at the end of a joint-space polyline, the base attitude following eq. (5).
-
-    The base rotation is the line integral of -(I_M . dq)/I_S along the straight
-    joint-space segments (Umetani & Yoshida 1990, eq. 5, zero momentum), evaluated with
-    a composite Gauss-Legendre rule per segment (``pieces`` panels of ``nodes`` points).
-    The integrand is analytic, so the defaults reach rounding level (about 1e-13 rad for
-    segments up to a full turn of every joint; see tests/test_motion.py).
-
-    Args:
-        robot: the design, or a batch of designs broadcasting with the path batch.
-        phi_start: ``(..., n+1)`` initial posture [phi0, phi1..phin], rad.
-        joint_waypoints: ``(..., k, n)`` joint angles joined by straight segments, rad;
-            the first row equals ``phi_start[..., 1:]``.
-        nodes, pieces: quadrature points per panel and panels per segment (static).
-
-    Returns:
-        ``(..., n+1)`` posture at the last waypoint, base attitude included, rad.
-    """
-    phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
-    batch, flat_robot, batched, (phi_flat, wp_flat) = _flatten_batch(
-        robot, [(phi_start, 1), (joint_waypoints, 2)]
-    )
-    out = _joint_path_flat(flat_robot, phi_flat, wp_flat, batched, nodes, pieces)
-    return out.reshape(batch + (robot.n_links + 1,))
-
-
-@functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
-def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
-    t, w = _composite_gauss(nodes, pieces)
-    t, w = jnp.asarray(t, waypoints.dtype), jnp.asarray(w, waypoints.dtype)
-
-    def one(robot, wp):
-        return _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
-
-    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0))(robot, waypoints)
-
-
-def joint_path_base_increments(
-    robot: PlanarRobot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int = 8
-) -> jax.Array:
-    """Base rotation over each segment of a joint polyline (eq. 5).
-
-    Args:
-        joint_waypoints: ``(..., k, n)`` joint angles, rad.
-
-    Returns:
-        ``(..., k-1)`` increments of phi0, rad.
-    """
-    joint_waypoints = jnp.asarray(joint_waypoints, jnp.result_type(float))
-    _check_arm_axis(robot, "joint_waypoints", joint_waypoints, robot.n_links)
-    if joint_waypoints.ndim < 2 or joint_waypoints.shape[-2] < 2:
-        raise ConfigError(f"joint_waypoints: expected shape (..., k, n) with k >= 2, got {joint_waypoints.shape}")
-    batch, flat_robot, batched, (wp_flat,) = _flatten_batch(robot, [(joint_waypoints, 2)])
-    out = _increments_flat(flat_robot, wp_flat, batched, nodes, pieces)
-    return out.reshape(batch + (joint_waypoints.shape[-2] - 1,))
-
-
-@functools.partial(jax.jit, static_argnames=("robot_batched", "samples", "nodes"))
-def _joint_history_flat(robot, phi_start, waypoints, robot_batched, samples, nodes):
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    fractions = jnp.asarray(np.arange(samples) / samples, phi_start.dtype)
-
-    def one(robot, phi, wp):
-        starts, steps = wp[:-1], wp[1:] - wp[:-1]
-        # Split each segment into `samples` sub-segments, integrate each with `nodes` points.
-        sub_starts = (starts[:, None, :] + fractions[None, :, None] * steps[:, None, :]).reshape(-1, steps.shape[-1])
-        sub_steps = jnp.repeat(steps / samples, samples, axis=0)
-        sub_t = jnp.asarray(np.broadcast_to((x + 1.0) / 2.0, (1, nodes)), phi.dtype)
-        sub_w = jnp.asarray(np.broadcast_to(w / 2.0, (1, nodes)), phi.dtype)
-        increments = _segment_integrals(robot, sub_starts, sub_steps, sub_t, sub_w)
-        phi0 = phi[0] + jnp.concatenate([jnp.zeros((1,), phi.dtype), jnp.cumsum(increments)])
-        joints = jnp.concatenate([sub_starts, wp[-1:]], axis=0)
-        postures = jnp.concatenate([phi0[:, None], joints], axis=-1)
-        return postures, tip_position(robot, postures)
-
-    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, phi_start, waypoints)
-
-
-def joint_path_history(
-    robot: PlanarRobot,
-    phi_start: jax.Array,
-    joint_waypoints: jax.Array,
-    samples_per_segment: int = 32,
-    *,
-    nodes: int = 16,
-) -> tuple[jax.Array, jax.Array]:
-    """Postures and inertial tip positions along a joint-space polyline (eq. 1, 5).
-
-    Each segment is sampled at ``samples_per_segment`` equally spaced points (the
-    segment's end is the next segment's start); the base attitude between samples is
-    integrated with ``nodes`` Gauss-Legendre points.
-
-    Args:
-        phi_start: ``(..., n+1)`` initial posture, rad.
-        joint_waypoints: ``(..., k, n)`` waypoints, first row = ``phi_start[..., 1:]``, rad.
-
-    Returns:
-        ``postures (..., S, n+1)`` rad and ``tips (..., S, 2)`` inertial, m, with
-        S = (k - 1) * samples_per_segment + 1; the last posture equals
-        :func:`integrate_joint_path`'s result.
-    """
-    phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
-    batch, flat_robot, batched, (phi_flat, wp_flat) = _flatten_batch(
-        robot, [(phi_start, 1), (joint_waypoints, 2)]
-    )
-    postures, tips = _joint_history_flat(flat_robot, phi_flat, wp_flat, batched, int(samples_per_segment), nodes)
-    count = postures.shape[1]
-    return (
-        postures.reshape(batch + (count, robot.n_links + 1)),
-        tips.reshape(batch + (count, 2)),
-    )
 
 
 # Straight tip paths ----------------------------------------------------------------------
@@ -334,52 +100,6 @@ class StraightPath:
     joint_arc: jax.Array
     steps: jax.Array
 
-
-_STAGE_TIMES = _dop853.STAGE_TIMES
-_STAGE_WEIGHTS = _dop853.STAGE_WEIGHTS
-_SOLUTION_WEIGHTS = _dop853.SOLUTION_WEIGHTS
-
-
-def _tableau_arrays(tableau: str):
-    """(stage weights (S, S) lower triangular, solution weights (S,)) as NumPy arrays."""
-    if tableau == "rk4":
-        a = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]])
-        return a, np.array([1.0, 2.0, 2.0, 1.0]) / 6.0
-    if tableau == "dop853":
-        stages = len(_STAGE_WEIGHTS)
-        a = np.zeros((stages, stages))
-        for i, row in enumerate(_STAGE_WEIGHTS):
-            a[i, : len(row)] = row
-        return a, np.asarray(_SOLUTION_WEIGHTS)
-    raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
-
-
-def _rk_step(field, y, h, tableau="dop853", return_slopes=False):
-    """One explicit Runge-Kutta step of size h (may be negative) of y' = field(y).
-
-    The stages are unrolled at trace time: under vmap on CPU this runs about 5x faster
-    than a ``lax.scan`` over the stages (which carries and updates a stage array), at
-    the price of a longer compile (measured in benchmarks/bench_motion.py).
-    """
-    a, b = _tableau_arrays(tableau)
-    slopes = []
-    for row in a:
-        increment = sum((w * k for w, k in zip(row, slopes) if w != 0.0), jnp.zeros_like(y))
-        slopes.append(field(y + h * increment))
-    y_new = y + h * sum(w * k for w, k in zip(b, slopes) if w != 0.0)
-    return (y_new, slopes) if return_slopes else y_new
-
-
-def _dop853_error(h, slopes, slope_new, y, y_new, rtol):
-    """Hairer's DOP853 error norm of one step (<= 1: accept), from the stage slopes."""
-    every = list(slopes) + [slope_new]  # 13 slopes (m,)
-    scale = rtol * (1.0 + jnp.maximum(jnp.abs(y), jnp.abs(y_new)))
-    err5 = sum(w * k for w, k in zip(_dop853.ERROR_WEIGHTS_5, every) if w != 0.0) / scale
-    err3 = sum(w * k for w, k in zip(_dop853.ERROR_WEIGHTS_3, every) if w != 0.0) / scale
-    e5, e3 = jnp.sum(err5**2), jnp.sum(err3**2)
-    denom = e5 + 0.01 * e3
-    safe = jnp.where(denom > 0, denom, 1.0)
-    return jnp.where(denom > 0, jnp.abs(h) * e5 / jnp.sqrt(safe * y.shape[0]), 0.0)
 
 
 def _straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
@@ -504,10 +224,10 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, *, max_steps, table
         # The error controller's step bounds the event-limited step (either sign).
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
-    y_new, slopes = _rk_step(field, y, h, tableau, return_slopes=True)
+    y_new, slopes = dop853.rk_step(field, y, h, tableau, return_slopes=True)
     f_new = field(y_new)
     if adaptive:
-        error = _dop853_error(h, slopes, f_new, y, y_new, rtol)
+        error = dop853.error_norm(h, slopes, f_new, y, y_new, rtol)
         accept = error <= 1.0
         factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
         limited = jnp.abs(h) < 0.999 * h_control
@@ -620,13 +340,13 @@ def _prepare_straight(robot, phi_start, direction, max_length):
     dtype = jnp.result_type(float)
     phi_start = jnp.asarray(phi_start, dtype)
     direction = jnp.asarray(direction, dtype)
-    _check_arm_axis(robot, "phi_start", phi_start, n + 1)
+    check_arm_axis(robot, "phi_start", phi_start, n + 1)
     if direction.ndim < 1 or direction.shape[-1] != 2:
         raise ConfigError(f"direction: expected shape (..., 2), got {direction.shape}")
-    if not _is_traced(direction) and np.any(np.linalg.norm(np.asarray(direction), axis=-1) == 0):
+    if not is_traced(direction) and np.any(np.linalg.norm(np.asarray(direction), axis=-1) == 0):
         raise ConfigError("direction: must be a nonzero vector")
     max_length = jnp.asarray(jnp.inf if max_length is None else max_length, dtype)
-    if not _is_traced(max_length) and np.any(np.asarray(max_length) < 0):
+    if not is_traced(max_length) and np.any(np.asarray(max_length) < 0):
         raise ConfigError("max_length: must not be negative")
     return phi_start, direction, max_length
 
@@ -672,7 +392,7 @@ def straight_tip_path(
         :class:`StraightPath` with batch shape ``(...)``.
     """
     phi_start, direction, max_length = _prepare_straight(robot, phi_start, direction, max_length)
-    batch, flat_robot, batched, (phi_flat, dir_flat, len_flat) = _flatten_batch(
+    batch, flat_robot, batched, (phi_flat, dir_flat, len_flat) = flatten_batch(
         robot, [(phi_start, 1), (direction, 1), (max_length, 0)]
     )
     dtype = phi_flat.dtype
@@ -696,7 +416,7 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
 
     def advance(y, _):
         for _ in range(substeps):
-            y = _rk_step(field, y, h, tableau)
+            y = dop853.rk_step(field, y, h, tableau)
         return y, y
 
     y0 = jnp.concatenate([phi_start, jnp.zeros((1,), dtype)])
@@ -734,7 +454,7 @@ def straight_tip_path_history(
         raise ConfigError("n_samples: must be at least 2")
     path = straight_tip_path(robot, phi_start, direction, max_length=max_length, **options)
     phi_start, direction, _ = _prepare_straight(robot, phi_start, direction, max_length)
-    batch, flat_robot, batched, (phi_flat, dir_flat, arc_flat) = _flatten_batch(
+    batch, flat_robot, batched, (phi_flat, dir_flat, arc_flat) = flatten_batch(
         robot, [(phi_start, 1), (direction, 1), (path.joint_arc, 0)]
     )
     postures, tips = _history_flat(

@@ -1,0 +1,76 @@
+"""The robot-family seam: the few per-posture primitives every family implements.
+
+Both families describe a serial arm on a free-floating base with zero momentum. A
+family gives, for ONE posture (no batch axes):
+
+- the tip position about the system centroid;
+- the Jacobians J_S (tip twist per base velocity) and J_M (tip twist per joint rate);
+- the momentum map (I_S, I_M), with I_S x_base_dot + I_M q_dot = 0;
+- the fixed-base Jacobian of the same arm.
+
+Everything else (J* = J_M - J_S I_S^-1 I_M, w*, ellipses and ellipsoids, base rates,
+straight-path fields, averages) is written once over these in
+:mod:`spacearm.kinematics` and above. A family may register closed forms in
+``fast_paths`` (kernel name -> function with the public kernel's signature); the
+generic layer picks them by type at trace time, so a closed form is an optimization,
+never a second definition (the tests check each one against the generic path).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar
+
+import jax
+
+__all__ = ["RobotFamily", "family_of"]
+
+
+class RobotFamily:
+    """Per-posture primitives of one robot family (shapes for one posture, no batch axes).
+
+    Attributes:
+        name: the family's name (``"planar"``, ``"spatial"``).
+        task_rows: rows m of J* (2 planar: [x, y]; 6 spatial: [v; w]).
+        translational_rows: how many leading rows of J* are the tip's linear velocity.
+        posture_offset: entries of the posture vector before the joints (1 for the
+            planar base angle phi0, 0 for spatial arms whose attitude is a rotation matrix).
+        rotates_with_base: whether kernels take ``base_rotation`` (spatial: the
+            primitives work in bus axes; the generic layer rotates the results).
+        fast_paths: closed forms by public kernel name.
+    """
+
+    name: ClassVar[str] = "abstract"
+    task_rows: ClassVar[int] = 0
+    translational_rows: ClassVar[int] = 0
+    posture_offset: ClassVar[int] = 0
+    rotates_with_base: ClassVar[bool] = False
+    fast_paths: Mapping[str, Callable[..., Any]] = {}
+
+    def joint_count(self, robot) -> int:
+        """The number of joints n (static)."""
+        raise NotImplementedError
+
+    def tip(self, robot, posture: jax.Array) -> jax.Array:
+        """``(d,)`` tip position about the system centroid, m (spatial: bus axes)."""
+        raise NotImplementedError
+
+    def jacobians(self, robot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """``(J_S (m, b), J_M (m, n))``: tip twist per base velocity and per joint rate (eq. 2)."""
+        raise NotImplementedError
+
+    def momentum_map(self, robot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """``(I_S (b, b), I_M (b, n))`` with I_S x_base_dot + I_M q_dot = 0 (eq. 4, 5)."""
+        raise NotImplementedError
+
+    def fixed_base_jacobian(self, robot, joints: jax.Array) -> jax.Array:
+        """``(m, n)`` Jacobian of the same arm with its base held fixed."""
+        raise NotImplementedError
+
+
+def family_of(robot) -> RobotFamily:
+    """The family of a robot pytree (its class attribute ``family``)."""
+    family = getattr(type(robot), "family", None)
+    if not isinstance(family, RobotFamily):
+        raise TypeError(f"expected a spacearm robot (PlanarRobot or SpatialRobot), got {type(robot).__name__}")
+    return family

@@ -1,0 +1,31 @@
+"""Motion of the free-floating arm: the base attitude along joint paths and straight tip paths."""
+
+from .joint_paths import (
+    integrate_joint_path as integrate_joint_path,
+    joint_path_base_increments as joint_path_base_increments,
+    joint_path_history as joint_path_history,
+)
+from .straight_paths import (
+    REASON_JOINT_LIMIT as REASON_JOINT_LIMIT,
+    REASON_MAX_LENGTH as REASON_MAX_LENGTH,
+    REASON_SINGULAR as REASON_SINGULAR,
+    REASON_STEP_BUDGET as REASON_STEP_BUDGET,
+    StraightPath as StraightPath,
+    go_and_back as go_and_back,
+    straight_tip_path as straight_tip_path,
+    straight_tip_path_history as straight_tip_path_history,
+)
+
+__all__ = [
+    "integrate_joint_path",
+    "joint_path_history",
+    "joint_path_base_increments",
+    "StraightPath",
+    "straight_tip_path",
+    "straight_tip_path_history",
+    "go_and_back",
+    "REASON_SINGULAR",
+    "REASON_MAX_LENGTH",
+    "REASON_JOINT_LIMIT",
+    "REASON_STEP_BUDGET",
+]

@@ -1,0 +1,208 @@
+"""Joint-space paths of the free-floating arm: the base attitude along polylines (eq. 5).
+
+With zero momentum the base turns as the joints move, I_S dphi0 + I_M . dphi_M = 0
+(Umetani & Yoshida 1990, eq. 5). I_S and I_M depend on the joint angles only, so the
+relation is driftless: along a joint-space path the base rotation is the line integral
+
+    Delta phi0 = - integral (I_M(q) . dq) / I_S(q)
+
+and does not depend on the timing. Joint-space polylines (cyclic loops, Fig. 2) are
+integrated by Gauss-Legendre quadrature of the line integral per straight segment,
+exact to rounding for these analytic integrands. Written for one path and batched with
+``vmap`` over paths, initial postures and designs, inside one ``jit`` per entry point.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._core.errors import ConfigError
+from ..models.planar.closed_forms import momentum_inertias, tip_position
+from ..models.planar.robot import PlanarRobot
+from .batching import check_arm_axis, flatten_batch, is_traced
+
+__all__ = ["integrate_joint_path", "joint_path_history", "joint_path_base_increments"]
+
+
+@functools.lru_cache(maxsize=None)
+def _composite_gauss(nodes: int, pieces: int) -> tuple[np.ndarray, np.ndarray]:
+    """Composite Gauss-Legendre rule on [0, 1]: ``pieces`` equal panels of ``nodes`` points."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    starts = np.arange(pieces)[:, None] / pieces
+    t = (starts + (x[None, :] + 1.0) / (2.0 * pieces)).reshape(-1)
+    weights = np.tile(w / (2.0 * pieces), pieces)
+    return t, weights
+
+
+def _segment_integrals(robot: PlanarRobot, starts: jax.Array, steps: jax.Array, t, weights) -> jax.Array:
+    """Base rotation over straight joint segments q(t) = start + t step, t in [t_a, t_b].
+
+    Args:
+        starts, steps: ``(m, n)`` segment start points and displacements, rad.
+        t: ``(m, Q)`` or ``(Q,)`` quadrature nodes in segment parameter; weights the same shape.
+
+    Returns:
+        ``(m,)`` increments of phi0, rad: sum_q w_q * (-(I_M . step) / I_S)(q(t_q)).
+    """
+    t = jnp.broadcast_to(jnp.asarray(t), (starts.shape[0],) + jnp.shape(t)[-1:])
+    q = starts[:, None, :] + t[..., None] * steps[:, None, :]
+    phi = jnp.concatenate([jnp.zeros(q.shape[:-1] + (1,), q.dtype), q], axis=-1)
+    i_s, i_m = momentum_inertias(robot, phi)
+    integrand = -jnp.sum(i_m * steps[:, None, :], axis=-1) / i_s
+    return jnp.sum(integrand * weights, axis=-1)
+
+
+@functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
+def _joint_path_flat(robot, phi_start, waypoints, robot_batched, nodes, pieces):
+    t, w = _composite_gauss(nodes, pieces)
+    t, w = jnp.asarray(t, phi_start.dtype), jnp.asarray(w, phi_start.dtype)
+
+    def one(robot, phi, wp):
+        increments = _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
+        return jnp.concatenate([phi[:1] + jnp.sum(increments), wp[-1]])
+
+    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, phi_start, waypoints)
+
+
+def _prepare_joint_path(robot, phi_start, joint_waypoints):
+    n = robot.n_links
+    dtype = jnp.result_type(float)
+    phi_start = jnp.asarray(phi_start, dtype)
+    joint_waypoints = jnp.asarray(joint_waypoints, dtype)
+    check_arm_axis(robot, "phi_start", phi_start, n + 1)
+    check_arm_axis(robot, "joint_waypoints", joint_waypoints, n)
+    if joint_waypoints.ndim < 2 or joint_waypoints.shape[-2] < 2:
+        raise ConfigError(f"joint_waypoints: expected shape (..., k, {n}) with k >= 2, got {joint_waypoints.shape}")
+    if not is_traced(phi_start, joint_waypoints):
+        gap = np.max(np.abs(np.asarray(joint_waypoints[..., 0, :]) - np.asarray(phi_start[..., 1:])), initial=0.0)
+        if not gap <= 1e-9:
+            raise ConfigError(
+                f"joint_waypoints: the first row must equal phi_start[..., 1:] (largest gap {gap:.3g} rad)"
+            )
+    return phi_start, joint_waypoints
+
+
+def integrate_joint_path(
+    robot: PlanarRobot,
+    phi_start: jax.Array,
+    joint_waypoints: jax.Array,
+    *,
+    nodes: int = 24,
+    pieces: int = 8,
+) -> jax.Array:
+    """Posture at the end of a joint-space polyline, the base attitude following eq. (5).
+
+    The base rotation is the line integral of -(I_M . dq)/I_S along the straight
+    joint-space segments (Umetani & Yoshida 1990, eq. 5, zero momentum), evaluated with
+    a composite Gauss-Legendre rule per segment (``pieces`` panels of ``nodes`` points).
+    The integrand is analytic, so the defaults reach rounding level (about 1e-13 rad for
+    segments up to a full turn of every joint; see tests/test_motion.py).
+
+    Args:
+        robot: the design, or a batch of designs broadcasting with the path batch.
+        phi_start: ``(..., n+1)`` initial posture [phi0, phi1..phin], rad.
+        joint_waypoints: ``(..., k, n)`` joint angles joined by straight segments, rad;
+            the first row equals ``phi_start[..., 1:]``.
+        nodes, pieces: quadrature points per panel and panels per segment (static).
+
+    Returns:
+        ``(..., n+1)`` posture at the last waypoint, base attitude included, rad.
+    """
+    phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
+    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
+        robot, [(phi_start, 1), (joint_waypoints, 2)]
+    )
+    out = _joint_path_flat(flat_robot, phi_flat, wp_flat, batched, nodes, pieces)
+    return out.reshape(batch + (robot.n_links + 1,))
+
+
+@functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
+def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
+    t, w = _composite_gauss(nodes, pieces)
+    t, w = jnp.asarray(t, waypoints.dtype), jnp.asarray(w, waypoints.dtype)
+
+    def one(robot, wp):
+        return _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
+
+    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0))(robot, waypoints)
+
+
+def joint_path_base_increments(
+    robot: PlanarRobot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int = 8
+) -> jax.Array:
+    """Base rotation over each segment of a joint polyline (eq. 5).
+
+    Args:
+        joint_waypoints: ``(..., k, n)`` joint angles, rad.
+
+    Returns:
+        ``(..., k-1)`` increments of phi0, rad.
+    """
+    joint_waypoints = jnp.asarray(joint_waypoints, jnp.result_type(float))
+    check_arm_axis(robot, "joint_waypoints", joint_waypoints, robot.n_links)
+    if joint_waypoints.ndim < 2 or joint_waypoints.shape[-2] < 2:
+        raise ConfigError(f"joint_waypoints: expected shape (..., k, n) with k >= 2, got {joint_waypoints.shape}")
+    batch, flat_robot, batched, (wp_flat,) = flatten_batch(robot, [(joint_waypoints, 2)])
+    out = _increments_flat(flat_robot, wp_flat, batched, nodes, pieces)
+    return out.reshape(batch + (joint_waypoints.shape[-2] - 1,))
+
+
+@functools.partial(jax.jit, static_argnames=("robot_batched", "samples", "nodes"))
+def _joint_history_flat(robot, phi_start, waypoints, robot_batched, samples, nodes):
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    fractions = jnp.asarray(np.arange(samples) / samples, phi_start.dtype)
+
+    def one(robot, phi, wp):
+        starts, steps = wp[:-1], wp[1:] - wp[:-1]
+        # Split each segment into `samples` sub-segments, integrate each with `nodes` points.
+        sub_starts = (starts[:, None, :] + fractions[None, :, None] * steps[:, None, :]).reshape(-1, steps.shape[-1])
+        sub_steps = jnp.repeat(steps / samples, samples, axis=0)
+        sub_t = jnp.asarray(np.broadcast_to((x + 1.0) / 2.0, (1, nodes)), phi.dtype)
+        sub_w = jnp.asarray(np.broadcast_to(w / 2.0, (1, nodes)), phi.dtype)
+        increments = _segment_integrals(robot, sub_starts, sub_steps, sub_t, sub_w)
+        phi0 = phi[0] + jnp.concatenate([jnp.zeros((1,), phi.dtype), jnp.cumsum(increments)])
+        joints = jnp.concatenate([sub_starts, wp[-1:]], axis=0)
+        postures = jnp.concatenate([phi0[:, None], joints], axis=-1)
+        return postures, tip_position(robot, postures)
+
+    return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, phi_start, waypoints)
+
+
+def joint_path_history(
+    robot: PlanarRobot,
+    phi_start: jax.Array,
+    joint_waypoints: jax.Array,
+    samples_per_segment: int = 32,
+    *,
+    nodes: int = 16,
+) -> tuple[jax.Array, jax.Array]:
+    """Postures and inertial tip positions along a joint-space polyline (eq. 1, 5).
+
+    Each segment is sampled at ``samples_per_segment`` equally spaced points (the
+    segment's end is the next segment's start); the base attitude between samples is
+    integrated with ``nodes`` Gauss-Legendre points.
+
+    Args:
+        phi_start: ``(..., n+1)`` initial posture, rad.
+        joint_waypoints: ``(..., k, n)`` waypoints, first row = ``phi_start[..., 1:]``, rad.
+
+    Returns:
+        ``postures (..., S, n+1)`` rad and ``tips (..., S, 2)`` inertial, m, with
+        S = (k - 1) * samples_per_segment + 1; the last posture equals
+        :func:`integrate_joint_path`'s result.
+    """
+    phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
+    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
+        robot, [(phi_start, 1), (joint_waypoints, 2)]
+    )
+    postures, tips = _joint_history_flat(flat_robot, phi_flat, wp_flat, batched, int(samples_per_segment), nodes)
+    count = postures.shape[1]
+    return (
+        postures.reshape(batch + (count, robot.n_links + 1)),
+        tips.reshape(batch + (count, 2)),
+    )
+

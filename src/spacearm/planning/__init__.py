@@ -1,0 +1,26 @@
+"""Planning: cyclic maneuvers that reorient the base, and reaching a point (section 3.2)."""
+
+from .reach import (
+    MODE_REORIENT as MODE_REORIENT,
+    MODE_REPOSITION as MODE_REPOSITION,
+    MODE_STRAIGHT as MODE_STRAIGHT,
+    PHASE_LOOP as PHASE_LOOP,
+    PHASE_REPOSITION as PHASE_REPOSITION,
+    PHASE_STRAIGHT as PHASE_STRAIGHT,
+    ReachPlan as ReachPlan,
+    plan_reach as plan_reach,
+    reachable_bounds as reachable_bounds,
+)
+from .reorientation import (
+    LoopSettings as LoopSettings,
+    ReorientationLoop as ReorientationLoop,
+    plan_reorientation as plan_reorientation,
+    plan_reorientation_details as plan_reorientation_details,
+    rotation_curl as rotation_curl,
+)
+
+__all__ = [
+    "LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl",
+    "ReachPlan", "plan_reach", "reachable_bounds", "MODE_STRAIGHT", "MODE_REORIENT", "MODE_REPOSITION",
+    "PHASE_REPOSITION", "PHASE_LOOP", "PHASE_STRAIGHT",
+]

@@ -1,0 +1,393 @@
+"""Reorienting the base by cyclic joint maneuvers (Umetani & Yoshida 1990, section 3.2).
+
+Umetani & Yoshida 1990, section 3.2, Fig. 5: point C "can be reached after reorienting
+the base by a suitable cyclic maneuver". This module plans that maneuver.
+
+Reorientation (:func:`plan_reorientation`). Along a closed joint-space loop the
+joints come back but the base turns by the line integral of eq. (5),
+
+    delta_phi0 = -(loop integral) (I_M / I_S) . dq,
+
+which by Stokes is the curl of the one-form -I_M/I_S times the enclosed (signed)
+joint-space area. I_S and I_M do not depend on phi0, so a loop repeated N times turns
+the base N times as much, and the base attitude at the start of the loop does not
+matter. The planner
+
+1. takes the curl at the start q0 = phi_start[1:] (an antisymmetric n x n matrix
+   Omega; its top singular pair spans the joint plane where small loops turn the base
+   most, with rotation ~ sigma_max * area), which sizes a circle through q0 for each
+   candidate number of repetitions N;
+2. refines every candidate loop (Fourier coefficients of a closed curve through q0,
+   sampled into waypoints) with optax Adam through the integrator
+   (:func:`spacearm.motion.integrate_joint_path`): squared rotation error, total
+   joint travel, soft penalties on joint limits and on the excursion from q0; all
+   candidates in one vmapped, jitted call;
+3. finishes each candidate with Newton steps on a scale factor of the loop about q0,
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from .._core.errors import ConfigError
+from ..models.planar.closed_forms import momentum_inertias
+from ..models.planar.robot import PlanarRobot
+from ..motion import integrate_joint_path
+
+__all__ = ["LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl", "check_posture"]
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopSettings:
+    """Static settings of the reorientation planner (hashable: part of the compile key).
+
+    Attributes:
+        samples_per_loop: waypoints per loop (straight joint-space segments between them).
+        harmonics: Fourier harmonics of the closed loop curve.
+        loop_counts: candidate numbers of repetitions N, all tried in one batch.
+        directions: candidate directions of the loop centre from q0, in the curl plane.
+        steps: Adam steps.
+        learning_rate: Adam step size, in units of the initial loop radius.
+        max_excursion: bound on |q_j - q0_j| for every joint along the loop, rad.
+        limit_margin: the optimizer keeps the loop this far inside finite joint limits, rad.
+        room_fraction: the optimizer uses this fraction of the allowed excursion, leaving
+            the rest for the final scaling.
+        travel_weight: weight of the (normalized) joint travel against the rotation error.
+        newton_steps: Newton steps on the loop scale factor after the optimizer.
+    """
+
+    samples_per_loop: int = 48
+    harmonics: int = 3
+    loop_counts: tuple[int, ...] = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
+    directions: int = 4
+    steps: int = 300
+    learning_rate: float = 0.03
+    max_excursion: float = 1.5
+    limit_margin: float = 0.02
+    room_fraction: float = 0.95
+    travel_weight: float = 0.005
+    newton_steps: int = 12
+
+
+# Curl of eq. (5) ------------------------------------------------------------------------
+
+
+def _connection(robot: PlanarRobot, q: jax.Array) -> jax.Array:
+    """The one-form of eq. (5): d phi0 = omega(q) . dq with omega = -I_M / I_S, ``(n,)``."""
+    phi = jnp.concatenate([jnp.zeros((1,), q.dtype), q])
+    i_s, i_m = momentum_inertias(robot, phi)
+    return -i_m / i_s
+
+
+def rotation_curl(robot: PlanarRobot, joint_angles: jax.Array) -> jax.Array:
+    """Curl of the base-rotation one-form of eq. (5) at a joint posture.
+
+    A small closed joint loop q0 + x(s) turns the base by sum_{i<j} Omega_ij A_ij, where
+    A_ij is the signed area the loop encloses in the (q_i, q_j) plane (counter-clockwise
+    positive). For n = 2 that is Omega_12 times the signed area.
+
+    Args:
+        robot: one design.
+        joint_angles: ``(n,)`` joint angles q, rad.
+
+    Returns:
+        ``(n, n)`` antisymmetric Omega_ij = d omega_j / d q_i - d omega_i / d q_j,
+        rad of base rotation per rad^2 of enclosed joint area.
+    """
+    q = jnp.asarray(joint_angles)
+    jac = jax.jacfwd(functools.partial(_connection, robot))(q)  # [j, i] = d omega_j / d q_i
+    return jac.T - jac
+
+
+# Loop parametrization ------------------------------------------------------------------
+
+
+def _loop_basis(settings: LoopSettings) -> np.ndarray:
+    """``(samples_per_loop + 1, 2 M)``: (1 - cos 2 pi m s), sin 2 pi m s at s = j / k.
+
+    Every basis function is zero at s = 0 and s = 1, so q(s) = q0 + basis @ C is a
+    closed curve through q0 for any coefficients C.
+    """
+    s = np.arange(settings.samples_per_loop + 1) / settings.samples_per_loop
+    m = np.arange(1, settings.harmonics + 1)
+    angle = 2.0 * np.pi * s[:, None] * m[None, :]
+    basis = np.concatenate([1.0 - np.cos(angle), np.sin(angle)], axis=1)
+    basis[-1] = 0.0  # exactly closed (cos 2 pi m = 1 up to rounding otherwise)
+    return basis
+
+
+def _path_length(points: jax.Array) -> jax.Array:
+    """Joint-space length of a polygon ``(k, n)``, rad (smooth at zero-length segments)."""
+    steps = jnp.diff(points, axis=0)
+    return jnp.sum(jnp.sqrt(jnp.sum(steps * steps, axis=-1) + 1e-30))
+
+
+def _loop_rotation(robot: PlanarRobot, q0: jax.Array, points: jax.Array) -> jax.Array:
+    """Base rotation of one pass over the closed polygon ``points`` ``(k+1, n)``, rad."""
+
+    phi_start = jnp.concatenate([jnp.zeros((1,), q0.dtype), q0])
+    # Loop segments are short (~0.1 rad): 10 Gauss points per segment are exact to rounding
+    # there; the returned waypoints are checked with the integrator's defaults.
+    return integrate_joint_path(robot, phi_start, points, nodes=10, pieces=1)[0]
+
+
+@functools.partial(jax.jit, static_argnames=("settings",))
+def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, settings: LoopSettings):
+    """Optimize one loop per (repetition count, centre direction) candidate.
+
+    Returns a dict of per-candidate arrays (leading axis: candidates): ``points``
+    ``(C, k+1, n)``, ``loops`` ``(C,)``, ``rotation`` (total, rad), ``travel`` (total, rad),
+    ``excursion`` (max |q - q0|, rad), ``limit_violation`` (rad, 0 when inside).
+    """
+    n = q0.shape[0]
+    dtype = q0.dtype
+    basis = jnp.asarray(_loop_basis(settings), dtype)
+    lower = jnp.asarray(robot.joint_lower, dtype)
+    upper = jnp.asarray(robot.joint_upper, dtype)
+
+    # The plane and strength of the curl at q0 (top singular pair of Omega).
+    omega = rotation_curl(robot, q0)
+    u_mat, sig, vt = jnp.linalg.svd(omega)
+    sigma = jnp.maximum(sig[0], 1e-12)
+    e1, e2 = u_mat[:, 0], vt[0]  # Omega e2 = sigma e1; e1 . e2 = 0 (Omega antisymmetric)
+    # A loop q0 + r[(1 - cos t) c + sin t c_perp] with (c, c_perp) a rotation of (e1, e2)
+    # encloses area pi r^2 clockwise in the (c, c_perp) orientation: its rotation is about
+    # -sigma pi r^2. Flip c_perp for the requested sign.
+    sign = jnp.where(delta >= 0, -1.0, 1.0).astype(dtype)
+
+    counts = np.repeat(np.asarray(settings.loop_counts), settings.directions)
+    alphas = np.tile(2.0 * np.pi * np.arange(settings.directions) / settings.directions, len(settings.loop_counts))
+    counts_j = jnp.asarray(counts, dtype)
+    magnitude = jnp.maximum(jnp.abs(delta), 1e-9)
+    radius = jnp.sqrt(magnitude / (counts_j * jnp.pi * sigma))
+    radius = jnp.minimum(radius, 0.5 * settings.max_excursion)
+
+    def initial(alpha, r):
+        c = jnp.cos(alpha) * e1 + jnp.sin(alpha) * e2
+        c_perp = sign * (-jnp.sin(alpha) * e1 + jnp.cos(alpha) * e2)
+        coeffs = jnp.zeros((2 * settings.harmonics, n), dtype)
+        coeffs = coeffs.at[0].set(r * c).at[settings.harmonics].set(r * c_perp)
+        return coeffs / r  # normalized by r
+
+    def points_of(normalized, r, scale=1.0):
+        return q0 + scale * r * (basis @ normalized)
+
+    # Allowed displacement from q0 per joint and direction: the excursion bound and the
+    # joint limits, shrunk by `room_fraction` so the final Newton scaling has room. The box
+    # contains q0 and is convex, so the loop q0 + c x(s) stays inside for every scale c
+    # up to largest_scale(x).
+    room_up = settings.room_fraction * jnp.clip(upper - settings.limit_margin - q0, 0.0, settings.max_excursion)
+    room_down = settings.room_fraction * jnp.clip(q0 - (lower + settings.limit_margin), 0.0, settings.max_excursion)
+
+    def largest_scale(offsets):
+        ratio_up = jnp.where(offsets > 0, room_up / jnp.where(offsets > 0, offsets, 1.0), jnp.inf)
+        ratio_down = jnp.where(offsets < 0, room_down / jnp.where(offsets < 0, -offsets, 1.0), jnp.inf)
+        return jnp.min(jnp.minimum(ratio_up, ratio_down))
+
+    def project(normalized, r):
+        # Projection onto the allowed box by shrinking the loop about q0.
+        return normalized * jnp.minimum(1.0, largest_scale(r * (basis @ normalized)))
+
+    def objective(normalized, r, count):
+        points = points_of(normalized, r)
+        rotation = count * _loop_rotation(robot, q0, points)
+        rot_err = (rotation - delta) / magnitude
+        travel = count * _path_length(points) / (2.0 * jnp.pi * jnp.sqrt(magnitude / (jnp.pi * sigma)))
+        return rot_err**2 + settings.travel_weight * travel**2
+
+    schedule = optax.cosine_decay_schedule(settings.learning_rate, settings.steps, alpha=0.02)
+    optimizer = optax.adam(schedule)
+
+    def solve(alpha, r, count):
+        params = project(initial(alpha, r), r)
+        state = optimizer.init(params)
+        grad_fn = jax.grad(objective)
+
+        def step(carry, _):
+            params, state = carry
+            grad = grad_fn(params, r, count)
+            updates, state = optimizer.update(grad, state, params)
+            return (project(optax.apply_updates(params, updates), r), state), None
+
+        (params, _), _ = jax.lax.scan(step, (params, state), None, length=settings.steps)
+
+        # Newton on the scale factor c of the loop about q0: count * R(c) = delta.
+        def rotation_at(scale):
+            return count * _loop_rotation(robot, q0, points_of(params, r, scale))
+
+        def newton(scale, _):
+            value, slope = jax.value_and_grad(rotation_at)(scale)
+            safe = jnp.where(jnp.abs(slope) > 1e-300, slope, 1.0)
+            return jnp.clip(scale - (value - delta) / safe, 0.25, 4.0), None
+
+        scale, _ = jax.lax.scan(newton, jnp.asarray(1.0, dtype), None, length=settings.newton_steps)
+        points = points_of(params, r, scale)
+        rotation = count * _loop_rotation(robot, q0, points)
+        violation = jnp.max(
+            jnp.concatenate([jax.nn.relu(points - upper).ravel(), jax.nn.relu(lower - points).ravel()])
+        )
+        return dict(
+            points=points,
+            rotation=rotation,
+            travel=count * _path_length(points),
+            excursion=jnp.max(jnp.abs(points - q0)),
+            limit_violation=violation,
+        )
+
+    result = jax.vmap(solve)(jnp.asarray(alphas, dtype), radius, counts_j)
+    result["loops"] = jnp.asarray(counts)
+    return result
+
+
+@dataclasses.dataclass(frozen=True)
+class ReorientationLoop:
+    """A planned reorientation maneuver (see :func:`plan_reorientation_details`).
+
+    Attributes:
+        waypoints: ``(N k + 1, n)`` joint waypoints, rad; the loop repeated N times,
+            first and last rows equal to q0.
+        loop: ``(k + 1, n)`` one pass of the loop, rad.
+        loops: N, the number of repetitions.
+        rotation: base rotation of the whole maneuver integrated along ``waypoints``, rad.
+        rotation_error: ``rotation - delta_phi0``, rad.
+        travel: joint-space length of the whole maneuver, rad.
+        excursion: largest |q_j - q0_j| along the loop, rad.
+    """
+
+    waypoints: np.ndarray
+    loop: np.ndarray
+    loops: int
+    rotation: float
+    rotation_error: float
+    travel: float
+    excursion: float
+
+
+def check_posture(robot: PlanarRobot, phi_start) -> np.ndarray:
+    if robot.batch_shape:
+        raise ConfigError("robot: plan one design at a time (got a batch of designs)")
+    phi = np.asarray(phi_start, dtype=float)
+    n = robot.n_links
+    if phi.shape != (n + 1,):
+        raise ConfigError(f"phi_start: expected shape ({n + 1},) = [phi0, phi1..phi{n}], got {phi.shape}")
+    if not np.all(np.isfinite(phi)):
+        raise ConfigError(f"phi_start: must be finite, got {phi}")
+    lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
+    outside = (phi[1:] < lower) | (phi[1:] > upper)
+    if np.any(outside):
+        j = int(np.argmax(outside)) + 1
+        raise ConfigError(
+            f"phi_start: joint {j} = {phi[j]:.6g} rad is outside its limits [{lower[j - 1]:.6g}, {upper[j - 1]:.6g}]"
+        )
+    return phi
+
+
+def plan_reorientation_details(
+    robot: PlanarRobot,
+    phi_start,
+    delta_phi0: float,
+    *,
+    settings: LoopSettings = LoopSettings(),
+    tolerance: float | None = None,
+) -> ReorientationLoop:
+    """Plan a closed joint maneuver that turns the base by ``delta_phi0``, with diagnostics.
+
+    Args:
+        robot: one design.
+        phi_start: ``(n+1,)`` start posture [phi0, q0], rad (phi0 does not matter).
+        delta_phi0: requested base rotation, rad (any sign and size).
+        settings: :class:`LoopSettings` (static; a new value compiles once).
+        tolerance: largest accepted |rotation error| of the integrated waypoints, rad
+            (default 1e-9 in float64, 1e-4 in float32).
+
+    Returns:
+        a :class:`ReorientationLoop`.
+
+    Raises:
+        ConfigError: bad input, or no candidate loop reaches the rotation within the
+            joint limits and the excursion bound (raise ``loop_counts`` or
+            ``max_excursion``).
+    """
+
+    phi = check_posture(robot, phi_start)
+    delta = float(delta_phi0)
+    if not math.isfinite(delta):
+        raise ConfigError(f"delta_phi0: must be finite, got {delta_phi0!r}")
+    if tolerance is None:
+        tolerance = 1e-9 if jax.config.jax_enable_x64 else 1e-4
+    q0 = phi[1:]
+    if delta == 0.0:
+        still = np.stack([q0, q0])
+        return ReorientationLoop(still, still, 0, 0.0, 0.0, 0.0, 0.0)
+    dtype = jnp.result_type(float)
+    result = _optimize_loops(robot, jnp.asarray(q0, dtype), jnp.asarray(delta, dtype), settings)
+    result = jax.tree_util.tree_map(np.asarray, result)
+    error = np.abs(result["rotation"] - delta)
+    feasible = (
+        (error <= tolerance)
+        & (result["limit_violation"] <= 0.0)
+        & (result["excursion"] <= settings.max_excursion)
+        & np.isfinite(result["travel"])
+    )
+    if not np.any(feasible):
+        raise ConfigError(
+            f"delta_phi0: no loop turns the base by {math.degrees(delta):.6g} deg within the joint limits, "
+            f"max_excursion = {settings.max_excursion:.3g} rad and at most {max(settings.loop_counts)} repetitions "
+            f"(best rotation error {np.min(error):.3g} rad); allow more repetitions or a larger excursion"
+        )
+    best = int(np.argmin(np.where(feasible, result["travel"], np.inf)))
+    loop = result["points"][best]
+    loops = int(result["loops"][best])
+    waypoints = np.concatenate([loop[:1]] + [loop[1:]] * loops, axis=0)
+    waypoints[-1] = q0
+    # One pass with the integrator's full accuracy; the passes are identical and eq. (5) does
+    # not depend on phi0, so N passes turn the base N times as far (one compiled shape for
+    # every N; tests integrate the whole waypoint array independently).
+    loop_start = np.r_[0.0, q0]
+    rotation = loops * float(integrate_joint_path(robot, jnp.asarray(loop_start), jnp.asarray(loop))[0])
+    if not abs(rotation - delta) <= tolerance:
+        raise ConfigError(
+            f"delta_phi0: the planned loop turns the base by {rotation!r} rad instead of {delta!r} rad "
+            f"(error {rotation - delta:.3g} rad above tolerance {tolerance:.3g})"
+        )
+    return ReorientationLoop(
+        waypoints=waypoints,
+        loop=loop,
+        loops=loops,
+        rotation=rotation,
+        rotation_error=rotation - delta,
+        travel=float(result["travel"][best]),
+        excursion=float(result["excursion"][best]),
+    )
+
+
+def plan_reorientation(robot: PlanarRobot, phi_start, delta_phi0: float, **options) -> np.ndarray:
+    """Joint waypoints of a closed maneuver that turns the base by ``delta_phi0``.
+
+    A closed joint-space loop through q0 = phi_start[1:], repeated N times where one
+    loop within the joint limits and ``max_excursion`` cannot turn the base far enough,
+    found by optax through the integrator of eq. (5) and finished by Newton steps on
+    the loop's scale, so that ``integrate_joint_path(robot, phi_start, waypoints)``
+    ends at [phi0 + delta_phi0, q0] to ~1e-12 rad (accepted at 1e-9).
+
+    Args:
+        robot: one design.
+        phi_start: ``(n+1,)`` start posture [phi0, phi1..phin], rad.
+        delta_phi0: base rotation, rad.
+        **options: ``settings`` (:class:`LoopSettings`), ``tolerance`` (rad).
+
+    Returns:
+        ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the
+        first and last rows equal phi_start[1:].
+    """
+    return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
+
+
+# Reaching a target ---------------------------------------------------------------------
