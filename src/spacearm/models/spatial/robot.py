@@ -21,7 +21,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from spacearm.robot import ConfigError
+from ..._core.errors import ConfigError
 
 from .urdf import ArmChain, check_inertia, rpy_matrix
 

@@ -21,17 +21,15 @@ its ``cmeel.prefix/share/example-robot-data/`` prefix).
 
 from __future__ import annotations
 
-import difflib
 import importlib.metadata
-import math
 import os
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-import yaml
 
-from spacearm.robot import ConfigError
+from ..._core.errors import ConfigError
+from ..._core.schema import check_keys, number, read_yaml
 
 from .robot import SpatialRobot, robot_from_chain
 from .urdf import check_inertia, read_urdf
@@ -50,26 +48,10 @@ def is_spatial_config(config: Any) -> bool:
     return isinstance(config, Mapping) and "arm" in config
 
 
-def _unknown_keys(where: str, mapping: Mapping, allowed: set[str]) -> None:
-    for key in mapping:
-        if key not in allowed:
-            hint = difflib.get_close_matches(str(key), sorted(allowed), n=1)
-            extra = f" (did you mean '{hint[0]}'?)" if hint else ""
-            raise ConfigError(f"{where}unknown key '{key}'{extra}; allowed keys: {', '.join(sorted(allowed))}")
-
-
 def _mapping(where: str, value: Any, keys: set[str]) -> Mapping:
     if not isinstance(value, Mapping):
         raise ConfigError(f"{where}: must be a mapping with keys {', '.join(sorted(keys))}")
     return value
-
-
-def _number(where: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{where}: must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ConfigError(f"{where}: must be a finite number, got {value!r}")
-    return float(value)
 
 
 def _array(where: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
@@ -111,7 +93,7 @@ def _urdf_path(source: str, arm: Mapping, base_dir: str) -> str:
     if isinstance(value, str):
         return value if os.path.isabs(value) else os.path.join(base_dir, value)
     if isinstance(value, Mapping):
-        _unknown_keys(f"{source}: arm.urdf: ", value, _PACKAGE_KEYS)
+        check_keys(f"{source}: arm.urdf: ", value, _PACKAGE_KEYS)
         for key in ("package", "path"):
             if not isinstance(value.get(key), str):
                 raise ConfigError(f"{source}: arm.urdf.{key}: missing or not a string")
@@ -134,18 +116,18 @@ def spatial_robot_from_mapping(
     """
     if not isinstance(config, Mapping):
         raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
-    _unknown_keys(f"{source}: ", config, _TOP_KEYS)
+    check_keys(f"{source}: ", config, _TOP_KEYS)
     name = config.get("name", "robot")
     if not isinstance(name, str):
         raise ConfigError(f"{source}: name: must be a string, got {name!r}")
     if "base" not in config:
         raise ConfigError(f"{source}: base: missing required key")
     base = _mapping(f"{source}: base", config["base"], _BASE_KEYS)
-    _unknown_keys(f"{source}: base: ", base, _BASE_KEYS)
+    check_keys(f"{source}: base: ", base, _BASE_KEYS)
     for key in ("mass", "inertia"):
         if key not in base:
             raise ConfigError(f"{source}: base.{key}: missing required key")
-    base_mass = _number(f"{source}: base.mass", base["mass"])
+    base_mass = number(f"{source}: base.mass", base["mass"])
     if base_mass <= 0:
         raise ConfigError(f"{source}: base.mass: must be positive, got {base_mass!r}")
     base_com = _array(f"{source}: base.com", base.get("com", [0.0, 0.0, 0.0]), (3,))
@@ -153,7 +135,7 @@ def spatial_robot_from_mapping(
     check_inertia(f"{source}: base.inertia", base_inertia, positive=True, triangle=True)
 
     mount = _mapping(f"{source}: mount", config.get("mount", {}), _MOUNT_KEYS)
-    _unknown_keys(f"{source}: mount: ", mount, _MOUNT_KEYS)
+    check_keys(f"{source}: mount: ", mount, _MOUNT_KEYS)
     if "rpy" in mount and "rpy_deg" in mount:
         raise ConfigError(f"{source}: mount: give either 'rpy' (rad) or 'rpy_deg', not both")
     mount_xyz = _array(f"{source}: mount.xyz", mount.get("xyz", [0.0, 0.0, 0.0]), (3,))
@@ -165,14 +147,14 @@ def spatial_robot_from_mapping(
     if "arm" not in config:
         raise ConfigError(f"{source}: arm: missing required key")
     arm = _mapping(f"{source}: arm", config["arm"], _ARM_KEYS)
-    _unknown_keys(f"{source}: arm: ", arm, _ARM_KEYS)
+    check_keys(f"{source}: arm: ", arm, _ARM_KEYS)
     for key in ("root_link", "tip"):
         if not isinstance(arm.get(key), str):
             raise ConfigError(f"{source}: arm.{key}: missing or not a link name")
     lock = arm.get("lock_joints") or {}
     if not isinstance(lock, Mapping):
         raise ConfigError(f"{source}: arm.lock_joints: must be a mapping joint: value")
-    lock = {str(k): _number(f"{source}: arm.lock_joints.{k}", v) for k, v in lock.items()}
+    lock = {str(k): number(f"{source}: arm.lock_joints.{k}", v) for k, v in lock.items()}
     as_written = arm.get("inertia_as_written", False)
     if not isinstance(as_written, bool):
         raise ConfigError(f"{source}: arm.inertia_as_written: must be true or false, got {as_written!r}")
@@ -208,15 +190,5 @@ def load_spatial_robot(source: str | os.PathLike | Mapping[str, Any], *, base_di
     if isinstance(source, Mapping):
         return spatial_robot_from_mapping(source, base_dir=base_dir or ".")
     path = os.fspath(source)
-    try:
-        with open(path, encoding="utf-8") as handle:
-            config = yaml.safe_load(handle)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such robot file") from None
-    except IsADirectoryError:
-        raise ConfigError(f"{path}: is a directory, not a robot file") from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        raise ConfigError(f"{path}: malformed YAML{where}: {getattr(error, 'problem', None) or error}") from None
+    config = read_yaml(path, what="robot file")
     return spatial_robot_from_mapping(config, source=path, base_dir=base_dir or os.path.dirname(path) or ".")

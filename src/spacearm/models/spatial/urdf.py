@@ -30,7 +30,6 @@ file and the link, joint or attribute.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -38,7 +37,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from spacearm.robot import ConfigError
+from ..._core.errors import ConfigError
+from ..._core.schema import did_you_mean
 
 __all__ = [
     "ArmChain",
@@ -257,8 +257,7 @@ def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
             "revolute, continuous, prismatic or fixed)"
         )
     if kind not in _KNOWN_TYPES:
-        hint = difflib.get_close_matches(str(kind), _KNOWN_TYPES, n=1)
-        extra = f" (did you mean '{hint[0]}'?)" if hint else ""
+        extra = did_you_mean(str(kind), _KNOWN_TYPES)
         raise ConfigError(f"{where}unknown type {kind!r}{extra}")
     ends = {}
     for end in ("parent", "child"):
@@ -267,8 +266,7 @@ def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
         if link is None:
             raise ConfigError(f"{where}{end}: missing <{end} link=...>")
         if link not in links:
-            hint = difflib.get_close_matches(link, list(links), n=1)
-            extra = f" (did you mean '{hint[0]}'?)" if hint else ""
+            extra = did_you_mean(link, list(links))
             raise ConfigError(f"{where}{end} link '{link}' is not defined{extra}")
         ends[end] = link
     rotation, translation = _origin(where, element)
@@ -364,8 +362,7 @@ def parse_urdf(
 
     for name, value in lock_joints.items():
         if name not in joints:
-            hint = difflib.get_close_matches(str(name), list(joints), n=1)
-            extra = f" (did you mean '{hint[0]}'?)" if hint else ""
+            extra = did_you_mean(str(name), list(joints))
             raise ConfigError(f"{source}: lock_joints: unknown joint '{name}'{extra}")
         if joints[name].kind == "fixed":
             raise ConfigError(f"{source}: lock_joints: joint '{name}' is fixed already; only movable joints are locked")
@@ -373,8 +370,7 @@ def parse_urdf(
             raise ConfigError(f"{source}: lock_joints: joint '{name}': the value must be a finite number, got {value!r}")
     for role, name in (("root_link", root_link), ("tip", tip)):
         if name not in links:
-            hint = difflib.get_close_matches(str(name), list(links), n=1)
-            extra = f" (did you mean '{hint[0]}'?)" if hint else ""
+            extra = did_you_mean(str(name), list(links))
             raise ConfigError(f"{source}: {role}: link '{name}' is not in the URDF{extra}")
 
     # The path from root_link to tip, walking up from the tip.
