@@ -137,7 +137,7 @@ def pinocchio_reference(combined: str, joint_names, tip: str, q):
     M = pin.crba(model, data, config)
     M = np.triu(M) + np.triu(M, 1).T
     M = M[np.ix_(order, order)]
-    frame = model.getFrameId(tip)
+    frame = model.getFrameId(tip, pin.BODY)
     J = pin.computeFrameJacobian(model, data, config, frame, pin.LOCAL_WORLD_ALIGNED)[:, order]
     pin.framesForwardKinematics(model, data, config)
     com = pin.centerOfMass(model, data, config)
