@@ -47,17 +47,17 @@ from .robot import SpatialRobot
 
 __all__ = [
     "ChainConstants",
+    "arm_inertia",
+    "base_twist_map",
     "chain_constants",
+    "fixed_base_jacobian",
+    "generalized_jacobian",
+    "jacobians",
+    "mass_matrix",
+    "momentum_map",
+    "rpy_to_matrix",
     "tip",
     "tip_pose",
-    "jacobians",
-    "momentum_map",
-    "fixed_base_jacobian",
-    "mass_matrix",
-    "generalized_jacobian",
-    "base_twist_map",
-    "arm_inertia",
-    "rpy_to_matrix",
 ]
 
 
@@ -114,7 +114,7 @@ def _from_columns(c0, c1, c2):
 def _sym_rotate(rot, inertia):
     """R I R^T for a symmetric I given as a full 3x3 tuple; returns the 6 unique entries."""
     a = _matmul(rot, inertia)
-    entry = lambda r, c: a[r][0] * rot[c][0] + a[r][1] * rot[c][1] + a[r][2] * rot[c][2]  # noqa: E731
+    entry = lambda r, c: a[r][0] * rot[c][0] + a[r][1] * rot[c][1] + a[r][2] * rot[c][2]
     return (entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2))
 
 
@@ -339,7 +339,7 @@ def _chain_pass(robot: SpatialRobot, q, with_momentum: bool = True) -> _Pass:
     flags = flags.reshape((-1,) + (1,) * len(batch))
     angle = q * (1.0 - flags)  # prismatic joints turn by 0 and slide by q
     xs = (cst.placement, cst.offset, jnp.cos(angle), jnp.sin(angle), q * flags, cst.link_com, cst.link_inertia)
-    spread = lambda x: jnp.broadcast_to(x, batch)  # noqa: E731 (carries keep one shape)
+    spread = lambda x: jnp.broadcast_to(x, batch)
     start = (
         tuple(tuple(spread(cst.mount_rotation[r, c]) for c in range(3)) for r in range(3)),
         tuple(spread(cst.mount_xyz[r]) for r in range(3)),
