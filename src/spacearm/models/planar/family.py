@@ -32,6 +32,7 @@ class PlanarFamily(RobotFamily):
         "base_rate": closed_forms.base_rate,
         "fixed_base_jacobian": closed_forms.fixed_base_jacobian,
         "fixed_base_manipulability": closed_forms.fixed_base_manipulability,
+        "straight_path_field": closed_forms.straight_path_field,
     }
 
     def joint_count(self, robot: PlanarRobot) -> int:
