@@ -94,13 +94,13 @@ def _adjugate(A: jax.Array) -> jax.Array:
 
 
 def square_determinant(J: jax.Array) -> jax.Array:
-    """det J of a ``(t, t)`` matrix, t <= 3, written out (no LU pivoting: smooth everywhere)."""
+    """det J of ``(..., t, t)`` matrices, t <= 3, written out (no LU pivoting: smooth everywhere)."""
     t = J.shape[-1]
     if t == 1:
-        return J[0, 0]
+        return J[..., 0, 0]
     if t == 2:
-        return J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
-    return jnp.dot(J[:, 0], jnp.cross(J[:, 1], J[:, 2]))
+        return J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    return jnp.sum(J[..., :, 0] * jnp.cross(J[..., :, 1], J[..., :, 2]), axis=-1)
 
 
 def straight_path_rates(J: jax.Array, direction: jax.Array, sign0: jax.Array) -> tuple[jax.Array, jax.Array]:

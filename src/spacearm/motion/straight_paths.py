@@ -394,8 +394,9 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
     h = joint_arc / (intervals * substeps)
 
     def advance(y, _):
-        for _ in range(substeps):
-            y = dop853.rk_step(field, y, h, tableau)
+        # A loop over the substeps rather than an unrolled body: the DOP853 stages are
+        # already unrolled inside one step, so unrolling the substeps only lengthens compiles.
+        y = jax.lax.fori_loop(0, substeps, lambda _, y: dop853.rk_step(field, y, h, tableau), y)
         return y, y
 
     y0 = jnp.concatenate([phi_start, jnp.zeros((1,), dtype)])
