@@ -11,16 +11,12 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from . import results
-
-from .kinematics import manipulability_on_grid
+from . import results, table2_variants
 from .robot import ConfigError, PlanarRobot, stack_robots, umetani1990
 
-__all__ = ["REPORTS", "PAPER_TABLE2", "table2_report", "wbar_readings"]
+__all__ = ["PAPER_TABLE2", "REPORTS", "table2_report", "wbar_readings"]
 
 B0 = 1.4  # m, Table 1's b0
 # Table 2 as printed: b0/B0 -> (w-bar x 1e-2, S_M, S_G).
@@ -37,75 +33,139 @@ def _write_text(path: Path, text: str) -> Path:
     return results.write_text(path, text)
 
 # Readings of the w-bar column -------------------------------------------------------------
-
-_GRID_PHI1, _GRID_PHI2 = 512, 256  # midpoint grid for the readings (second order: ~1e-6 relative)
-
-
-@jax.jit
-def _grid_statistics(robots: PlanarRobot) -> dict[str, jax.Array]:
-    """Several averages of w*/L^2 per design on one midpoint grid of the elbow-down strip."""
-
-    def single(robot):
-        phi1 = -jnp.pi + 2 * jnp.pi * (jnp.arange(_GRID_PHI1) + 0.5) / _GRID_PHI1
-        phi2 = jnp.pi * (jnp.arange(_GRID_PHI2) + 0.5) / _GRID_PHI2
-        w = manipulability_on_grid(robot, [phi1, phi2]) / robot.reach**2
-        area = jnp.broadcast_to(jnp.sin(phi2), w.shape)  # l1 l2 cancels in the ratios
-        return {
-            "area": jnp.sum(w * area) / jnp.sum(area),
-            "joint": jnp.mean(w),
-            "area_squared": jnp.sum(w * w * area) / jnp.sum(area),
-            "inertial_area": jnp.sum(w * w) / jnp.sum(w),
-        }
-
-    return jax.lax.map(single, robots)
-
-
-def _model(base: PlanarRobot, ratio: float, variant: str) -> PlanarRobot:
-    robot = base.replace(base_attach=np.float64(B0 * ratio))
-    if variant == "I0 about joint 1":
-        return robot.replace(base_inertia=np.float64(robot.base_inertia + robot.base_mass * robot.base_attach**2))
-    if variant == "I_i about joint i":
-        return robot.replace(link_inertia=robot.link_inertia + robot.link_mass * robot.link_a**2)
-    if variant == "point-mass links":
-        return robot.replace(link_inertia=np.full_like(robot.link_inertia, 1e-9))
-    if variant == "B0 = l0 = 2.6 m":
-        return base.replace(base_attach=np.float64(2.6 * ratio))
-    return robot
+# The derivation variants and averaging rules live in table2_variants; here they become rows.
 
 
 def wbar_readings(base: PlanarRobot | None = None, ratios=tuple(PAPER_TABLE2)) -> list[dict]:
-    """The plausible readings of the w-bar column tried against the printed values.
+    """Every reading of the w-bar column tried against the printed values.
 
-    Each entry: ``name``, ``note`` and ``values`` (w-bar x 1e-2 at ``ratios``). The
-    numbers come from a 512 x 256 midpoint grid (about 1e-6 relative; the faithful
-    row is also computed by the adaptive quadrature in the main table).
+    Each model variant of :func:`spacearm.table2_variants.model_variants` (the faithful
+    derivation, every single departure and every pair) by each averaging rule of
+    :data:`spacearm.table2_variants.AVERAGES`, then three readings outside that grid
+    (B0 read as the base length; the ground robot's closed forms). Each entry: ``name``,
+    ``note``, ``departures`` (how many choices differ from eq. 1-12 as written) and
+    ``values`` (w-bar x 1e-2 at ``ratios``; NaN where the variant's I_S vanishes on the
+    strip). Computed on a 512 x 256 midpoint grid (about 1e-6 relative; the faithful
+    area row is also computed by the adaptive quadrature in the main table).
     """
     base = umetani1990() if base is None else base
-    variants = ("Table 1", "I0 about joint 1", "I_i about joint i", "point-mass links", "B0 = l0 = 2.6 m")
-    robots = stack_robots([_model(base, r, v) for v in variants for r in ratios])
-    stats = {k: np.asarray(v).reshape(len(variants), len(ratios)) * 100 for k, v in _grid_statistics(robots).items()}
+    readings = []
+    for reading in table2_variants.wbar_readings(base, tuple(ratios)):
+        model = " + ".join(reading["model"]) or "faithful"
+        extra = 0 if reading["average"] == "area" else 1
+        readings.append({
+            "name": f"{model} / {reading['average']}",
+            "model": model,
+            "rule": reading["average"],
+            "note": table2_variants.AVERAGES[reading["average"]] if not reading["model"] else
+                    "; ".join(table2_variants.DEPARTURES[n][1] for n in reading["model"]),
+            "departures": len(reading["model"]) + extra,
+            "values": np.asarray(reading["values"], float),
+        })
     l1, l2 = np.asarray(base.link_length)
     reach = l1 + l2
-    b0 = B0 * np.asarray(ratios)
-    readings = [
-        ("faithful: area average, elbow-down, w*/L^2 (default)", "eq. 12 as written; elbow-up and both sheets give the same number (mirror symmetry)", stats["area"][0]),
-        ("joint-space average (uniform dphi1 dphi2)", "ds read as dphi instead of the area element", stats["joint"][0]),
-        ("area average of (w*/L^2)^2", "det(J* J*^T)/L^4 instead of its square root", stats["area_squared"][0]),
-        ("inertial-area weighting ds = w* dphi", "average over the area the tip sweeps in the inertial frame", stats["inertial_area"][0]),
-        ("normalized by (b0 + L)^2", "L read as the reach from the base centroid", stats["area"][0] * reach**2 / (b0 + reach) ** 2),
-        ("model: I0 about joint 1 (I0 + m0 b0^2)", "base inertia taken about the attachment point", stats["area"][1]),
-        ("model: I_i about joint i (I_i + m_i a_i^2)", "link inertias about the joints", stats["area"][2]),
-        ("model: point-mass links (I_i = 0)", "no link rotational inertia", stats["area"][3]),
-        ("model: B0 = l0 = 2.6 m", "b0/B0 scaled by the base length (then S_M, S_G no longer match)", stats["area"][4]),
-        ("joint-space average + I_i about joint i", "the two nearest single readings combined", stats["joint"][2]),
-        ("ground robot, area average", "(l1 l2 / L^2) pi/4, no base motion", np.full(len(ratios), 100 * l1 * l2 / reach**2 * math.pi / 4)),
-        ("ground robot, joint-space average", "(l1 l2 / L^2) 2/pi", np.full(len(ratios), 100 * l1 * l2 / reach**2 * 2 / math.pi)),
+    scaled = stack_robots([base.replace(base_attach=np.float64(2.6 * r)) for r in ratios])
+    readings += [
+        {"name": "faithful, B0 = l0 = 2.6 m / area", "note": "b0/B0 scaled by the base length (then S_M, S_G no longer match)",
+         "departures": 1, "values": 100 * table2_variants.grid_averages([table2_variants.FAITHFUL], scaled)["area"][0]},
+        {"name": "ground robot / area", "note": "(l1 l2 / L^2) pi/4, no base motion", "departures": 1,
+         "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * math.pi / 4)},
+        {"name": "ground robot / joint", "note": "(l1 l2 / L^2) 2/pi", "departures": 2,
+         "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * 2 / math.pi)},
     ]
-    return [{"name": n, "note": note, "values": np.asarray(v, float)} for n, note, v in readings]
+    return readings
 
 
 def _rms_relative(values, printed) -> float:
     return float(np.sqrt(np.mean((np.asarray(values) / np.asarray(printed) - 1.0) ** 2)))
+
+
+def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]) -> list[str]:
+    """The readings section of table.md: the variants, the rules, the verdict, every reading."""
+    readings = wbar_readings(base, tuple(ratios))
+    for r in readings:
+        r["max"], r["rms"] = table2_variants.relative_errors(r["values"], printed)
+    finite = [r for r in readings if np.all(np.isfinite(r["values"]))]
+    rank = sorted(finite, key=lambda r: r["rms"])
+    growth = printed[-1] / printed[0]
+    best = rank[0]
+    best_single = min((r for r in finite if r["departures"] <= 1 and r["name"] != "faithful / area"), key=lambda r: r["rms"])
+    best_area = min((r for r in finite if r["name"].endswith("/ area") and r["name"] != "faithful / area"), key=lambda r: r["rms"])
+    by_max = min(finite, key=lambda r: r["max"])
+    faithful = next(r for r in readings if r["name"] == "faithful / area")["values"]
+    fraction, median = table2_variants.chance_level(np.array([r["values"] for r in readings]), printed)
+    header = " | ".join(f"b0/B0={r:g}" for r in ratios)
+    fmt = lambda r: f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
+    lines = [
+        "## Readings of the w-bar column (x1e-2; no parameter, none tuned to the printed numbers)",
+        "",
+        "A reading = a derivation of I_S, I_M and J_S, J_M (eq. 2, 5; the faithful one or departures",
+        "from it that a hand derivation could make) and a rule for averaging w* (eq. 12 or a",
+        "misreading of it). Derivations: src/spacearm/table2_variants.py; the reasoning:",
+        "docs/explanation/table2-wbar.md. Every value comes from a 512 x 256 midpoint grid of the",
+        "elbow-down strip (about 1e-6 relative).",
+        "",
+        "### Departures from the faithful derivation (each alone, and every pair changing two different things)",
+        "",
+        "| departure | why a 1990 derivation could make it |",
+        "|---|---|",
+        *[f"| {name} | {note} |" for name, (_, note) in table2_variants.DEPARTURES.items()],
+        "",
+        "### Averaging rules (each with every model variant)",
+        "",
+        "| rule | what it changes |",
+        "|---|---|",
+        *[f"| {name} | {note} |" for name, note in table2_variants.AVERAGES.items()],
+        "",
+        "### Verdict",
+        "",
+        f"{len(readings)} readings, {len(finite)} finite (the others put I_S = 0 somewhere on the strip, where w* has a pole).",
+        f"Growth from the first row to the last: x{growth:.3f} printed, x{faithful[-1] / faithful[0]:.3f} faithful.",
+        "",
+        f"- Closest by rms: {fmt(best)}, {best['departures']} departures.",
+        f"- Closest by maximum error: {fmt(by_max)}.",
+        f"- Closest with at most one departure: {fmt(best_single)}.",
+        f"- Closest keeping eq. 12's area average: {fmt(best_area)}.",
+        (f"- No reading reproduces the column: the printed values are rounded to 0.005 (at most "
+         f"{0.005 / min(printed):.2%} relative); every reading misses some row by {by_max['max']:.1%} or more."),
+        (f"- Against chance: over 1000 random increasing columns with the printed first and last values, the"
+         f" best of these readings has a median rms of {median:.1%}; {fraction:.1%} of the random columns are"
+         " fitted at least as well as the printed one."),
+        "- The faithful definition stays the default everywhere.",
+        "",
+        "### rms relative error of every reading (rows: model variant; columns: averaging rule; - = diverges)",
+        "",
+        "| model variant | " + " | ".join(table2_variants.AVERAGES) + " |",
+        "|---|" + "---|" * len(table2_variants.AVERAGES),
+    ]
+    grid = {}
+    for r in readings:
+        if "model" in r:
+            grid.setdefault(r["model"], {})[r["rule"]] = r
+    for model, cells in grid.items():
+        lines.append(f"| {model} | " + " | ".join(
+            "-" if not np.isfinite(cells[k]["rms"]) else f"{cells[k]['rms']:.1%}" for k in table2_variants.AVERAGES) + " |")
+    lines += [
+        "",
+        "### Every reading, closest first",
+        "",
+        "departures = how many choices differ from eq. 1-12 as written (model departures, plus one for a rule",
+        f"other than the area average). growth = last row / first (paper: {growth:.3f}).",
+        "",
+        f"| reading (model / rule) | departures | {header} | max rel. err | rms rel. err | growth |",
+        "|---|---|" + "---|" * len(ratios) + "---|---|---|",
+        "| **paper (printed)** | | " + " | ".join(f"{p:.2f}" for p in printed) + f" | 0 | 0 | {growth:.3f} |",
+    ]
+    for r in rank + [r for r in readings if r not in finite]:
+        if np.all(np.isfinite(r["values"])):
+            cells = " | ".join(f"{v:.2f}" for v in r["values"])
+            ratio = f"{r['values'][-1] / r['values'][0]:.3f}" if r["values"][0] else "-"
+            tail = f"{r['max']:.1%} | {r['rms']:.1%} | {ratio}"
+        else:
+            cells = " | ".join("-" if not np.isfinite(v) else f"{v:.2f}" for v in r["values"])
+            tail = "diverges | | "
+        lines.append(f"| {r['name']} | {r['departures']} | {cells} | {tail} |")
+    return lines
 
 
 # Table 2 ------------------------------------------------------------------------------------
@@ -150,32 +210,7 @@ def table2_report(out_dir: Path, rows: list[dict], spec) -> list[Path]:
     lines += ["", *_table2_summary(rows), ""]
     if ratios:
         printed = [PAPER_TABLE2[round(r, 6)][0] for r in ratios]
-        readings = wbar_readings(base, tuple(ratios))
-        header = " | ".join(f"b0/B0={r:g}" for r in ratios)
-        lines += [
-            "## Readings of the w-bar column tried (x1e-2; none tuned to the printed numbers)",
-            "",
-            "Computed on a 512 x 256 midpoint grid of the elbow-down strip (about 1e-6 relative).",
-            "rms rel. = root mean square of ours / paper - 1 over the five rows; growth = value at",
-            "the last row / value at the first (paper: %.3f)." % (printed[-1] / printed[0]),
-            "",
-            f"| reading | {header} | rms rel. | growth | what it changes |",
-            "|---|" + "---|" * len(ratios) + "---|---|---|",
-            "| **paper (printed)** | " + " | ".join(f"{p:.2f}" for p in printed) + " | 0 | %.3f | |" % (printed[-1] / printed[0]),
-        ]
-        for reading in readings:
-            values = reading["values"]
-            lines.append(
-                f"| {reading['name']} | "
-                + " | ".join(f"{v:.2f}" for v in values)
-                + f" | {_rms_relative(values, printed):.3f} | {values[-1] / values[0]:.3f} | {reading['note']} |"
-            )
-        best = min(readings[1:], key=lambda r: _rms_relative(r["values"], printed))
-        lines += [
-            "",
-            f"Closest: {best['name']} (rms rel. {_rms_relative(best['values'], printed):.3f}). No single",
-            "reading reproduces the column; the faithful definition stays the default.",
-        ]
+        lines += _readings_lines(base, ratios, printed)
     from .figures.maps import draw_fig10
 
     fig_ratios = [r for r in (0.0, 1.0, 2.0)]
