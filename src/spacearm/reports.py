@@ -45,7 +45,7 @@ def wbar_readings(base: PlanarRobot | None = None, ratios=tuple(PAPER_TABLE2)) -
     (B0 read as the base length; the ground robot's closed forms). Each entry: ``name``,
     ``note``, ``departures`` (how many choices differ from eq. 1-12 as written) and
     ``values`` (w-bar x 1e-2 at ``ratios``; NaN where the variant's I_S vanishes on the
-    strip). Computed on a 512 x 256 midpoint grid (about 1e-6 relative; the faithful
+    strip). Computed on a 512 x 256 midpoint grid (under 1e-5 relative; the faithful
     area row is also computed by the adaptive quadrature in the main table).
     """
     base = umetani1990() if base is None else base
@@ -103,7 +103,7 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         "from it that a hand derivation could make) and a rule for averaging w* (eq. 12 or a",
         "misreading of it). Derivations: src/spacearm/table2_variants.py; the reasoning:",
         "docs/explanation/table2-wbar.md. Every value comes from a 512 x 256 midpoint grid of the",
-        "elbow-down strip (about 1e-6 relative).",
+        "elbow-down strip (under 1e-5 relative; the faithful area row differs from the main table by 6e-6).",
         "",
         "### Departures from the faithful derivation (each alone, and every pair changing two different things)",
         "",

@@ -315,7 +315,7 @@ def manipulability(derivation: Derivation, robot: PlanarRobot, phi: jax.Array) -
 
 # Averages over the elbow-down strip ------------------------------------------------------
 
-_GRID_PHI1, _GRID_PHI2 = 512, 256  # midpoint grid (second order at the kinks: ~1e-6 relative)
+_GRID_PHI1, _GRID_PHI2 = 512, 256  # midpoint grid (second order at the kinks: under 1e-5 relative)
 
 
 @jax.jit
@@ -360,7 +360,7 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
     Returns:
         ``{rule: (len(derivations), designs)}``, dimensionless; NaN where I_S vanishes
         somewhere on the strip (w* has a pole, the average diverges). Computed on a 512 x 256
-        midpoint grid of the elbow-down strip (about 1e-6 relative to the adaptive rule
+        midpoint grid of the elbow-down strip (under 1e-5 relative to the adaptive rule
         of :func:`spacearm.metrics.average_manipulability` for the faithful model).
     """
     if robots.n_links != 2 or len(robots.batch_shape) != 1:
