@@ -251,3 +251,12 @@ def test_relative_errors_and_chance_level():
     assert dataclasses.replace(tv.FAITHFUL, sign=-1).departures() == ("sign",)
     with pytest.raises(ValueError, match="momentum_origin"):
         tv.Derivation(momentum_origin="moon")
+
+
+def test_shape_error_is_blind_to_a_constant_factor():
+    assert tv.shape_error(0.6 * np.asarray(PRINTED), PRINTED) == pytest.approx(0.0, abs=1e-15)
+    assert tv.shape_error([1.0, 2.0], [1.0, 1.0]) == pytest.approx(1.0)
+    assert math.isnan(tv.shape_error([0.0, 1.0], [1.0, 1.0]))
+    values = np.array([2 * np.asarray(PRINTED), np.linspace(1.0, 2.0, 5)])
+    fraction, _ = tv.chance_level(values, PRINTED, trials=200, statistic="shape")
+    assert fraction == 0.0

@@ -85,6 +85,7 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
     readings = wbar_readings(base, tuple(ratios))
     for r in readings:
         r["max"], r["rms"] = table2_variants.relative_errors(r["values"], printed)
+        r["shape"] = table2_variants.shape_error(r["values"], printed)
     finite = [r for r in readings if np.all(np.isfinite(r["values"]))]
     rank = sorted(finite, key=lambda r: r["rms"])
     growth = printed[-1] / printed[0]
@@ -94,6 +95,13 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
     by_max = min(finite, key=lambda r: r["max"])
     faithful = next(r for r in readings if r["name"] == "faithful / area")["values"]
     fraction, median = table2_variants.chance_level(np.array([r["values"] for r in readings]), printed)
+    shaped = [r for r in finite if np.isfinite(r["shape"])]
+    # Rules that scale every row alike (area, square, area / joint volume) tie in shape: prefer fewer departures.
+    by_shape = min(shaped, key=lambda r: (round(r["shape"], 9), r["departures"]))
+    by_shape_single = min((r for r in shaped if len(r.get("model", "").split(" + ")) == 1 and r.get("model") != "faithful"),
+                          key=lambda r: (round(r["shape"], 9), r["departures"]))
+    shape_fraction, shape_median = table2_variants.chance_level(
+        np.array([r["values"] for r in readings]), printed, statistic="shape")
     header = " | ".join(f"b0/B0={r:g}" for r in ratios)
     fmt = lambda r: f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
     lines = [
@@ -126,11 +134,16 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         f"- Closest by maximum error: {fmt(by_max)}.",
         f"- Closest with at most one departure: {fmt(best_single)}.",
         f"- Closest keeping eq. 12's area average: {fmt(best_area)}.",
+        ("- Closest in shape (each column divided by its first row, so blind to any constant factor of the"
+         f" averaging or the normalization): {by_shape['name']} (shape error {by_shape['shape']:.1%});"
+         f" with one model departure: {by_shape_single['name']} (shape error {by_shape_single['shape']:.1%},"
+         f" growth x{by_shape_single['values'][-1] / by_shape_single['values'][0]:.3f})."),
         (f"- No reading reproduces the column: the printed values are rounded to 0.005 (at most "
          f"{0.005 / min(printed):.2%} relative); every reading misses some row by {by_max['max']:.1%} or more."),
         (f"- Against chance: over 1000 random increasing columns with the printed first and last values, the"
          f" best of these readings has a median rms of {median:.1%}; {fraction:.1%} of the random columns are"
-         " fitted at least as well as the printed one."),
+         " fitted at least as well as the printed one. In shape: median best shape error"
+         f" {shape_median:.1%}, {shape_fraction:.1%} of the random columns fitted at least as well."),
         "- The faithful definition stays the default everywhere.",
         "",
         "### rms relative error of every reading (rows: model variant; columns: averaging rule; - = diverges)",
@@ -150,20 +163,22 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         "### Every reading, closest first",
         "",
         "departures = how many choices differ from eq. 1-12 as written (model departures, plus one for a rule",
-        f"other than the area average). growth = last row / first (paper: {growth:.3f}).",
+        f"other than the area average). growth = last row / first (paper: {growth:.3f}). shape err = max over the",
+        "rows of |(ours_i / ours_0) / (paper_i / paper_0) - 1|, blind to a constant factor.",
         "",
-        f"| reading (model / rule) | departures | {header} | max rel. err | rms rel. err | growth |",
-        "|---|---|" + "---|" * len(ratios) + "---|---|---|",
-        "| **paper (printed)** | | " + " | ".join(f"{p:.2f}" for p in printed) + f" | 0 | 0 | {growth:.3f} |",
+        f"| reading (model / rule) | departures | {header} | max rel. err | rms rel. err | growth | shape err |",
+        "|---|---|" + "---|" * len(ratios) + "---|---|---|---|",
+        "| **paper (printed)** | | " + " | ".join(f"{p:.2f}" for p in printed) + f" | 0 | 0 | {growth:.3f} | 0 |",
     ]
     for r in rank + [r for r in readings if r not in finite]:
         if np.all(np.isfinite(r["values"])):
             cells = " | ".join(f"{v:.2f}" for v in r["values"])
             ratio = f"{r['values'][-1] / r['values'][0]:.3f}" if r["values"][0] else "-"
-            tail = f"{r['max']:.1%} | {r['rms']:.1%} | {ratio}"
+            shape = f"{r['shape']:.1%}" if np.isfinite(r["shape"]) else "-"
+            tail = f"{r['max']:.1%} | {r['rms']:.1%} | {ratio} | {shape}"
         else:
             cells = " | ".join("-" if not np.isfinite(v) else f"{v:.2f}" for v in r["values"])
-            tail = "diverges | | "
+            tail = "diverges | | | "
         lines.append(f"| {r['name']} | {r['departures']} | {cells} | {tail} |")
     return lines
 

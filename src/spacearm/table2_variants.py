@@ -430,25 +430,42 @@ def relative_errors(values, printed) -> tuple[float, float]:
     return float(np.max(np.abs(rel))), float(np.sqrt(np.mean(rel**2)))
 
 
-def chance_level(values: np.ndarray, printed, *, trials: int = 1000, seed: int = 0) -> tuple[float, float]:
+def shape_error(values, printed) -> float:
+    """max over the rows of |(ours_i / ours_0) / (printed_i / printed_0) - 1|.
+
+    The column relative to its first row: blind to any constant factor (a misread
+    normalization or measure that scales every row alike), so it tests the derivation.
+    NaN when the first value is 0 or undefined.
+    """
+    values, printed = np.asarray(values, float), np.asarray(printed, float)
+    if not np.isfinite(values[0]) or values[0] == 0:
+        return float("nan")
+    return float(np.max(np.abs((values / values[0]) / (printed / printed[0]) - 1.0)))
+
+
+def chance_level(values: np.ndarray, printed, *, trials: int = 1000, seed: int = 0, statistic: str = "rms") -> tuple[float, float]:
     """How well the same set of readings fits columns that are not the paper's.
 
     Draws ``trials`` random increasing columns with the printed first and last values
-    (interior steps uniform on the simplex) and finds each one's best reading by rms.
+    (interior steps uniform on the simplex) and finds each one's best reading.
 
     Args:
-        values: ``(readings, rows)`` the readings' values (NaN rows are skipped).
+        values: ``(readings, rows)`` the readings' values (rows with NaN or a zero first value are skipped).
         printed: ``(rows,)`` the printed column.
+        statistic: "rms" (rms relative error) or "shape" (:func:`shape_error`).
 
     Returns:
         ``(fraction, median)``: the fraction of random columns fitted at least as well as
-        the printed one, and the median of their best rms.
+        the printed one, and the median of their best scores.
     """
     values = np.asarray(values, float)
-    values = values[np.all(np.isfinite(values), axis=1)]
+    values = values[np.all(np.isfinite(values), axis=1) & (values[:, 0] != 0)]
     printed = np.asarray(printed, float)
 
     def best(target):
+        if statistic == "shape":
+            shapes = values / values[:, :1]
+            return float(np.min(np.max(np.abs(shapes / (target / target[0]) - 1.0), axis=1)))
         return float(np.min(np.sqrt(np.mean((values / target - 1.0) ** 2, axis=1))))
 
     rng = np.random.default_rng(seed)
