@@ -161,7 +161,7 @@ DEPARTURES: dict[str, tuple[dict, str]] = {
     ),
 }
 
-# Pairs that give the faithful derivation's other pair or a single departure (no new model).
+# Pairs that are the same model as one of their parts (left out of model_variants).
 _DEGENERATE = {frozenset({"momentum about base centroid", "no base orbital term"})}  # base term is 0 about its own centroid
 
 # Averaging rules of w*/L^2 over the elbow-down strip (the grid of grid_averages).
