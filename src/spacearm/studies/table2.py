@@ -2,9 +2,10 @@
 
 ``REPORTS["table2"](out_dir, rows, spec)`` writes ``table.md`` (Table 2 of Umetani &
 Yoshida 1990 with our values and the relative differences, then the readings of the
-w-bar column we tried). ``spacearm sweep`` adds Fig. 10 beside it
-(:func:`spacearm.figures.sweep.report_figures`). ``REPORT_CHECKS["table2"](spec)``
-refuses, when the sweep is loaded, a sweep the report cannot compare with the paper.
+w-bar column we tried, from :mod:`spacearm.studies.table2_readings`). ``spacearm sweep``
+adds Fig. 10 beside it (:func:`spacearm.figures.sweep.report_figures`).
+``REPORT_CHECKS["table2"](spec)`` refuses, when the sweep is loaded, a sweep the report
+cannot compare with the paper.
 """
 
 from __future__ import annotations
@@ -13,14 +14,21 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
 from ..io import write_text
 from ..models.planar import PlanarRobot, stack_robots, umetani1990
-from ..models.planar.closed_forms import manipulability_on_grid
+from .table2_readings import (
+    AVERAGES,
+    DEPARTURES,
+    FAITHFUL,
+    chance_level,
+    grid_averages,
+    relative_errors,
+    shape_error,
+)
+from .table2_readings import wbar_readings as model_readings
 
 __all__ = ["REPORTS", "REPORT_CHECKS", "PAPER_TABLE2", "B0", "FIG10_RATIOS", "table2_report", "check_table2",
            "wbar_readings"]
@@ -34,79 +42,160 @@ PAPER_TABLE2 = {
     1.5: (7.52, 1.83, 0.23),
     2.0: (8.08, 2.25, 0.11),
 }
+
+
 # The b0/B0 values Fig. 10 shows beside the table (spacearm.figures.sweep draws it).
 FIG10_RATIOS = (0.0, 1.0, 2.0)
 
 # Readings of the w-bar column -------------------------------------------------------------
-
-_GRID_PHI1, _GRID_PHI2 = 512, 256  # midpoint grid for the readings (second order: ~1e-6 relative)
-
-
-@jax.jit
-def _grid_statistics(robots: PlanarRobot) -> dict[str, jax.Array]:
-    """Several averages of w*/L^2 per design on one midpoint grid of the elbow-down strip."""
-
-    def single(robot):
-        phi1 = -jnp.pi + 2 * jnp.pi * (jnp.arange(_GRID_PHI1) + 0.5) / _GRID_PHI1
-        phi2 = jnp.pi * (jnp.arange(_GRID_PHI2) + 0.5) / _GRID_PHI2
-        w = manipulability_on_grid(robot, [phi1, phi2]) / robot.reach**2
-        area = jnp.broadcast_to(jnp.sin(phi2), w.shape)  # l1 l2 cancels in the ratios
-        return {
-            "area": jnp.sum(w * area) / jnp.sum(area),
-            "joint": jnp.mean(w),
-            "area_squared": jnp.sum(w * w * area) / jnp.sum(area),
-            "inertial_area": jnp.sum(w * w) / jnp.sum(w),
-        }
-
-    return jax.lax.map(single, robots)
-
-
-def _model(base: PlanarRobot, ratio: float, variant: str) -> PlanarRobot:
-    robot = base.replace(base_attach=np.float64(B0 * ratio))
-    if variant == "I0 about joint 1":
-        return robot.replace(base_inertia=np.float64(robot.base_inertia + robot.base_mass * robot.base_attach**2))
-    if variant == "I_i about joint i":
-        return robot.replace(link_inertia=robot.link_inertia + robot.link_mass * robot.link_a**2)
-    if variant == "point-mass links":
-        return robot.replace(link_inertia=np.full_like(robot.link_inertia, 1e-9))
-    if variant == "B0 = l0 = 2.6 m":
-        return base.replace(base_attach=np.float64(2.6 * ratio))
-    return robot
+# The derivation variants and averaging rules live in table2_readings; here they become rows.
 
 
 def wbar_readings(base: PlanarRobot | None = None, ratios=tuple(PAPER_TABLE2)) -> list[dict]:
-    """The plausible readings of the w-bar column tried against the printed values.
+    """Every reading of the w-bar column tried against the printed values.
 
-    Each entry: ``name``, ``note`` and ``values`` (w-bar x 1e-2 at ``ratios``). The
-    numbers come from a 512 x 256 midpoint grid (about 1e-6 relative; the faithful
-    row is also computed by the adaptive quadrature in the main table).
+    Each model variant of :func:`spacearm.studies.table2_readings.model_variants` (the faithful
+    derivation, every single departure and every pair) by each averaging rule of
+    :data:`spacearm.studies.AVERAGES`, then three readings outside that grid
+    (B0 read as the base length; the ground robot's closed forms). Each entry: ``name``,
+    ``note``, ``departures`` (how many choices differ from eq. 1-12 as written) and
+    ``values`` (w-bar x 1e-2 at ``ratios``; NaN where the variant's I_S vanishes on the
+    strip). Computed on a 512 x 256 midpoint grid (under 1e-5 relative; the faithful
+    area row is also computed by the adaptive quadrature in the main table).
     """
     base = umetani1990() if base is None else base
-    variants = ("Table 1", "I0 about joint 1", "I_i about joint i", "point-mass links", "B0 = l0 = 2.6 m")
-    robots = stack_robots([_model(base, r, v) for v in variants for r in ratios])
-    stats = {k: np.asarray(v).reshape(len(variants), len(ratios)) * 100 for k, v in _grid_statistics(robots).items()}
+    readings = []
+    for reading in model_readings(base, tuple(ratios)):
+        model = " + ".join(reading["model"]) or "faithful"
+        extra = 0 if reading["average"] == "area" else 1
+        readings.append({
+            "name": f"{model} / {reading['average']}",
+            "model": model,
+            "rule": reading["average"],
+            "note": AVERAGES[reading["average"]] if not reading["model"] else
+                    "; ".join(DEPARTURES[n][1] for n in reading["model"]),
+            "departures": len(reading["model"]) + extra,
+            "values": np.asarray(reading["values"], float),
+        })
     l1, l2 = np.asarray(base.link_length)
     reach = l1 + l2
-    b0 = B0 * np.asarray(ratios)
-    readings = [
-        ("faithful: area average, elbow-down, w*/L^2 (default)", "eq. 12 as written; elbow-up and both sheets give the same number (mirror symmetry)", stats["area"][0]),
-        ("joint-space average (uniform dphi1 dphi2)", "ds read as dphi instead of the area element", stats["joint"][0]),
-        ("area average of (w*/L^2)^2", "det(J* J*^T)/L^4 instead of its square root", stats["area_squared"][0]),
-        ("inertial-area weighting ds = w* dphi", "average over the area the tip sweeps in the inertial frame", stats["inertial_area"][0]),
-        ("normalized by (b0 + L)^2", "L read as the reach from the base centroid", stats["area"][0] * reach**2 / (b0 + reach) ** 2),
-        ("model: I0 about joint 1 (I0 + m0 b0^2)", "base inertia taken about the attachment point", stats["area"][1]),
-        ("model: I_i about joint i (I_i + m_i a_i^2)", "link inertias about the joints", stats["area"][2]),
-        ("model: point-mass links (I_i = 0)", "no link rotational inertia", stats["area"][3]),
-        ("model: B0 = l0 = 2.6 m", "b0/B0 scaled by the base length (then S_M, S_G no longer match)", stats["area"][4]),
-        ("joint-space average + I_i about joint i", "the two nearest single readings combined", stats["joint"][2]),
-        ("ground robot, area average", "(l1 l2 / L^2) pi/4, no base motion", np.full(len(ratios), 100 * l1 * l2 / reach**2 * math.pi / 4)),
-        ("ground robot, joint-space average", "(l1 l2 / L^2) 2/pi", np.full(len(ratios), 100 * l1 * l2 / reach**2 * 2 / math.pi)),
+    scaled = stack_robots([base.replace(base_attach=np.float64(2.6 * r)) for r in ratios])
+    readings += [
+        {"name": "faithful, B0 = l0 = 2.6 m / area", "note": "b0/B0 scaled by the base length (then S_M, S_G no longer match)",
+         "departures": 1, "values": 100 * grid_averages([FAITHFUL], scaled)["area"][0]},
+        {"name": "ground robot / area", "note": "(l1 l2 / L^2) pi/4, no base motion", "departures": 1,
+         "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * math.pi / 4)},
+        {"name": "ground robot / joint", "note": "(l1 l2 / L^2) 2/pi", "departures": 2,
+         "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * 2 / math.pi)},
     ]
-    return [{"name": n, "note": note, "values": np.asarray(v, float)} for n, note, v in readings]
+    return readings
 
 
 def _rms_relative(values, printed) -> float:
     return float(np.sqrt(np.mean((np.asarray(values) / np.asarray(printed) - 1.0) ** 2)))
+
+
+def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]) -> list[str]:
+    """The readings section of table.md: the variants, the rules, the verdict, every reading."""
+    readings = wbar_readings(base, tuple(ratios))
+    for r in readings:
+        r["max"], r["rms"] = relative_errors(r["values"], printed)
+        r["shape"] = shape_error(r["values"], printed)
+    finite = [r for r in readings if np.all(np.isfinite(r["values"]))]
+    rank = sorted(finite, key=lambda r: r["rms"])
+    growth = printed[-1] / printed[0]
+    best = rank[0]
+    best_single = min((r for r in finite if r["departures"] <= 1 and r["name"] != "faithful / area"), key=lambda r: r["rms"])
+    best_area = min((r for r in finite if r["name"].endswith("/ area") and r["name"] != "faithful / area"), key=lambda r: r["rms"])
+    by_max = min(finite, key=lambda r: r["max"])
+    faithful = next(r for r in readings if r["name"] == "faithful / area")["values"]
+    fraction, median = chance_level(np.array([r["values"] for r in readings]), printed)
+    shaped = [r for r in finite if np.isfinite(r["shape"])]
+    # Rules that scale every row alike (area, square, area / joint volume) tie in shape: prefer fewer departures.
+    by_shape = min(shaped, key=lambda r: (round(r["shape"], 9), r["departures"]))
+    by_shape_single = min((r for r in shaped if len(r.get("model", "").split(" + ")) == 1 and r.get("model") != "faithful"),
+                          key=lambda r: (round(r["shape"], 9), r["departures"]))
+    shape_fraction, shape_median = chance_level(
+        np.array([r["values"] for r in readings]), printed, statistic="shape")
+    header = " | ".join(f"b0/B0={r:g}" for r in ratios)
+    fmt = lambda r: f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
+    lines = [
+        "## Readings of the w-bar column (x1e-2; no parameter, none tuned to the printed numbers)",
+        "",
+        "A reading = a derivation of I_S, I_M and J_S, J_M (eq. 2, 5; the faithful one or departures",
+        "from it that a hand derivation could make) and a rule for averaging w* (eq. 12 or a",
+        "misreading of it). Derivations: src/spacearm/studies/table2_readings.py; the reasoning:",
+        "docs/explanation/table2-wbar.md. Every value comes from a 512 x 256 midpoint grid of the",
+        "elbow-down strip (under 1e-5 relative; the faithful area row differs from the main table by 6e-6).",
+        "",
+        "### Departures from the faithful derivation (each alone, and every pair changing two different things)",
+        "",
+        "| departure | why a 1990 derivation could make it |",
+        "|---|---|",
+        *[f"| {name} | {note} |" for name, (_, note) in DEPARTURES.items()],
+        "",
+        "### Averaging rules (each with every model variant)",
+        "",
+        "| rule | what it changes |",
+        "|---|---|",
+        *[f"| {name} | {note} |" for name, note in AVERAGES.items()],
+        "",
+        "### Verdict",
+        "",
+        f"{len(readings)} readings, {len(finite)} finite (the others put I_S = 0 somewhere on the strip, where w* has a pole).",
+        f"Growth from the first row to the last: x{growth:.3f} printed, x{faithful[-1] / faithful[0]:.3f} faithful.",
+        "",
+        f"- Closest by rms: {fmt(best)}, {best['departures']} departures.",
+        f"- Closest by maximum error: {fmt(by_max)}.",
+        f"- Closest with at most one departure: {fmt(best_single)}.",
+        f"- Closest keeping eq. 12's area average: {fmt(best_area)}.",
+        ("- Closest in shape (each column divided by its first row, so blind to any constant factor of the"
+         f" averaging or the normalization): {by_shape['name']} (shape error {by_shape['shape']:.1%});"
+         f" with one model departure: {by_shape_single['name']} (shape error {by_shape_single['shape']:.1%},"
+         f" growth x{by_shape_single['values'][-1] / by_shape_single['values'][0]:.3f})."),
+        (f"- No reading reproduces the column: the printed values are rounded to 0.005 (at most "
+         f"{0.005 / min(printed):.2%} relative); every reading misses some row by {by_max['max']:.1%} or more."),
+        (f"- Against chance: over 1000 random increasing columns with the printed first and last values, the"
+         f" best of these readings has a median rms of {median:.1%}; {fraction:.1%} of the random columns are"
+         " fitted at least as well as the printed one. In shape: median best shape error"
+         f" {shape_median:.1%}, {shape_fraction:.1%} of the random columns fitted at least as well."),
+        "- The faithful definition stays the default everywhere.",
+        "",
+        "### rms relative error of every reading (rows: model variant; columns: averaging rule; - = diverges)",
+        "",
+        "| model variant | " + " | ".join(AVERAGES) + " |",
+        "|---|" + "---|" * len(AVERAGES),
+    ]
+    grid = {}
+    for r in readings:
+        if "model" in r:
+            grid.setdefault(r["model"], {})[r["rule"]] = r
+    for model, cells in grid.items():
+        lines.append(f"| {model} | " + " | ".join(
+            "-" if not np.isfinite(cells[k]["rms"]) else f"{cells[k]['rms']:.1%}" for k in AVERAGES) + " |")
+    lines += [
+        "",
+        "### Every reading, closest first",
+        "",
+        "departures = how many choices differ from eq. 1-12 as written (model departures, plus one for a rule",
+        f"other than the area average). growth = last row / first (paper: {growth:.3f}). shape err = max over the",
+        "rows of |(ours_i / ours_0) / (paper_i / paper_0) - 1|, blind to a constant factor.",
+        "",
+        f"| reading (model / rule) | departures | {header} | max rel. err | rms rel. err | growth | shape err |",
+        "|---|---|" + "---|" * len(ratios) + "---|---|---|---|",
+        "| **paper (printed)** | | " + " | ".join(f"{p:.2f}" for p in printed) + f" | 0 | 0 | {growth:.3f} | 0 |",
+    ]
+    for r in rank + [r for r in readings if r not in finite]:
+        if np.all(np.isfinite(r["values"])):
+            cells = " | ".join(f"{v:.2f}" for v in r["values"])
+            ratio = f"{r['values'][-1] / r['values'][0]:.3f}" if r["values"][0] else "-"
+            shape = f"{r['shape']:.1%}" if np.isfinite(r["shape"]) else "-"
+            tail = f"{r['max']:.1%} | {r['rms']:.1%} | {ratio} | {shape}"
+        else:
+            cells = " | ".join("-" if not np.isfinite(v) else f"{v:.2f}" for v in r["values"])
+            tail = "diverges | | | "
+        lines.append(f"| {r['name']} | {r['departures']} | {cells} | {tail} |")
+    return lines
 
 
 # Table 2 ------------------------------------------------------------------------------------
@@ -151,32 +240,7 @@ def table2_report(out_dir: Path, rows: list[dict], spec) -> list[Path]:
     lines += ["", *_table2_summary(rows), ""]
     if ratios:
         printed = [PAPER_TABLE2[round(r, 6)][0] for r in ratios]
-        readings = wbar_readings(base, tuple(ratios))
-        header = " | ".join(f"b0/B0={r:g}" for r in ratios)
-        lines += [
-            "## Readings of the w-bar column tried (x1e-2; none tuned to the printed numbers)",
-            "",
-            "Computed on a 512 x 256 midpoint grid of the elbow-down strip (about 1e-6 relative).",
-            "rms rel. = root mean square of ours / paper - 1 over the five rows; growth = value at",
-            "the last row / value at the first (paper: %.3f)." % (printed[-1] / printed[0]),
-            "",
-            f"| reading | {header} | rms rel. | growth | what it changes |",
-            "|---|" + "---|" * len(ratios) + "---|---|---|",
-            "| **paper (printed)** | " + " | ".join(f"{p:.2f}" for p in printed) + " | 0 | %.3f | |" % (printed[-1] / printed[0]),
-        ]
-        for reading in readings:
-            values = reading["values"]
-            lines.append(
-                f"| {reading['name']} | "
-                + " | ".join(f"{v:.2f}" for v in values)
-                + f" | {_rms_relative(values, printed):.3f} | {values[-1] / values[0]:.3f} | {reading['note']} |"
-            )
-        best = min(readings[1:], key=lambda r: _rms_relative(r["values"], printed))
-        lines += [
-            "",
-            f"Closest: {best['name']} (rms rel. {_rms_relative(best['values'], printed):.3f}). No single",
-            "reading reproduces the column; the faithful definition stays the default.",
-        ]
+        lines += _readings_lines(base, ratios, printed)
     return [write_text(out_dir / "table.md", "\n".join(lines) + "\n")]
 
 
