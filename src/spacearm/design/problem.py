@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from .._core.schema import check_keys, choice, integer, number, read_yaml
+from .._core.schema import check_keys, check_memory, choice, integer, number, read_yaml
 from ..analysis import average_manipulability, check_average_options
 from ..models.planar import PlanarRobot
 from .objectives import OBJECTIVES, objective
@@ -396,15 +396,7 @@ def _check_grid_size(where: str, points: Sequence[int], n_objectives: int) -> No
     """Refuse a grid baseline whose designs would not fit in memory (the grid is built at once)."""
     count = math.prod(points)
     need = count * 8 * (2 * len(points) + n_objectives)  # the mesh, its meshgrid, the objective values
-    try:
-        have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return
-    if need > have / 2:
-        raise ConfigError(
-            f"{where}: {count:,} grid designs ({' x '.join(map(str, points))}) need about {need / 2**30:,.0f} GiB, "
-            f"more than half of this machine's {have / 2**30:.0f} GiB; use fewer points"
-        )
+    check_memory(where, need, f"{count:,} grid designs ({' x '.join(map(str, points))})", "use fewer points")
 
 
 def load_problem(path: str | os.PathLike | Mapping[str, Any]) -> DesignProblem:

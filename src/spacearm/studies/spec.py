@@ -27,7 +27,7 @@ import numpy as np
 import yaml
 
 from .._core.errors import ConfigError
-from .._core.schema import check_keys, describe_yaml_error, is_number, read_yaml
+from .._core.schema import check_keys, check_memory, describe_yaml_error, is_number, read_yaml
 from ..models import load_robot
 from ..models.planar import PlanarRobot, robot_from_mapping, robot_to_mapping
 from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field
@@ -270,12 +270,4 @@ def _check_size(where: str, count: int, sizes: str, n_links: int) -> None:
     """Refuse a sweep whose designs alone would not fit in memory (they are built at once),
     before anything that large is allocated."""
     need = count * 8 * (3 + 6 * n_links) * 4  # float64 leaves, with room for temporaries
-    try:
-        have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return
-    if need > have / 2:
-        raise ConfigError(
-            f"{where}: {count:,} designs ({sizes}) need about {need / 2**30:,.0f} GiB to hold, "
-            f"more than half of this machine's {have / 2**30:.0f} GiB; split the sweep into several files"
-        )
+    check_memory(where, need, f"{count:,} designs ({sizes})", "split the sweep into several files")

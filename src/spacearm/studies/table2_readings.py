@@ -37,7 +37,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models.planar import PlanarRobot, stack_robots, umetani1990
-from ..models.planar.closed_forms import DesignCoefficients, grid_angle_tables
+from ..models.planar.closed_forms import (
+    DesignCoefficients,
+    _manipulability_from_columns,
+    _momentum_terms,
+    _tip_columns,
+    grid_angle_tables,
+)
+from ..models.planar.closed_forms import _momentum_rows as _faithful_momentum_rows
 
 __all__ = [
     "AVERAGES",
@@ -233,19 +240,8 @@ def _momentum_rows(coeffs: DesignCoefficients, c, s, link_rates):
 
     ``link_rates`` is a Python bool or a 0/1 array (blended, for batches mixing both).
     """
-    W, inertia = coeffs.inertia_coupling, coeffs.inertia
-    count = len(c)
-    h = []
-    for l in range(count):
-        total = inertia[..., l] + W[..., l, l]
-        for k in range(count):
-            if k != l:
-                total = total + W[..., k, l] * (c[k] * c[l] + s[k] * s[l])
-        h.append(total)
-    H, acc = [None] * count, 0.0
-    for j in reversed(range(count)):
-        acc = acc + h[j]
-        H[j] = acc
+    h = _momentum_terms(coeffs, c, s)
+    H = _faithful_momentum_rows(coeffs, c, s)
     if link_rates is False:
         return H
     if link_rates is True:
@@ -253,33 +249,11 @@ def _momentum_rows(coeffs: DesignCoefficients, c, s, link_rates):
     return [jnp.where(link_rates, hj, Hj) for hj, Hj in zip(h, H)]
 
 
-def _tip_columns(coeffs: DesignCoefficients, c, s):
-    """d tip / d phi_j (x_j, y_j), j = 0..n: reverse sums of K_k u_perp(theta_k) (eq. 2)."""
-    K = coeffs.tip
-    count = len(c)
-    xs, ys = [None] * count, [None] * count
-    acc_x = acc_y = 0.0
-    for k in reversed(range(count)):
-        acc_x = acc_x - K[..., k] * s[k]
-        acc_y = acc_y + K[..., k] * c[k]
-        xs[k], ys[k] = acc_x, acc_y
-    return xs, ys
-
-
 def _columns(coeffs, c, s, link_rates, sign):
     xs, ys = _tip_columns(coeffs, c, s)
     H = _momentum_rows(coeffs, c, s, link_rates)
     ratio = [sign * H[j] / H[0] for j in range(1, len(c))]
     return [xs[j] - xs[0] * r for j, r in zip(range(1, len(c)), ratio)], [ys[j] - ys[0] * r for j, r in zip(range(1, len(c)), ratio)]
-
-
-def _w_from_columns(gx, gy):
-    """sqrt(det(J J^T)) by Cauchy-Binet (the norm of the 2 x 2 minors)."""
-    n = len(gx)
-    minors = [gx[i] * gy[j] - gx[j] * gy[i] for i in range(n) for j in range(i + 1, n)]
-    if len(minors) == 1:
-        return jnp.abs(minors[0])
-    return jnp.sqrt(sum(m * m for m in minors))
 
 
 def _angles(phi):
@@ -310,7 +284,7 @@ def generalized_jacobian(derivation: Derivation, robot: PlanarRobot, phi: jax.Ar
 def manipulability(derivation: Derivation, robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """w* = sqrt(det(J* J*^T)) under ``derivation``, m^2 (``(...)``)."""
     c, s = _angles(phi)
-    return _w_from_columns(*_columns(derivation_coefficients(derivation, robot), c, s, derivation.link_rates, derivation.sign))
+    return _manipulability_from_columns(*_columns(derivation_coefficients(derivation, robot), c, s, derivation.link_rates, derivation.sign))
 
 
 # Averages over the elbow-down strip ------------------------------------------------------
@@ -328,7 +302,7 @@ def _grid_statistics(coeffs: DesignCoefficients, link_rates, sign, reach, l1l2, 
 
     def single(args):
         co, lr, sg, L, ll, b = args
-        w = _w_from_columns(*_columns(co, c, s, lr, sg))
+        w = _manipulability_from_columns(*_columns(co, c, s, lr, sg))
         w = jnp.broadcast_to(w, (_GRID_PHI1, _GRID_PHI2)) / L**2
         i_s = _momentum_rows(co, c, s, lr)[0]
         # I_S changing sign on the strip: w* has a pole there and no finite average.
