@@ -7,6 +7,9 @@ Prints postures/s for
   * the same formulas in vectorized NumPy (baseline),
   * jnp.sin(x) + jnp.cos(x) over (n+1) angles per posture (the transcendental bound),
   * spacearm.manipulability_on_grid on a structured phi1 x phi2 grid (angle addition),
+  * the generic path over the family primitives (kinematics.generic_manipulability: J* by
+    a solve, w* by Cauchy-Binet) on the same postures, which is what a new robot family
+    gets with no closed form,
 and the ratios. Compile time is reported apart from run time.
 """
 
@@ -21,6 +24,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
+from spacearm import kinematics  # noqa: E402
 
 
 def best_time(fn, repeats):
@@ -72,6 +76,13 @@ def main():
     compile_s = time.perf_counter() - start
     jax_s = best_time(lambda: compiled(robot, phi), args.repeats)
 
+    generic = jax.jit(kinematics.generic_manipulability)
+    start = time.perf_counter()
+    generic_compiled = generic.lower(robot, phi).compile()
+    generic_compile_s = time.perf_counter() - start
+    generic_s = best_time(lambda: generic_compiled(robot, phi), args.repeats)
+    generic_diff = float(jnp.max(jnp.abs(generic_compiled(robot, phi) - compiled(robot, phi))))
+
     bound = jax.jit(lambda x: jnp.sin(x) + jnp.cos(x))
     bound(angles).block_until_ready()
     bound_s = best_time(lambda: bound(angles), args.repeats)
@@ -93,9 +104,12 @@ def main():
     print(f"devices: {jax.devices()}  float64: {jax.config.jax_enable_x64}")
     print(f"postures: {N:,} (n = {robot.n_links}); best of {args.repeats}")
     print(f"  spacearm.manipulability  {N / jax_s:14,.0f} postures/s  (compile {compile_s:.2f} s, run {jax_s * 1e3:.1f} ms)")
+    print(f"  generic path (no closed form) {N / generic_s:9,.0f} postures/s  (compile {generic_compile_s:.2f} s, max |diff| {generic_diff:.1e})")
     print(f"  NumPy, same formulas     {N / numpy_s:14,.0f} postures/s  (max |diff| {diff:.1e})")
     print(f"  sin+cos bound, {robot.n_links + 1} angles  {N / bound_s:14,.0f} postures/s")
     print(f"  grid {side}x{side}, angle addition {side * side / grid_s:14,.0f} postures/s  (compile {grid_compile_s:.2f} s)")
+    print(f"ratio closed form / generic     {generic_s / jax_s:6.1f}x")
+    print(f"ratio generic / NumPy           {numpy_s / generic_s:6.1f}x")
     print(f"ratio spacearm / NumPy          {numpy_s / jax_s:6.1f}x")
     print(f"ratio spacearm / sin-cos bound  {bound_s / jax_s:6.2f}  (target >= 0.5)")
     print(f"ratio bound / NumPy             {numpy_s / bound_s:6.1f}x")

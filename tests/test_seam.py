@@ -73,3 +73,20 @@ def test_renaming_a_design_does_not_recompile(table1):
 def test_base_rotation_is_refused_for_planar_robots(table1):
     with pytest.raises(TypeError, match="base_rotation"):
         sa.generalized_jacobian(table1, jnp.zeros(3), jnp.eye(3))
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_planar_straight_path_field_equals_the_generic_field(n):
+    from spacearm.models.planar.closed_forms import straight_path_field
+    from spacearm.motion.straight_paths import generic_straight_field
+
+    rng = np.random.default_rng(10 + n)
+    robot = random_robot(rng, n)
+    for _ in range(20):
+        y = np.concatenate([rng.uniform(-np.pi, np.pi, n + 1), [0.3]])
+        angle = rng.uniform(0, 2 * np.pi)
+        direction = jnp.array([np.cos(angle), np.sin(angle)])
+        sign0 = jnp.asarray(rng.choice([-1.0, 1.0]) if n == 2 else 1.0)
+        np.testing.assert_allclose(
+            generic_straight_field(robot, direction, sign0)(y), straight_path_field(robot, direction, sign0)(y), atol=1e-13
+        )

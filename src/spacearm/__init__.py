@@ -9,6 +9,7 @@ lower layers are imported at once; the higher layers (analysis, motion, planning
 design, io) on first use, so ``import spacearm`` stays light.
 """
 
+import importlib
 from typing import TYPE_CHECKING
 
 from ._core.errors import ConfigError as ConfigError
@@ -69,35 +70,33 @@ _LAZY = {
 
 if TYPE_CHECKING:  # the same names, visible to type checkers and the API reference
     from .analysis import (
-        attitude_constraint,
-        average_manipulability,
-        dynamic_singularities,
-        fixed_vehicle_radius,
-        guaranteed_radius,
-        maximum_reachable_radii,
-        maximum_reachable_radius,
-        normalized_areas,
-        path_independent_radius,
-        straight_path_workspace,
-        workspace_relations,
+        attitude_constraint as attitude_constraint,
+        average_manipulability as average_manipulability,
+        dynamic_singularities as dynamic_singularities,
+        fixed_vehicle_radius as fixed_vehicle_radius,
+        guaranteed_radius as guaranteed_radius,
+        maximum_reachable_radii as maximum_reachable_radii,
+        maximum_reachable_radius as maximum_reachable_radius,
+        normalized_areas as normalized_areas,
+        path_independent_radius as path_independent_radius,
+        straight_path_workspace as straight_path_workspace,
+        workspace_relations as workspace_relations,
     )
-    from .design import hypervolume_2d, load_problem, pareto_search
-    from .io import open_results
+    from .design import hypervolume_2d as hypervolume_2d, load_problem as load_problem, pareto_search as pareto_search
+    from .io import open_results as open_results
     from .motion import (
-        StraightPath,
-        go_and_back,
-        integrate_joint_path,
-        joint_path_history,
-        straight_tip_path,
-        straight_tip_path_history,
+        StraightPath as StraightPath,
+        go_and_back as go_and_back,
+        integrate_joint_path as integrate_joint_path,
+        joint_path_history as joint_path_history,
+        straight_tip_path as straight_tip_path,
+        straight_tip_path_history as straight_tip_path_history,
     )
-    from .planning import plan_reach, plan_reorientation
+    from .planning import plan_reach as plan_reach, plan_reorientation as plan_reorientation
 
 
 def __getattr__(name):
     if name in _LAZY:
-        import importlib
-
         value = getattr(importlib.import_module(f"spacearm.{_LAZY[name]}"), name)
         globals()[name] = value
         return value

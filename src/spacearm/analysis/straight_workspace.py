@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..kinematics import tip_position
+from ..kinematics import manipulability, tip_position
 from ..models.planar.robot import PlanarRobot
 from ..motion import straight_tip_path
 from .singularities import path_independent_radius
@@ -208,8 +208,6 @@ def summarize_straight_paths(robot: PlanarRobot, phis, ends, conditioning: float
     starts = np.asarray(tip_position(robot, phis))
     end_tip = np.asarray(ends.end_tip)
     clearance = np.asarray(clearance_radius(starts, end_tip))
-    from .kinematics import manipulability
-
     w = np.asarray(manipulability(robot, phis)) / float(robot.reach) ** 2
     conditioned = w >= conditioning
     r_g = float(guaranteed_radius(robot))

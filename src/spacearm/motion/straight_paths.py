@@ -42,16 +42,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from ..models.planar.closed_forms import (
-    _momentum_rows,
-    _tip_columns,
-    _unit_vectors,
-    design_coefficients,
+from ..kinematics import (
+    base_rate,
     fixed_base_manipulability,
+    generalized_jacobian,
+    square_determinant,
+    straight_path_rates,
     tip_position,
 )
+from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
-from . import dop853
+from .dop853 import error_norm, rk_step
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = [
@@ -102,55 +103,33 @@ class StraightPath:
 
 
 
-def _straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
+def generic_straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
     """The regularized straight-path field y' = f(y), y = [phi0, phi_1..phi_n, s].
 
     Derivatives are with respect to the joint-space arc length sigma. Returns a function
-    of y giving ``(n+2,)``: [dphi0, dphi_M (unit norm), ds].
+    of y giving ``(n+2,)``: [dphi0, dphi_M (unit norm), ds]. The joint rates come from
+    :func:`spacearm.kinematics.straight_path_rates` on J* (eq. 6), the base rate from
+    eq. (5): both written once over the family's primitives.
     """
-    coeffs = design_coefficients(robot)
     n = robot.n_links
-    dx, dy = direction[0], direction[1]
 
     def field(y):
-        c, s = _unit_vectors(y[: n + 1])
-        xs, ys = _tip_columns(coeffs, c, s)
-        H = _momentum_rows(coeffs, c, s)
-        inv_is = 1.0 / H[0]
-        # Columns of J* = J_M - J_S I_M / I_S (eq. 6), inertial frame.
-        gx = [xs[j] - xs[0] * (H[j] * inv_is) for j in range(1, n + 1)]
-        gy = [ys[j] - ys[0] * (H[j] * inv_is) for j in range(1, n + 1)]
-        if n == 2:
-            det = gx[0] * gy[1] - gx[1] * gy[0]
-            v = [sign0 * (gy[1] * dx - gx[1] * dy), sign0 * (-gy[0] * dx + gx[0] * dy)]
-            rate = sign0 * det
-        else:
-            a = sum(g * g for g in gx)
-            b = sum(p * q for p, q in zip(gx, gy))
-            d = sum(g * g for g in gy)
-            # det(J* J*^T) by Cauchy-Binet: no cancellation near singular postures.
-            rate = sum((gx[i] * gy[j] - gx[j] * gy[i]) ** 2 for i in range(n) for j in range(i + 1, n))
-            ax, ay = d * dx - b * dy, -b * dx + a * dy  # adj(J* J*^T) d
-            v = [gx[j] * ax + gy[j] * ay for j in range(n)]
-        norm_sq = sum(vj * vj for vj in v)
-        positive = norm_sq > 0
-        inv_norm = jnp.where(positive, 1.0 / jnp.sqrt(jnp.where(positive, norm_sq, 1.0)), 0.0)
-        dq = [vj * inv_norm for vj in v]
-        dphi0 = -sum(H[j + 1] * dq[j] for j in range(n)) * inv_is  # eq. (5)
-        return jnp.stack([dphi0] + dq + [rate * inv_norm])
+        phi = y[: n + 1]
+        dq, ds = straight_path_rates(generalized_jacobian(robot, phi), direction, sign0)
+        return jnp.concatenate([base_rate(robot, phi, dq)[None], dq, ds[None]])
 
     return field
 
 
+def _straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
+    """The family's closed-form field where it has one (chosen by type), else the generic one."""
+    fast = family_of(robot).fast_paths.get("straight_path_field")
+    return (fast or generic_straight_field)(robot, direction, sign0)
+
+
 def _initial_sign(robot: PlanarRobot, phi) -> jax.Array:
     """sign(det J*) at the start for n = 2 (+1 when exactly singular)."""
-    coeffs = design_coefficients(robot)
-    c, s = _unit_vectors(phi)
-    xs, ys = _tip_columns(coeffs, c, s)
-    H = _momentum_rows(coeffs, c, s)
-    gx = [xs[j] - xs[0] * H[j] / H[0] for j in (1, 2)]
-    gy = [ys[j] - ys[0] * H[j] / H[0] for j in (1, 2)]
-    return jnp.where(gx[0] * gy[1] - gx[1] * gy[0] < 0, -1.0, 1.0)
+    return jnp.where(square_determinant(generalized_jacobian(robot, phi)) < 0, -1.0, 1.0)
 
 
 def _lane_start(robot, phi_start, direction, max_step):
@@ -224,10 +203,10 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, *, max_steps, table
         # The error controller's step bounds the event-limited step (either sign).
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
-    y_new, slopes = dop853.rk_step(field, y, h, tableau, return_slopes=True)
+    y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True)
     f_new = field(y_new)
     if adaptive:
-        error = dop853.error_norm(h, slopes, f_new, y, y_new, rtol)
+        error = error_norm(h, slopes, f_new, y, y_new, rtol)
         accept = error <= 1.0
         factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
         limited = jnp.abs(h) < 0.999 * h_control
@@ -415,8 +394,9 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
     h = joint_arc / (intervals * substeps)
 
     def advance(y, _):
-        for _ in range(substeps):
-            y = dop853.rk_step(field, y, h, tableau)
+        # A loop over the substeps rather than an unrolled body: the DOP853 stages are
+        # already unrolled inside one step, so unrolling the substeps only lengthens compiles.
+        y = jax.lax.fori_loop(0, substeps, lambda _, y: rk_step(field, y, h, tableau), y)
         return y, y
 
     y0 = jnp.concatenate([phi_start, jnp.zeros((1,), dtype)])
