@@ -212,3 +212,15 @@ def test_construction_validates_the_pytree():
         robot.replace(joint_axis=np.array([[0, 0, 1.0], [0, 1, 0], [0, 0, 0]]))
     with pytest.raises(sa.ConfigError, match=r"base.mass: must be positive"):
         robot.replace(base_mass=np.float64(0.0))
+
+
+def test_cli_validate_checks_spatial_files(tmp_path, capsys):
+    from spacearm.cli import main
+
+    assert main(["validate", os.path.join(CONFIGS, "ur5-smallsat.yaml")]) == 0
+    assert "valid robot (ur5-smallsat, 6 links" in capsys.readouterr().out
+    bad = _urdf(mass=-1.0)
+    assert main(["validate", _file(tmp_path, urdf_text=bad)]) == 2
+    err = capsys.readouterr().err
+    assert "arm.urdf: link 'l1': inertial mass: must not be negative" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1

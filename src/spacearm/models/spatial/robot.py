@@ -153,6 +153,18 @@ class SpatialRobot:
         return len(self.joint_kinds)
 
     @property
+    def n_links(self) -> int:
+        """Number of moving bodies, n (one per arm joint; the same as :attr:`n_joints`)."""
+        return len(self.joint_kinds)
+
+    @property
+    def reach(self):
+        """``(...)`` L: joint 1 to the tip along the chain (sum of joint-to-joint offsets and the
+        tip offset), m; prismatic joints at zero extension. An upper bound on the distance."""
+        offsets = np.linalg.norm(np.asarray(self.joint_translation)[..., 1:, :], axis=-1).sum(-1)
+        return offsets + np.linalg.norm(np.asarray(self.tip_translation), axis=-1)
+
+    @property
     def batch_shape(self) -> tuple[int, ...]:
         """Leading design-batch shape (``()`` for a single design)."""
         return tuple(np.shape(self.base_mass))
