@@ -224,3 +224,14 @@ def test_cli_validate_checks_spatial_files(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "arm.urdf: link 'l1': inertial mass: must not be negative" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_batched_validation_is_vectorized_and_names_the_design():
+    robot = sa.load_robot(os.path.join(CONFIGS, "arm3dof-100kg.yaml"))
+    fields = spatial.robot._LEAF_FIELDS
+    batch = {f: np.stack([np.asarray(getattr(robot, f))] * 50) for f in fields}
+    spatial.SpatialRobot(**batch, joint_kinds=robot.joint_kinds)  # valid: the one vectorized pass
+    batch["link_inertia"] = batch["link_inertia"].copy()
+    batch["link_inertia"][17, 2] = -np.eye(3)
+    with pytest.raises(sa.ConfigError, match=r"design \(17,\): joints\[2\]: link_inertia: must be positive semidefinite"):
+        spatial.SpatialRobot(**batch, joint_kinds=robot.joint_kinds)
