@@ -7,7 +7,8 @@ Two problems, each on the same batch of paths for every JAX method (``--paths``,
    to 1.5 rad each): ``integrate_joint_path`` (Gauss-Legendre line integral of eq. 5) for
    several rules (nodes per panel x panels per segment), against diffrax (Dopri8 and
    Tsit5, PID step control) integrating the same base rate, one ODE per loop (jumps at
-   the corners) or one per segment, at several tolerances;
+   the corners) or one per segment, at several tolerances; the same on long closed
+   paths (3 segments, every joint turning up to 2 pi per segment);
 2. straight tip paths (random initial postures x random directions, to the singular
    end): ``straight_tip_path`` (DOP853 with embedded error control and Newton event
    steps in one ``lax.while_loop``, lane refill) against diffrax (Dopri8 / Tsit5 + PID
@@ -183,14 +184,26 @@ def diffrax_loops(solver_name, per_segment, max_steps=4096):
     return run
 
 
-def bench_loops(args, rng, robot, model):
+def long_paths(rng, count, span=2 * np.pi):
+    """start -> start + u1 -> start + u2 -> start, u uniform in +-span/2 per joint: segments up to ``span``."""
+    start = rng.uniform(-np.pi, np.pi, (count, 1, 2))
+    middle = start + rng.uniform(-span / 2, span / 2, (count, 2, 2))
+    waypoints = np.concatenate([start, middle, start], axis=1)
+    phi_start = np.concatenate([np.zeros((count, 1)), start[:, 0]], axis=-1)
+    return phi_start, waypoints
+
+
+def bench_loops(args, rng, robot, model, long=False):
     count = args.paths
-    phi_start, waypoints = random_loops(rng, count)
+    phi_start, waypoints = (long_paths if long else random_loops)(rng, count)
     phi_start, waypoints = jnp.asarray(phi_start), jnp.asarray(waypoints)
+    problem = "long" if long else "loops"
     reference = np.asarray(sa.integrate_joint_path(robot, phi_start, waypoints, nodes=40, pieces=64))[:, 0]
     check = np.asarray(sa.integrate_joint_path(robot, phi_start, waypoints, nodes=64, pieces=64))[:, 0]
+    segments = waypoints.shape[1] - 1
     segment_max = float(np.max(np.abs(np.diff(np.asarray(waypoints), axis=1))))
-    print(f"\n[cyclic loops: {count} loops x 4 segments (<= {segment_max:.2f} rad each), Table 1 robot]")
+    title = "long closed paths" if long else "cyclic loops (rectangles)"
+    print(f"\n[{title}: {count} paths x {segments} segments (<= {segment_max:.2f} rad per joint), Table 1 robot]")
     print(f"  reference: Gauss-Legendre 40 x 64 per segment (agrees with 64 x 64 to "
           f"{np.max(np.abs(reference - check)):.0e} rad); |phi0 change| up to {np.max(np.abs(reference)):.2f} rad")
 
@@ -198,43 +211,53 @@ def bench_loops(args, rng, robot, model):
         err = np.abs(np.asarray(values) - reference)
         return float(err.max()), float(np.median(err))
 
-    rules = [(24, 8), (24, 4), (24, 1), (16, 2), (16, 1), (12, 1), (10, 1), (8, 1)]
-    for nodes, pieces in rules:
+    # The default picks its panels from the longest segment of the concrete batch (inside
+    # a jit the waypoints are traced and it would take 8): resolve it here, outside.
+    auto = motion._default_pieces(waypoints, None)
+    rules = [(24, auto, f"GL default: 24 nodes x {auto} panel(s) (auto)"), (24, 8, "GL 24 x 8 (former default)")]
+    extra = [(24, 2), (16, 4), (16, 2)] if long else [(16, 1), (12, 1), (10, 1), (8, 1)]
+    rules += [(n, p, f"GL {n} x {p}") for n, p in extra if (n, p) != (24, auto)]
+    for nodes, pieces, label in rules:
         def fn(robot, phi, wp, nodes=nodes, pieces=pieces):
             return sa.integrate_joint_path(robot, phi, wp, nodes=nodes, pieces=pieces)[:, 0]
 
         compile_s, first, run, calls, values = measure(fn, robot, phi_start, waypoints, repeats=args.repeats,
                                                        budget=args.budget)
-        label = f"GL {nodes} nodes x {pieces} panels" + (" (default)" if (nodes, pieces) == (24, 8) else "")
-        row("loops", label, "-", count, compile_s, first, run, calls, *errors(values),
+        row(problem, label, "-", count, compile_s, first, run, calls, *errors(values),
             f"{nodes * pieces} rate evals/segment")
 
-    for solver_name, tolerances in (("Dopri8", (1e-8, 1e-10, 1e-12, 1e-14)), ("Tsit5", (1e-8, 1e-10, 1e-12))):
-        for per_segment in (True, False):
-            fn = diffrax_loops(solver_name, per_segment)
-            jitted = jax.jit(fn)
-            start = time.perf_counter()
-            compiled = jitted.lower(robot, phi_start, waypoints, jnp.asarray(1e-8)).compile()
-            compile_s = time.perf_counter() - start
-            for rtol in tolerances:
-                # one compiled program for every tolerance (rtol is an argument)
-                _, first, run, calls, (values, steps, ok) = _measure_compiled(
-                    compiled, (robot, phi_start, waypoints, jnp.asarray(rtol)), args
-                )
-                stages = {"Dopri8": 12, "Tsit5": 6}[solver_name]
-                layout = "per segment" if per_segment else "per loop, corners as jumps"
-                row("loops", f"diffrax {solver_name} PID, {layout}", f"rtol {rtol:.0e}", count, compile_s, first, run,
-                    calls, *errors(values),
-                    f"{np.mean(steps) / 4:.1f} steps/segment (~{stages * np.mean(steps) / 4:.0f} rate evals)",
-                    note="" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} failed")
-                compile_s = None  # reported once per compiled program
+    if long:
+        variants = (("Dopri8", True, (1e-10, 1e-12, 1e-14)),)
+    else:
+        variants = (("Dopri8", True, (1e-8, 1e-10, 1e-12, 1e-14)), ("Dopri8", False, (1e-8, 1e-10, 1e-12, 1e-14)),
+                    ("Tsit5", True, (1e-8, 1e-10, 1e-12)), ("Tsit5", False, (1e-8, 1e-10, 1e-12)))
+    for solver_name, per_segment, tolerances in variants:
+        fn = diffrax_loops(solver_name, per_segment)
+        jitted = jax.jit(fn)
+        start = time.perf_counter()
+        compiled = jitted.lower(robot, phi_start, waypoints, jnp.asarray(1e-8)).compile()
+        compile_s = time.perf_counter() - start
+        for rtol in tolerances:
+            # one compiled program for every tolerance (rtol is an argument)
+            _, first, run, calls, (values, steps, ok) = _measure_compiled(
+                compiled, (robot, phi_start, waypoints, jnp.asarray(rtol)), args
+            )
+            stages = {"Dopri8": 12, "Tsit5": 6}[solver_name]
+            layout = "per segment" if per_segment else "per loop, corners as jumps"
+            row(problem, f"diffrax {solver_name} PID, {layout}", f"rtol {rtol:.0e}", count, compile_s, first, run,
+                calls, *errors(values),
+                f"{np.mean(steps) / segments:.1f} steps/segment (~{stages * np.mean(steps) / segments:.0f} rate evals)",
+                note="" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} failed")
+            compile_s = None  # reported once per compiled program
 
+    if long:
+        return
     subset = min(args.scipy, count)
     start = time.perf_counter()
     scipy_values = np.array([scipy_loop(model, np.asarray(waypoints[i])) for i in range(subset)])
     per_loop = (time.perf_counter() - start) / subset
     err = np.abs(scipy_values - reference[:subset])
-    row("loops", f"SciPy solve_ivp DOP853 loop ({subset} loops)", "rtol 1e-10", count, None, None, per_loop * count,
+    row(problem, f"SciPy solve_ivp DOP853 loop ({subset} loops)", "rtol 1e-10", count, None, None, per_loop * count,
         1, float(err.max()), float(np.median(err)), "extrapolated from the subset")
 
 
@@ -387,7 +410,8 @@ def main():
     parser.add_argument("--repeats", type=int, default=3, help="warm calls timed (best taken)")
     parser.add_argument("--budget", type=float, default=30.0, help="stop repeating after this many seconds")
     parser.add_argument("--max-step", type=float, default=0.25, help="step cap of every adaptive straight solver")
-    parser.add_argument("--only", choices=("loops", "straight"), default=None)
+    parser.add_argument("--only", choices=("loops", "long", "straight"), default=None)
+    parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
     args = parser.parse_args()
     robot = sa.umetani1990()
     model = numpy_model(robot)
@@ -395,8 +419,30 @@ def main():
           f"{args.paths} paths per batch")
     if args.only in (None, "loops"):
         bench_loops(args, np.random.default_rng(0), robot, model)
+    if args.only in (None, "long"):
+        bench_loops(args, np.random.default_rng(2), robot, model, long=True)
     if args.only in (None, "straight"):
         bench_straight(args, np.random.default_rng(1), robot, model)
+    summary()
+    if args.json:
+        import json
+
+        with open(args.json, "w") as handle:
+            json.dump(ROWS, handle, indent=1)
+
+
+def summary():
+    """The rows as one Markdown table; ratio = run time / run time of the spacearm default on that problem."""
+    print("\n| problem | method | tolerance | paths | max error | median error | compile s | warm run s | paths/s "
+          "| time / spacearm default |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for entry in ROWS:
+        base = next(e for e in ROWS if e["problem"] == entry["problem"] and "default" in e["method"]
+                    and "former" not in e["method"] and e["tolerance"] in ("-", "rtol 1e-12"))
+        compile_text = "-" if entry["compile"] is None else f"{entry['compile']:.1f}"
+        print(f"| {entry['problem']} | {entry['method']} | {entry['tolerance']} | {entry['size']} "
+              f"| {entry['err_max']:.1e} | {entry['err_med']:.1e} | {compile_text} | {entry['run']:.3f} "
+              f"| {entry['rate']:,.0f} | {entry['run'] / base['run']:.2f} |")
 
 
 if __name__ == "__main__":
