@@ -20,8 +20,9 @@ How each JAX method is timed: the function is wrapped in ``jax.jit`` once, outsi
 timed region, and compiled ahead of time (``.lower(...).compile()``; the design, the
 paths and the tolerance are arguments, so nothing is folded into the program). The
 compile time is reported apart; the first call of the compiled program is reported
-apart too; the run time is the best of up to ``--repeats`` further warm calls (fewer
-when one call takes more than ``--budget`` seconds).
+apart too; the run time is the best of ``--repeats`` further warm calls, taken in
+interleaved rounds over all the methods of a problem (a shared machine's load changes
+during the run; every method gets the same chances).
 
 SciPy (``solve_ivp`` DOP853, a Python loop over paths, no batching and no compile) runs
 on the first ``--scipy`` of the same paths; its per-path time is extrapolated.
@@ -32,7 +33,6 @@ on the first ``--scipy`` of the same paths; its per-path time is extrapolated.
 from __future__ import annotations
 
 import argparse
-import math
 import time
 
 import jax
@@ -50,26 +50,44 @@ ROWS: list[dict] = []
 # Timing ------------------------------------------------------------------------------------
 
 
-def measure(fn, *args, repeats=3, budget=20.0):
-    """Compile ``jax.jit(fn)`` once (timed apart), call it once, then time warm calls.
+class Tasks:
+    """Compiled programs of one problem, timed in interleaved rounds.
 
-    Returns:
-        (compile s, first call s, best warm call s, number of warm calls, result).
+    Each program is ``jax.jit``-ed once and compiled ahead of time (timed apart); each
+    task (a program with its arguments, e.g. one tolerance) is called once (the first
+    call, reported apart), then every task is timed once per round, for ``repeats``
+    rounds, and the best warm call is kept. Interleaving gives every method the same
+    chances on a shared machine whose load changes during the run.
     """
-    jitted = jax.jit(fn)
-    start = time.perf_counter()
-    compiled = jitted.lower(*args).compile()
-    compile_s = time.perf_counter() - start
-    start = time.perf_counter()
-    out = jax.block_until_ready(compiled(*args))
-    first = time.perf_counter() - start
-    best, calls, spent = np.inf, 0, 0.0
-    while calls < repeats and (calls == 0 or spent + best <= budget):
+
+    def __init__(self, problem, size):
+        self.problem, self.size, self.tasks = problem, size, []
+
+    def compile(self, fn, *args):
         start = time.perf_counter()
-        out = jax.block_until_ready(compiled(*args))
-        elapsed = time.perf_counter() - start
-        best, calls, spent = min(best, elapsed), calls + 1, spent + elapsed
-    return compile_s, first, best, calls, out
+        compiled = jax.jit(fn).lower(*args).compile()
+        return compiled, time.perf_counter() - start
+
+    def add(self, method, tolerance, compiled, call_args, compile_s, describe):
+        """``describe(out) -> (err_max, err_med, work, note)``; compile_s None when shared."""
+        self.tasks.append(dict(method=method, tolerance=tolerance, compiled=compiled, args=call_args,
+                               compile=compile_s, describe=describe))
+
+    def run(self, repeats):
+        for task in self.tasks:
+            start = time.perf_counter()
+            task["out"] = jax.block_until_ready(task["compiled"](*task["args"]))
+            task["first"] = time.perf_counter() - start
+            task["best"] = np.inf
+        for _ in range(repeats):
+            for task in self.tasks:
+                start = time.perf_counter()
+                jax.block_until_ready(task["compiled"](*task["args"]))
+                task["best"] = min(task["best"], time.perf_counter() - start)
+        for task in self.tasks:
+            row(self.problem, task["method"], task["tolerance"], self.size, task["compile"], task["first"],
+                task["best"], repeats, *task["describe"](task["out"]))
+            del task["out"], task["compiled"]
 
 
 def row(problem, method, tolerance, size, compile_s, first, run, calls, err_max, err_med, work, note=""):
@@ -217,14 +235,14 @@ def bench_loops(args, rng, robot, model, long=False):
     rules = [(24, auto, f"GL default: 24 nodes x {auto} panel(s) (auto)"), (24, 8, "GL 24 x 8 (former default)")]
     extra = [(24, 2), (16, 4), (16, 2)] if long else [(16, 1), (12, 1), (10, 1), (8, 1)]
     rules += [(n, p, f"GL {n} x {p}") for n, p in extra if (n, p) != (24, auto)]
+    tasks = Tasks(problem, count)
     for nodes, pieces, label in rules:
         def fn(robot, phi, wp, nodes=nodes, pieces=pieces):
             return sa.integrate_joint_path(robot, phi, wp, nodes=nodes, pieces=pieces)[:, 0]
 
-        compile_s, first, run, calls, values = measure(fn, robot, phi_start, waypoints, repeats=args.repeats,
-                                                       budget=args.budget)
-        row(problem, label, "-", count, compile_s, first, run, calls, *errors(values),
-            f"{nodes * pieces} rate evals/segment")
+        compiled, compile_s = tasks.compile(fn, robot, phi_start, waypoints)
+        tasks.add(label, "-", compiled, (robot, phi_start, waypoints), compile_s,
+                  lambda values, work=f"{nodes * pieces} rate evals/segment": (*errors(values), work))
 
     if long:
         variants = (("Dopri8", True, (1e-10, 1e-12, 1e-14)),)
@@ -232,46 +250,34 @@ def bench_loops(args, rng, robot, model, long=False):
         variants = (("Dopri8", True, (1e-8, 1e-10, 1e-12, 1e-14)), ("Dopri8", False, (1e-8, 1e-10, 1e-12, 1e-14)),
                     ("Tsit5", True, (1e-8, 1e-10, 1e-12)), ("Tsit5", False, (1e-8, 1e-10, 1e-12)))
     for solver_name, per_segment, tolerances in variants:
-        fn = diffrax_loops(solver_name, per_segment)
-        jitted = jax.jit(fn)
-        start = time.perf_counter()
-        compiled = jitted.lower(robot, phi_start, waypoints, jnp.asarray(1e-8)).compile()
-        compile_s = time.perf_counter() - start
+        compiled, compile_s = tasks.compile(diffrax_loops(solver_name, per_segment), robot, phi_start, waypoints,
+                                            jnp.asarray(1e-8))
+        stages = {"Dopri8": 12, "Tsit5": 6}[solver_name]
+        layout = "per segment" if per_segment else "per loop, corners as jumps"
+
+        def describe(out, stages=stages):
+            values, steps, ok = out
+            per = np.mean(steps) / segments
+            note = "" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} failed"
+            return (*errors(values), f"{per:.1f} steps/segment (~{stages * per:.0f} rate evals)", note)
+
         for rtol in tolerances:
             # one compiled program for every tolerance (rtol is an argument)
-            _, first, run, calls, (values, steps, ok) = _measure_compiled(
-                compiled, (robot, phi_start, waypoints, jnp.asarray(rtol)), args
-            )
-            stages = {"Dopri8": 12, "Tsit5": 6}[solver_name]
-            layout = "per segment" if per_segment else "per loop, corners as jumps"
-            row(problem, f"diffrax {solver_name} PID, {layout}", f"rtol {rtol:.0e}", count, compile_s, first, run,
-                calls, *errors(values),
-                f"{np.mean(steps) / segments:.1f} steps/segment (~{stages * np.mean(steps) / segments:.0f} rate evals)",
-                note="" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} failed")
+            tasks.add(f"diffrax {solver_name} PID, {layout}", f"rtol {rtol:.0e}", compiled,
+                      (robot, phi_start, waypoints, jnp.asarray(rtol)), compile_s, describe)
             compile_s = None  # reported once per compiled program
+    tasks.run(args.repeats)
 
     if long:
         return
     subset = min(args.scipy, count)
+    scipy_loop(model, np.asarray(waypoints[0]))  # imports and warms SciPy outside the timed region
     start = time.perf_counter()
     scipy_values = np.array([scipy_loop(model, np.asarray(waypoints[i])) for i in range(subset)])
     per_loop = (time.perf_counter() - start) / subset
     err = np.abs(scipy_values - reference[:subset])
     row(problem, f"SciPy solve_ivp DOP853 loop ({subset} loops)", "rtol 1e-10", count, None, None, per_loop * count,
         1, float(err.max()), float(np.median(err)), "extrapolated from the subset")
-
-
-def _measure_compiled(compiled, call_args, args):
-    start = time.perf_counter()
-    out = jax.block_until_ready(compiled(*call_args))
-    first = time.perf_counter() - start
-    best, calls, spent = np.inf, 0, 0.0
-    while calls < args.repeats and (calls == 0 or spent + best <= args.budget):
-        start = time.perf_counter()
-        out = jax.block_until_ready(compiled(*call_args))
-        elapsed = time.perf_counter() - start
-        best, calls, spent = min(best, elapsed), calls + 1, spent + elapsed
-    return None, first, best, calls, out
 
 
 # Straight paths ----------------------------------------------------------------------------
@@ -376,23 +382,24 @@ def bench_straight(args, rng, robot, model):
         ("spacearm DOP853 fixed step (error control off)", ours_straight(), "step", (0.05,)),
         ("spacearm RK4 fixed step", ours_straight(tableau="rk4"), "step", (0.02, 0.005)),
     ]
+    def describe(out):
+        states, steps, ok = out
+        note = "" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} not at a singular end"
+        return (*errors(states), f"{np.mean(steps):.1f} steps/path (max {int(np.max(steps))})", note)
+
+    tasks = Tasks("straight", count)
     for name, fn, kind, values in programs:
-        jitted = jax.jit(fn)
-        start = time.perf_counter()
-        compiled = jitted.lower(robot, phi0, directions, jnp.asarray(1e-8), cap).compile()
-        compile_s = time.perf_counter() - start
+        compiled, compile_s = tasks.compile(fn, robot, phi0, directions, jnp.asarray(1e-8), cap)
         for value in values:
             rtol, step = (value, cap) if kind == "rtol" else (1e30, value)
-            _, first, run, calls, (states, steps, ok) = _measure_compiled(
-                compiled, (robot, phi0, directions, jnp.asarray(rtol), jnp.asarray(step)), args
-            )
             tolerance = f"rtol {value:.0e}" if kind == "rtol" else f"h {value:g}"
-            row("straight", name, tolerance, count, compile_s, first, run, calls, *errors(states),
-                f"{np.mean(steps):.1f} steps/path (max {int(np.max(steps))})",
-                note="" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} not at a singular end")
+            tasks.add(name, tolerance, compiled, (robot, phi0, directions, jnp.asarray(rtol), jnp.asarray(step)),
+                      compile_s, describe)
             compile_s = None
+    tasks.run(args.repeats)
 
     subset = min(args.scipy, count)
+    scipy_straight(model, np.asarray(phi0[0]), np.asarray(directions[0]))  # imports SciPy outside the timing
     for rtol, atol in ((1e-10, 1e-12), (1e-12, 1e-14)):
         start = time.perf_counter()
         states = np.array([scipy_straight(model, np.asarray(phi0[i]), np.asarray(directions[i]), rtol=rtol, atol=atol,
@@ -407,8 +414,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--paths", type=int, default=10_000, help="paths per batch, the same for every JAX method")
     parser.add_argument("--scipy", type=int, default=100, help="SciPy runs on the first N of the same paths")
-    parser.add_argument("--repeats", type=int, default=3, help="warm calls timed (best taken)")
-    parser.add_argument("--budget", type=float, default=30.0, help="stop repeating after this many seconds")
+    parser.add_argument("--repeats", type=int, default=3, help="timing rounds (best warm call of each method taken)")
     parser.add_argument("--max-step", type=float, default=0.25, help="step cap of every adaptive straight solver")
     parser.add_argument("--only", choices=("loops", "long", "straight"), default=None)
     parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
