@@ -386,8 +386,12 @@ def bench_straight(args, rng, robot, model):
     ]
     def describe(out):
         states, steps, ok = out
-        note = "" if np.all(ok) else f"{int(np.sum(~np.asarray(ok)))} not at a singular end"
-        return (*errors(states), f"{np.mean(steps):.1f} steps/path (max {int(np.max(steps))})", note)
+        notes = [] if np.all(ok) else [f"{int(np.sum(~np.asarray(ok)))} not at a singular end"]
+        err = np.max(np.abs(np.asarray(states) - ref_state), axis=-1)
+        wrong = err > 1e-6  # ended somewhere else than the reference (e.g. an event stepped over)
+        if np.any(wrong):
+            notes.append(f"{int(wrong.sum())} wrong ends (> 1e-6), the rest within {err[~wrong].max():.1e}")
+        return (*errors(states), f"{np.mean(steps):.1f} steps/path (max {int(np.max(steps))})", "; ".join(notes))
 
     tasks = Tasks("straight", count)
     for name, fn, kind, values in programs:
