@@ -8,7 +8,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["map_leading", "bucket_size", "pad_leading"]
+__all__ = ["map_leading", "bucket_size", "pad_leading", "shapes_of"]
+
+
+def shapes_of(tree):
+    """``jax.ShapeDtypeStruct`` leaves for a pytree of concrete arrays, in JAX's dtypes
+    (float32 without x64), to compile a program ahead of time with ``.lower(...).compile()``."""
+    return jax.tree_util.tree_map(
+        lambda x: jax.ShapeDtypeStruct(np.shape(x), jax.dtypes.canonicalize_dtype(np.result_type(x))), tree
+    )
 
 
 def bucket_size(count: int, minimum: int = 1) -> int:

@@ -41,7 +41,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._core.batching import bucket_size, pad_leading
+from .._core.batching import bucket_size, pad_leading, shapes_of
 from .._core.errors import ConfigError
 from ..kinematics import (
     base_rate,
@@ -60,6 +60,7 @@ __all__ = [
     "StraightPath",
     "straight_tip_path",
     "straight_tip_path_history",
+    "compile_straight_tip_path_history",
     "go_and_back",
     "REASON_SINGULAR",
     "REASON_MAX_LENGTH",
@@ -453,6 +454,21 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
 def _history_flat(robot, phi_start, direction, joint_arc, robot_batched, intervals, substeps, tableau):
     one = functools.partial(_history_one, intervals=intervals, substeps=substeps, tableau=tableau)
     return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0, 0))(robot, phi_start, direction, joint_arc)
+
+
+def compile_straight_tip_path_history(robot: PlanarRobot, count: int = 1, n_samples: int = 101, *,
+                                      substeps: int = 4, tableau: str = "dop853") -> None:
+    """Compile, without running, the sampler :func:`straight_tip_path_history` uses for
+    ``count`` paths of one design; a later call with those sizes finds the program.
+
+    XLA compiles outside Python's GIL, so a caller can compile this on a second core (in
+    a thread) while it integrates the paths it will sample (``planning.plan_reach`` does).
+    """
+    dtype = jnp.result_type(float)
+    padded = bucket_size(count)
+    n = robot.n_links
+    shapes = [jax.ShapeDtypeStruct(shape, dtype) for shape in ((padded, n + 1), (padded, 2), (padded,))]
+    _history_flat.lower(shapes_of(robot), *shapes, False, int(n_samples) - 1, int(substeps), tableau).compile()
 
 
 def straight_tip_path_history(
