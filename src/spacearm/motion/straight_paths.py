@@ -322,15 +322,18 @@ def _straight_flat(robot, phi_start, direction, max_length, max_step, tol, rtol,
 PATH_BUCKET = 512
 
 
-def lane_count(padded: int, lanes: int) -> int:
-    """Lanes for a padded batch: padded / 16, at least 64, at most ``lanes``.
+def lane_count(padded: int, lanes: int | None = None) -> int:
+    """Lanes for a padded batch: ``lanes`` when given (at most ``padded``), else padded / 16,
+    at least 64 and at most 512.
 
     Narrow queues run faster on CPU, because a lane that finishes takes the next path
     at once (CPU time of 1,000 random Table 1 paths: 95 ms on 64 lanes, 212 ms on 512;
     4,000 paths: 361 ms vs 525 ms); wider ones only pay off on many-core backends, so the
     width grows with the bucket.
     """
-    return int(max(1, min(lanes, max(64, padded // 16), padded)))
+    if lanes is not None:
+        return int(max(1, min(lanes, padded)))
+    return int(min(512, max(64, padded // 16), padded))
 
 
 def _as_array(x, dtype):
@@ -366,7 +369,7 @@ def straight_tip_path(
     rtol: float | None = None,
     max_steps: int = 4096,
     tableau: str = "dop853",
-    lanes: int = 512,
+    lanes: int | None = None,
 ) -> StraightPath:
     """Move the tip along a straight inertial line until J* loses rank (Fig. 3a).
 
@@ -389,10 +392,11 @@ def straight_tip_path(
         max_steps: step budget (static); paths that exhaust it get reason 3.
         tableau: "dop853" (8th order with its embedded error control, default) or "rk4"
             (fixed steps, a baseline; static).
-        lanes: at most this many paths integrated side by side (static); a lane whose
-            path ends takes the next one, so short paths do not wait for long ones. The
-            batch is padded to 512 paths or the next power of two (one compiled program
-            per bucket, not per batch size) and runs on :func:`lane_count` lanes.
+        lanes: paths integrated side by side (static; None: :func:`lane_count` of the
+            padded batch, 64 to 512); a lane whose path ends takes the next one, so short
+            paths do not wait for long ones (``lanes`` = the batch size is a plain vmap).
+            The batch is padded to 512 paths or the next power of two (one compiled
+            program per bucket, not per batch size); the padding is never integrated.
 
     Returns:
         :class:`StraightPath` with batch shape ``(...)``.
