@@ -22,6 +22,8 @@ import spacearm as sa
 from spacearm import design
 from spacearm.cli import main as cli_main
 
+from .conftest import count_compiles
+
 ROOT = Path(__file__).resolve().parents[1]
 CHEAP_WBAR = {"rule": "product", "phi1_panels": 4, "phi2_panels": 2, "order": 4}
 TINY_SEARCH = {"directions": 8, "starts": 2, "steps": 12, "chunk": 4, "initial_samples": 16, "learning_rate": 0.05}
@@ -252,6 +254,21 @@ def test_front_is_nondominated_and_covers_the_archive(two_variable_search):
     hv = [c["hypervolume"] for c in result.checkpoints]
     assert np.all(np.diff(hv) >= 0)
     assert result.evaluations == f.shape[0] == result.checkpoints[-1]["evaluations"]
+
+
+def test_a_run_compiles_each_program_once_and_times_nothing_apart(tmp_path):
+    """The value program serves every batch of the search (densified batches are padded),
+    the gradient program compiles once, and the default cost ratio is read off the
+    search's own calls: no gradient program is compiled only to time it."""
+    problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR, search=dict(TINY_SEARCH, seed=5)))
+    with count_compiles() as compiles:
+        summary = design.run_problem(problem, tmp_path, baselines=False, log=lambda line: None)
+    heavy = {name: count for name, count in compiles.items() if "evaluate" in name or "run_chunk" in name}
+    assert heavy and max(heavy.values()) == 1, dict(compiles)
+    assert not [name for name in compiles if "summed" in name], dict(compiles)
+    gradient = summary["methods"]["gradient"]
+    assert gradient["value_and_gradient_cost_ratio"] > 0
+    assert gradient["value_and_gradient_cost_ratio_from"] == "search"
 
 
 def test_baselines_use_the_same_objective_code(two_variable_search):

@@ -13,7 +13,7 @@ from spacearm import motion
 from spacearm.motion import straight_paths
 
 from . import reference as ref
-from .conftest import random_robot
+from .conftest import count_compiles, random_robot
 
 DEG = np.pi / 180.0
 # Fig. 2 of Umetani & Yoshida 1990 starts from (phi1, phi2) = (-60, 120) deg; the corners
@@ -284,6 +284,22 @@ def test_no_retrace_for_new_values(fig3_paths):
     before = straight_paths._straight_flat._cache_size()
     motion.straight_tip_path(robot, PHI_FIG3 + 0.1, -DIRECTIONS, max_step=0.1, max_length=3.0)
     assert straight_paths._straight_flat._cache_size() == before
+
+
+def test_one_program_for_every_batch_up_to_the_bucket(fig3_paths):
+    """1 and 320 paths run in the program that integrated 8 (batches are padded to 512),
+    with the same numbers: the padding is never integrated."""
+    robot, paths = fig3_paths
+    before = straight_paths._straight_flat._cache_size()
+    with count_compiles() as compiles:
+        one = motion.straight_tip_path(robot, PHI_FIG3, DIRECTIONS[3])
+        many = motion.straight_tip_path(robot, PHI_FIG3, np.tile(DIRECTIONS, (40, 1)))
+    assert straight_paths._straight_flat._cache_size() == before
+    assert not [name for name in compiles if "_straight_flat" in name]
+    assert one.length.shape == () and many.length.shape == (320,)
+    np.testing.assert_allclose(one.length, paths.length[3], rtol=1e-13)
+    np.testing.assert_allclose(np.asarray(many.end_posture).reshape(40, 8, 3), np.broadcast_to(paths.end_posture, (40, 8, 3)),
+                               rtol=1e-13, atol=1e-13)
 
 
 def test_straight_path_errors(table1):

@@ -7,11 +7,11 @@ import pytest
 from scipy.integrate import quad
 
 import spacearm as sa
-from spacearm import planning
+from spacearm import motion, planning
 from spacearm.planning import reorientation
 
 from . import reference as ref
-from .conftest import random_robot
+from .conftest import count_compiles, random_robot
 
 DEG = np.pi / 180.0
 PHI_START = np.array([0.0, -60.0, 120.0]) * DEG  # the initial posture of Fig. 3 and Fig. 5
@@ -162,6 +162,15 @@ def test_mujoco_simulation_of_a_planned_loop_agrees():
 
 
 # Reach plans -----------------------------------------------------------------------------
+
+
+def test_a_program_compiled_ahead_is_not_compiled_again(table1):
+    """plan_reach compiles the history sampler ahead in a thread; the later call must find
+    that program (7 samples: a program no other test builds)."""
+    with count_compiles() as compiles:
+        motion.compile_straight_tip_path_history(table1, 1, 7)
+        motion.straight_tip_path_history(table1, PHI_START, np.array([-1.0, 0.2]), 7, max_length=0.5)
+    assert [count for name, count in compiles.items() if "_history_flat" in name] == [1], dict(compiles)
 
 
 def test_point_b_is_reached_by_a_straight_path():

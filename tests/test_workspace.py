@@ -7,7 +7,7 @@ import spacearm as sa
 from spacearm import analysis as ws
 
 from . import reference
-from .conftest import random_robot
+from .conftest import count_compiles, random_robot
 
 
 GRID = dict(n_phi1=360, n_phi2=64)  # one compiled singular-set shape for every test
@@ -190,6 +190,15 @@ def table1_paths():
     robot = sa.umetani1990()
     phis = _starts_inside_piw(robot, 8)
     return robot, phis, ws.straight_path_ends(robot, phis, N_DIRECTIONS)
+
+
+def test_straight_path_ends_compiles_no_program_of_its_own(table1_paths):
+    """straight_path_ends is a plain function over straight_tip_path's compiled program:
+    other postures and another number of directions (same bucket) compile nothing."""
+    robot, phis, _ = table1_paths
+    with count_compiles() as compiles:
+        ws.straight_path_ends(robot, phis + 0.01, N_DIRECTIONS + 5)  # 1192 paths, bucket 2048 as 1152
+    assert not compiles, dict(compiles)
 
 
 def test_end_points_lie_on_their_lines_at_singularities(table1_paths):

@@ -6,7 +6,6 @@ It has no closed form: each direction's path is integrated numerically with
 
 from __future__ import annotations
 
-import functools
 import math
 
 import jax
@@ -40,14 +39,6 @@ def evenly_spaced_directions(n_directions: int, dtype=None) -> jax.Array:
     return jnp.stack([jnp.cos(angle), jnp.sin(angle)], axis=-1)
 
 
-@functools.partial(jax.jit, static_argnames=("n_directions", "options"))
-def _straight_path_ends(robot, phi_start, n_directions, options):
-    phi_start = jnp.asarray(phi_start)
-    directions = evenly_spaced_directions(n_directions, phi_start.dtype)
-    # One vmapped batch: measured faster than lax.map over chunks of 512-16384 paths.
-    return straight_tip_path(robot, phi_start[..., None, :], directions, **dict(options))
-
-
 def straight_path_ends(robot: PlanarRobot, phi_start: jax.Array, n_directions: int = 360, **path_options):
     """Straight tip paths from ``phi_start`` in ``n_directions`` evenly spaced directions (Fig. 3).
 
@@ -64,7 +55,13 @@ def straight_path_ends(robot: PlanarRobot, phi_start: jax.Array, n_directions: i
     Returns:
         ``motion.StraightPath`` with batch shape ``(..., n_directions)``.
     """
-    return _straight_path_ends(robot, phi_start, n_directions, tuple(sorted(path_options.items())))
+    # No jit wrapper here: straight_tip_path is the compiled entry point, and a wrapper
+    # would trace (and compile) the whole integrator again for every shape it sees. The
+    # directions are built in NumPy, so no small program compiles for them either.
+    angle = 2.0 * np.pi * np.arange(n_directions) / n_directions
+    directions = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+    phi_start = phi_start if isinstance(phi_start, jax.core.Tracer) else np.asarray(phi_start)
+    return straight_tip_path(robot, phi_start[..., None, :], directions, **path_options)
 
 
 def straight_path_workspace(robot: PlanarRobot, phi_start: jax.Array, n_directions: int = 360, **path_options):

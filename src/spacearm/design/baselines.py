@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._core.batching import pad_leading
 from .._core.errors import ConfigError
 from .fronts import hypervolume_2d, hypervolume_history
 from .problem import DesignProblem
@@ -83,8 +84,8 @@ def nsga2_search(
     evaluate = problem.batch_function()
     d, m = len(problem.variables), len(problem.objectives)
     start = time.perf_counter()
-    # Compile for the population size (pymoo may send a smaller batch after removing
-    # duplicates; such a batch compiles once more, inside the timed run).
+    # Compile for the population size; pymoo may send a smaller batch after removing
+    # duplicates, which is padded to it (one program, never compiled inside the timed run).
     jax.block_until_ready(evaluate(jnp.asarray(np.tile(problem.lower, (population, 1)))))
     compile_seconds = time.perf_counter() - start
     log: list[tuple[np.ndarray, np.ndarray, float]] = []
@@ -95,7 +96,9 @@ def nsga2_search(
             super().__init__(n_var=d, n_obj=m, xl=problem.lower, xu=problem.upper)
 
         def _evaluate(self, x, out, *args, **kwargs):
-            f = np.asarray(evaluate(jnp.asarray(x, dtype=jnp.float64)))
+            x = np.asarray(x, dtype=np.float64)
+            rows = max(population, x.shape[0])
+            f = np.asarray(evaluate(jnp.asarray(pad_leading(x, rows))))[: x.shape[0]]
             out["F"] = -f
             log.append((np.array(x, dtype=np.float64), f, time.perf_counter() - clock["start"]))
 

@@ -35,18 +35,21 @@ def flatten_batch(robot, arrays: list[tuple[jax.Array, int]]):
     except ValueError:
         raise ConfigError(f"batch axes do not broadcast together: {shapes}") from None
     size = math.prod(batch)
+    # Concrete inputs are flattened in NumPy: eager jnp.broadcast_to / reshape would each
+    # compile a small program per shape, before the kernel's own.
+    xp = jnp if is_traced(robot, [a for a, _ in arrays]) else np
     flat = []
     for a, core in arrays:
-        a = jnp.asarray(a)
+        a = xp.asarray(a)
         core_shape = a.shape[a.ndim - core :]
-        flat.append(jnp.broadcast_to(a, batch + core_shape).reshape((size,) + core_shape))
+        flat.append(xp.broadcast_to(a, batch + core_shape).reshape((size,) + core_shape))
     if robot_batch:
         nb = len(robot_batch)
 
         def spread(x):
-            x = jnp.asarray(x)
+            x = xp.asarray(x)
             core_shape = x.shape[nb:]
-            return jnp.broadcast_to(x, batch + core_shape).reshape((size,) + core_shape)
+            return xp.broadcast_to(x, batch + core_shape).reshape((size,) + core_shape)
 
         robot = jax.tree_util.tree_map(spread, robot)
     return batch, robot, bool(robot_batch), flat

@@ -20,6 +20,7 @@ space (radius K0 + ... + Kn about the system centroid) are refused with
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 
 import jax
@@ -30,8 +31,20 @@ from .._core.errors import ConfigError
 from ..analysis import maximum_reachable_inner_radius, maximum_reachable_radius
 from ..kinematics import tip_position
 from ..models.planar.robot import PlanarRobot
-from ..motion import REASON_MAX_LENGTH, joint_path_history, straight_tip_path, straight_tip_path_history
-from .reorientation import LoopSettings, ReorientationLoop, check_posture, plan_reorientation_details
+from ..motion import (
+    REASON_MAX_LENGTH,
+    compile_straight_tip_path_history,
+    joint_path_history,
+    straight_tip_path,
+    straight_tip_path_history,
+)
+from .reorientation import (
+    LoopSettings,
+    ReorientationLoop,
+    check_posture,
+    compile_loop_optimizer,
+    plan_reorientation_details,
+)
 
 __all__ = ["ReachPlan", "plan_reach", "reachable_bounds", "MODE_STRAIGHT", "MODE_REORIENT", "MODE_REPOSITION",
            "PHASE_REPOSITION", "PHASE_LOOP", "PHASE_STRAIGHT"]
@@ -251,6 +264,18 @@ def plan_reach(
         )
     q0 = phi[1:]
     dtype = jnp.result_type(float)
+    # Compile ahead on a second core: XLA compiles outside the GIL, so the history sampler
+    # (needed by every plan with a straight leg) and the loop optimizer (needed at point C)
+    # compile while this thread compiles and integrates the straight paths. Each program
+    # is still compiled once: the plan waits for them before it first calls them.
+    ahead = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="spacearm-compile")
+    history_ready = ahead.submit(compile_straight_tip_path_history, robot, 1, history_samples)
+    loops_ready = ahead.submit(compile_loop_optimizer, robot, settings) if MODE_REORIENT in modes else None
+    ahead.shutdown(wait=False)
+
+    def wait(future):  # a failed compile ahead is only a missed head start
+        if future is not None:
+            concurrent.futures.wait([future])
 
     def straight(phi_from, max_length=None, directions=None):
         tip_from = np.asarray(tip_position(robot, jnp.asarray(phi_from, dtype)))
@@ -278,6 +303,7 @@ def plan_reach(
                     f"target: the straight tip path from the planned posture stops after {float(path.length):.6g} m "
                     f"of {length:.6g} m (reason {int(path.reason)})"
                 )
+            wait(history_ready)
             postures, tips = straight_tip_path_history(
                 robot, jnp.asarray(phi_after, dtype), jnp.asarray(offset, dtype), history_samples, max_length=length
             )
@@ -329,6 +355,7 @@ def plan_reach(
         feasible = (slack > 1e-6 * float(robot.reach)) & (np.asarray(ends.reason) != 3)
     if np.any(feasible):
         delta = _choose_rotation(deltas, slack, feasible)
+        wait(loops_ready)
         loop = plan_reorientation_details(robot, phi, delta, settings=settings)
         postures, tips = _loop_history(robot, phi, loop)
         return finish(MODE_REORIENT, loop.waypoints, [(PHASE_LOOP, postures, tips)], postures[-1], delta, loop.loops)
@@ -344,6 +371,7 @@ def plan_reach(
     phi_mid = move_postures[-1]
     tip_mid = move_tips[-1]
     delta = float(_wrap(np.arctan2(target[1], target[0]) - np.arctan2(tip_mid[1], tip_mid[0])))
+    wait(loops_ready)
     loop = plan_reorientation_details(robot, phi_mid, delta, settings=settings)
     postures, tips = _loop_history(robot, phi_mid, loop)
     waypoints = np.concatenate([segment, loop.waypoints[1:]])

@@ -36,12 +36,14 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from ..models.planar.closed_forms import momentum_inertias
 from ..models.planar.robot import PlanarRobot
 from ..motion import integrate_joint_path
 
-__all__ = ["LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl", "check_posture"]
+__all__ = ["LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl", "check_posture",
+           "compile_loop_optimizer"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -287,6 +289,18 @@ def check_posture(robot: PlanarRobot, phi_start) -> np.ndarray:
             f"phi_start: joint {j} = {phi[j]:.6g} rad is outside its limits [{lower[j - 1]:.6g}, {upper[j - 1]:.6g}]"
         )
     return phi
+
+
+def compile_loop_optimizer(robot: PlanarRobot, settings: LoopSettings = LoopSettings()) -> None:
+    """Compile, without running, the loop optimizer :func:`plan_reorientation_details`
+    runs for this design's shapes and ``settings``; a later plan finds the program.
+
+    XLA compiles outside Python's GIL, so a caller can compile this on a second core (in
+    a thread) while it does other work (``planning.plan_reach`` does).
+    """
+    dtype = jnp.result_type(float)
+    q0, delta = jax.ShapeDtypeStruct((robot.n_links,), dtype), jax.ShapeDtypeStruct((), dtype)
+    _optimize_loops.lower(shapes_of(robot), q0, delta, settings).compile()
 
 
 def plan_reorientation_details(

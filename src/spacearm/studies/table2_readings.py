@@ -36,6 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._core.batching import pad_leading
 from ..models.planar import PlanarRobot, stack_robots, umetani1990
 from ..models.planar.closed_forms import (
     DesignCoefficients,
@@ -290,6 +291,7 @@ def manipulability(derivation: Derivation, robot: PlanarRobot, phi: jax.Array) -
 # Averages over the elbow-down strip ------------------------------------------------------
 
 _GRID_PHI1, _GRID_PHI2 = 512, 256  # midpoint grid (second order at the kinks: under 1e-5 relative)
+GRID_CHUNK = 64  # (derivation, design) pairs per call of the compiled grid program
 
 
 @jax.jit
@@ -346,10 +348,21 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
     link_rates = jnp.repeat(jnp.asarray([d.link_rates for d in derivations]), designs)
     sign = jnp.repeat(jnp.asarray([float(d.sign) for d in derivations]), designs)
     lengths = robots.link_length
-    stats = _grid_statistics(
-        coeffs, link_rates, sign, repeat(robots.reach), repeat(lengths[:, 0] * lengths[:, 1]), repeat(robots.base_attach)
-    )
-    return {k: np.asarray(v).reshape(len(derivations), designs) for k, v in stats.items()}
+    args = (coeffs, link_rates, sign, repeat(robots.reach), repeat(lengths[:, 0] * lengths[:, 1]),
+            repeat(robots.base_attach))
+    # Fixed chunks of GRID_CHUNK pairs, the last padded (lax.map runs the pairs one by one
+    # anyway): one compiled program for any number of pairs, instead of one per count.
+    # Sliced in NumPy, so the chunks compile no slicing programs either.
+    count = len(derivations) * designs
+    args = pad_leading(jax.tree_util.tree_map(np.asarray, args), -(-count // GRID_CHUNK) * GRID_CHUNK)
+    chunks = [
+        _grid_statistics(*jax.tree_util.tree_map(lambda x, start=start: x[start : start + GRID_CHUNK], args))
+        for start in range(0, count, GRID_CHUNK)
+    ]
+    return {
+        k: np.concatenate([np.asarray(chunk[k]) for chunk in chunks])[:count].reshape(len(derivations), designs)
+        for k in chunks[0]
+    }
 
 
 # The readings of Table 2 -------------------------------------------------------------------
