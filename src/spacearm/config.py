@@ -1,4 +1,4 @@
-"""Deprecated path (one release): use :mod:`spacearm._core.numeric` (and :func:`spacearm.enable_x64`)."""
+"""Deprecated path (one release): use `spacearm._core.numeric` (and `spacearm.enable_x64`)."""
 
 from ._core.numeric import (
     enable_compilation_cache as enable_compilation_cache,

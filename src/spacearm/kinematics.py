@@ -110,7 +110,7 @@ def _rotate_twist_rows(family: RobotFamily, J, base_rotation):
 
 
 def generic_tip_position(robot, posture: jax.Array) -> jax.Array:
-    """:func:`tip_position` through the family's ``tip`` primitive only (no closed form)."""
+    """`tip_position` through the family's ``tip`` primitive only (no closed form)."""
     family = family_of(robot)
     return map_leading(lambda p: family.tip(robot, p), posture, core_ndims=(1,))
 

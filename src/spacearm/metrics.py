@@ -1,4 +1,4 @@
-"""Deprecated path (one release): use :mod:`spacearm.analysis`."""
+"""Deprecated path (one release): use `spacearm.analysis`."""
 
 from .analysis import (
     average_manipulability as average_manipulability,

@@ -1,4 +1,4 @@
-"""Deprecated path (one release): use :mod:`spacearm.studies.table2`."""
+"""Deprecated path (one release): use `spacearm.studies.table2`."""
 
 from .studies.table2 import (
     PAPER_TABLE2 as PAPER_TABLE2,

@@ -1,4 +1,4 @@
-"""Deprecated path (one release): use :mod:`spacearm.io`."""
+"""Deprecated path (one release): use `spacearm.io`."""
 
 from .io import (
     atomic_path as atomic_path,

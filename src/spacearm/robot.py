@@ -1,4 +1,4 @@
-"""Deprecated path (one release): use :mod:`spacearm.models.planar` and :func:`spacearm.load_robot`."""
+"""Deprecated path (one release): use `spacearm.models.planar` and `spacearm.load_robot`."""
 
 from ._core.errors import ConfigError as ConfigError
 from .models import load_robot as load_robot

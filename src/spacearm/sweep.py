@@ -1,4 +1,4 @@
-"""Deprecated path (one release): use :mod:`spacearm.studies`."""
+"""Deprecated path (one release): use `spacearm.studies`."""
 
 from .studies import (
     FIELD_HELP as FIELD_HELP,

@@ -1,5 +1,5 @@
-"""Deprecated path (one release): use ``spacearm validate`` (:mod:`spacearm.cli.validate`) and
-:func:`spacearm._core.schema.read_yaml`."""
+"""Deprecated path (one release): use ``spacearm validate`` (`spacearm.cli.validate`) and
+`spacearm._core.schema.read_yaml`."""
 
 import importlib
 

@@ -1,8 +1,8 @@
 """The YAML/schema layer: one reader, one did-you-mean formatter, the field checks.
 
-Every input file (robot, sweep, design problem) is read by :func:`read_yaml` and
+Every input file (robot, sweep, design problem) is read by `read_yaml` and
 checked with the helpers here, so all errors share one shape: ``<file>: <field>: <reason>``,
-raised as :class:`~spacearm._core.errors.ConfigError` (exit status 2 on the command line).
+raised as `ConfigError` (exit status 2 on the command line).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ def describe_yaml_error(error: yaml.YAMLError) -> str:
 
 
 def read_yaml(path: str | os.PathLike, *, what: str = "YAML file") -> Any:
-    """Parse a YAML file; :class:`ConfigError` for a missing, unreadable or malformed file."""
+    """Parse a YAML file; `ConfigError` for a missing, unreadable or malformed file."""
     path = os.fspath(path)
     try:
         with open(path, encoding="utf-8") as handle:
@@ -80,7 +80,7 @@ def is_number(value: Any) -> bool:
 
 
 def number(where: str, value: Any) -> float:
-    """A finite real number, else :class:`ConfigError` naming ``where``."""
+    """A finite real number, else `ConfigError` naming ``where``."""
     if not is_number(value):
         raise ConfigError(f"{where}: must be a number, got {type(value).__name__} {value!r}")
     if not math.isfinite(value):
@@ -89,7 +89,7 @@ def number(where: str, value: Any) -> float:
 
 
 def integer(where: str, value: Any, *, least: int | None = None) -> int:
-    """An integer (optionally ``>= least``), else :class:`ConfigError` naming ``where``."""
+    """An integer (optionally ``>= least``), else `ConfigError` naming ``where``."""
     if not isinstance(value, int) or isinstance(value, bool) or (least is not None and value < least):
         bound = f" >= {least}" if least is not None else ""
         raise ConfigError(f"{where}: must be an integer{bound}, got {value!r}")
@@ -97,7 +97,7 @@ def integer(where: str, value: Any, *, least: int | None = None) -> int:
 
 
 def choice(where: str, value: Any, options: Iterable[str]) -> str:
-    """One of ``options``, else :class:`ConfigError` with a did-you-mean hint."""
+    """One of ``options``, else `ConfigError` with a did-you-mean hint."""
     options = tuple(options)
     if value not in options:
         raise ConfigError(f"{where}: must be one of {', '.join(options)}, got {value!r}{did_you_mean(str(value), options)}")
@@ -105,7 +105,7 @@ def choice(where: str, value: Any, options: Iterable[str]) -> str:
 
 
 def number_list(where: str, value: Any, length: int | None = None) -> list[float]:
-    """A list of finite numbers (of the given length), else :class:`ConfigError`."""
+    """A list of finite numbers (of the given length), else `ConfigError`."""
     if not isinstance(value, (list, tuple)) or (length is not None and len(value) != length):
         size = f" of {length}" if length is not None else ""
         raise ConfigError(f"{where}: must be a list{size} numbers, got {value!r}")

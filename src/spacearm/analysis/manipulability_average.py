@@ -41,7 +41,7 @@ times a bracket linear in cos phi1, so the phi1 splits are in closed form.
 
 For n > 2 the posture -> tip map is many-to-one and an area average needs a choice
 of measure on each self-motion manifold, which the paper does not make; the area
-reading raises :class:`ConfigError` and ``measure="joint"`` (uniform average over the
+reading raises `ConfigError` and ``measure="joint"`` (uniform average over the
 joint torus) is offered for any n.
 """
 
@@ -106,7 +106,7 @@ def _signed_determinant(coeffs: DesignCoefficients, cos1, sin1, phi2):
 def _fourier_forms(coeffs: DesignCoefficients, cos1, sin1):
     """det J* at fixed phi1 as trigonometric polynomials in phi2: N / H.
 
-    Every factor of :func:`_signed_determinant` is linear in (1, cos phi2, sin phi2), so
+    Every factor of `_signed_determinant` is linear in (1, cos phi2, sin phi2), so
     with H = h0 + h1 + h2 > 0 the numerator N = det J* H is a trigonometric polynomial
     of degree 2.
 
@@ -154,7 +154,7 @@ _TO_QUARTIC = np.array([[1, 0, 2, 0, 1], [1, 0, 0, 0, -1], [0, 2, 0, 2, 0], [1, 
 
 
 def _panel_rotations(centers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Constant maps of :func:`_fourier_forms`'s coefficients in phi2 to coefficients in
+    """Constant maps of `_fourier_forms`'s coefficients in phi2 to coefficients in
     d = phi2 - c for each panel center c (orthogonal: rotations by c and 2c).
 
     Returns:
@@ -341,7 +341,7 @@ def _wbar_two_link(robot: PlanarRobot, measure: str, elbow: str, phi1_panels: in
 
 
 def check_average_options(*, where: str = "", **options) -> None:
-    """Raise :class:`ConfigError` naming the first bad option of :func:`average_manipulability`.
+    """Raise `ConfigError` naming the first bad option of `average_manipulability`.
 
     Shared with the sweep files' ``wbar`` metric, so ``spacearm validate`` catches what a
     run would reject. ``where`` prefixes the field names (``"metrics[0]."``).

@@ -52,7 +52,7 @@ def manipulability_map(
 
     The first axis is processed in chunks of ``rows_per_chunk`` rows with
     ``jax.lax.map(..., batch_size=...)``, so the working memory is that of one chunk;
-    only the result is held whole. Use :func:`grid_average` when even the result is
+    only the result is held whole. Use `grid_average` when even the result is
     too large.
 
     Args:

@@ -2,8 +2,8 @@
 
 The Generalized Jacobian J* loses rank on curves that pass through the collinear
 postures and bulge away from the kinematic singularity phi_2 = 0 when b0 > 0
-(Papadopoulos & Dubowsky's dynamic singularities). :func:`dynamic_singularities`
-traces the zero set of det J*; :func:`path_independent_radius` gives the largest
+(Papadopoulos & Dubowsky's dynamic singularities). `dynamic_singularities`
+traces the zero set of det J*; `path_independent_radius` gives the largest
 singularity-free disk about the system centroid.
 """
 
@@ -126,7 +126,7 @@ def path_independent_radius(robot: PlanarRobot, **grid) -> jax.Array:
     The min of |tip| over the zero set of det J* (n = 2): inside this disk a tip path
     meets no dynamic singularity whatever the base attitude (Papadopoulos & Dubowsky
     1991's path-independent workspace; it contains points only where Area 3 has no hole).
-    Compare :func:`guaranteed_radius` (eq. 8), which considers phi_2 = 0 only.
+    Compare `guaranteed_radius` (eq. 8), which considers phi_2 = 0 only.
     """
     return jnp.nanmin(dynamic_singularities(robot, **grid).radius, axis=(-2, -1))
 

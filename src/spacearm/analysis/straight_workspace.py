@@ -1,7 +1,7 @@
 """The Straight-Path workspace (Area 4, Fig. 3a, 5): where straight tip paths end.
 
 It has no closed form: each direction's path is integrated numerically with
-:func:`spacearm.motion.straight_tip_path` until J* loses rank.
+`spacearm.motion.straight_tip_path` until J* loses rank.
 """
 
 from __future__ import annotations
@@ -114,7 +114,7 @@ def straight_path_union_radius(end_tip: jax.Array) -> jax.Array:
         end_tip: ``(..., P, D, 2)`` end points over P initial postures and D directions.
 
     Returns:
-        ``(...)`` m; compare :func:`maximum_reachable_radius`.
+        ``(...)`` m; compare `maximum_reachable_radius`.
     """
     return jnp.max(jnp.linalg.norm(end_tip, axis=-1), axis=(-2, -1))
 
@@ -127,7 +127,7 @@ def straight_path_intersection_radius(start_tip: jax.Array, end_tip: jax.Array) 
         end_tip: ``(..., P, D, 2)`` end points.
 
     Returns:
-        ``(...)`` m; compare :func:`guaranteed_radius` (eq. 8) and :func:`path_independent_radius`.
+        ``(...)`` m; compare `guaranteed_radius` (eq. 8) and `path_independent_radius`.
     """
     return jnp.min(clearance_radius(start_tip, end_tip), axis=-1)
 
@@ -173,7 +173,7 @@ def straight_path_study(
 
     One batched call integrates ``n_postures x n_directions`` straight tip paths from
     random joint postures (phi0 = 0; a change of phi0 only turns each workspace about
-    the centroid, which :func:`clearance_radius` accounts for exactly).
+    the centroid, which `clearance_radius` accounts for exactly).
 
     Args:
         robot: a single design.
@@ -195,7 +195,7 @@ def straight_path_study(
 
 
 def summarize_straight_paths(robot: PlanarRobot, phis, ends, conditioning: float = 0.01) -> dict[str, float]:
-    """The numbers of :func:`straight_path_study` from already integrated paths.
+    """The numbers of `straight_path_study` from already integrated paths.
 
     Args:
         phis: ``(P, n+1)`` initial postures, rad.

@@ -21,27 +21,27 @@ workspace             paper (n = 2)                               here, n links
 Where the closed forms stop holding:
 
 - Area 4 (Straight-Path) has none; it is integrated numerically
-  (:func:`spacearm.analysis.straight_path_workspace.straight_path_workspace`).
+  (`spacearm.analysis.straight_path_workspace.straight_path_workspace`).
 - Eq. (8) takes the straight-path boundary to be the kinematic singularity phi_2 = 0.
   The Generalized Jacobian J* does not lose rank there when b0 > 0; it loses rank on
   curves that pass through the collinear postures (phi_1, phi_2) in {0, pi} x {0, pi}
   and bulge up to ~18 deg away from phi_2 = 0 (Table 1) -- and a second branch near
-  the folded arm, phi_2 ~ pi, which eq. (8) ignores. :func:`~spacearm.analysis.singularities.dynamic_singularities`
-  traces the zero set of det J* (n = 2) and :func:`~spacearm.analysis.singularities.path_independent_radius` gives the
+  the folded arm, phi_2 ~ pi, which eq. (8) ignores. `dynamic_singularities`
+  traces the zero set of det J* (n = 2) and `path_independent_radius` gives the
   largest singularity-free disk about the system centroid (the path-independent
   workspace of Papadopoulos & Dubowsky 1991). For Table 1 that radius is
   |K0 + K1 - K2| = 1.0 m, not eq. (8)'s 2.5 m.
 - When K0 > K1+..+Kn the Guaranteed "disk" is exactly the unreachable hole of Area 3,
   so Area 2 does not contain Area 5 and the paper's "always" fails.
 - Under joint limits (sec. 3.2, last paragraph) the radii of Area 3 come from a search
-  over the joint box (:func:`maximum_reachable_radii`); the base attitude stays free
+  over the joint box (`maximum_reachable_radii`); the base attitude stays free
   because cyclic joint motions inside the box can turn the base by any angle.
 - Fig. 4 draws Area 1 in the inertial frame; we place it about joint 1 of the
   stretched posture phi = 0, the one placement where eq. (9) is exactly the condition
   for Area 3 >= Area 1 (all three circles then touch at (K0+..+Kn, 0)).
 
-Areas are normalized by pi L^2 (sec. 5): :func:`normalized_areas` gives Table 2's S_M and
-S_G, :func:`normalized_workspace_areas` the areas of workspaces 1-3 and 5.
+Areas are normalized by pi L^2 (sec. 5): `normalized_areas` gives Table 2's S_M and
+S_G, `normalized_workspace_areas` the areas of workspaces 1-3 and 5.
 """
 
 from __future__ import annotations
@@ -130,7 +130,7 @@ def guaranteed_radius(robot: PlanarRobot) -> jax.Array:
     """``(...)`` Area 5 radius |K0 - (K1 + .. + Kn)| about the system centroid, m (eq. 8).
 
     The paper's derivation: the closest approach to the centroid of the tip on the
-    stretched-arm singularity (phi_2 = .. = phi_n = 0). See :func:`path_independent_radius`
+    stretched-arm singularity (phi_2 = .. = phi_n = 0). See `path_independent_radius`
     for the radius that accounts for where det J* really vanishes.
     """
     K = tip_coefficients(robot)
@@ -167,7 +167,7 @@ def normalized_areas(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
 
     S_M = (K0 + K1 + ... + Kn)^2 / L^2 (section 3.1, 3-a) and
     S_G = (K0 - (K1 + ... + Kn))^2 / L^2 (eq. 8): the disks of radius
-    :func:`maximum_reachable_radius` and :func:`guaranteed_radius`, holes not removed.
+    `maximum_reachable_radius` and `guaranteed_radius`, holes not removed.
 
     Args:
         robot: a design or a batch of designs.
@@ -210,7 +210,7 @@ def workspace_relations(robot: PlanarRobot, tol: float = 1e-9) -> dict[str, jax.
     Returns:
         ``(...)`` bools: ``"3>=2"``, ``"2>=5"``, ``"3>=1"``, ``"1>=2"``, ``"eq9"`` (the
         condition), and ``"2>=5_with_hole"`` (Area 2 taken as the annulus it is, with the
-        hole of :func:`attitude_constraint_inner_radius`).
+        hole of `attitude_constraint_inner_radius`).
     """
     zero = jnp.zeros_like(fixed_vehicle_center(robot))
     c1, r1 = fixed_vehicle_center(robot), fixed_vehicle_radius(robot)
@@ -274,7 +274,7 @@ def maximum_reachable_radii(robot: PlanarRobot, points_per_axis: int | None = No
     angle), so Area 3 is the rotation-swept set of the tip over the joint box: an
     annulus between the smallest and largest |tip| over the box. Found by a grid over
     the box, then ``zoom_levels`` finer grids about the best point. Without limits this
-    reproduces :func:`maximum_reachable_radius` and :func:`maximum_reachable_inner_radius`.
+    reproduces `maximum_reachable_radius` and `maximum_reachable_inner_radius`.
 
     Args:
         robot: a single design; free joints span [-pi, pi].

@@ -31,7 +31,7 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     """The front in objective space, the front designs in variable space, convergence.
 
     Drawn for two objectives (``front.png``, ``designs.png``, ``convergence.png``); nothing
-    for more. Fits :data:`spacearm.design.run.ProblemOutput`.
+    for more. Fits `spacearm.design.run.ProblemOutput`.
     """
     if len(problem.objectives) != 2:
         return []

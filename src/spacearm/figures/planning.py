@@ -1,6 +1,6 @@
 """Reaching point C (Umetani & Yoshida 1990, sec. 3.2, Fig. 5): base, arm and tip path.
 
-``draw_reach`` draws a :class:`~spacearm.planning.ReachPlan` in the inertial frame (left:
+``draw_reach`` draws a `ReachPlan` in the inertial frame (left:
 the Maximum Reachable circle, the Straight-Path workspace before and after the
 reorientation, the tip path by phase, the robot at the start, after the loop and at
 the end; right: the base attitude and joint angles along the plan).
@@ -51,7 +51,7 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
     Args:
         robot: the design.
         phi_start: ``(n+1,)`` start posture, rad.
-        plan: a :class:`~spacearm.planning.ReachPlan` from ``plan_reach(robot, phi_start, ...)``.
+        plan: a `ReachPlan` from ``plan_reach(robot, phi_start, ...)``.
         path: output PNG.
         n_directions: directions of the Straight-Path workspace boundaries drawn.
     """

@@ -21,8 +21,8 @@ __all__ = ["write_figures", "sweep_figures", "report_figures", "axis_label"]
 
 
 def write_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray]) -> list[Path]:
-    """Every figure of a sweep: :func:`sweep_figures` and :func:`report_figures`
-    (a :data:`spacearm.studies.runner.SweepOutput`)."""
+    """Every figure of a sweep: `sweep_figures` and `report_figures`
+    (a `spacearm.studies.runner.SweepOutput`)."""
     return sweep_figures(spec, out_dir, table) + report_figures(spec, out_dir, table)
 
 

@@ -93,7 +93,7 @@ def write_csv(path: str | os.PathLike, columns: Mapping[str, Sequence]) -> Path:
 
 
 def read_csv(path: str | os.PathLike) -> dict[str, list]:
-    """Read a CSV written by :func:`write_csv`; numeric cells become floats."""
+    """Read a CSV written by `write_csv`; numeric cells become floats."""
     with open(path, encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         names = next(reader)

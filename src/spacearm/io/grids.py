@@ -3,7 +3,7 @@
 A sweep writes ``grids.npz`` (``axis/<name>``: the axis values, ``metric/<column>``: one
 array per metric column, shaped like the grid, ``dims``: the axis names of a product
 sweep or ``["design"]`` for a zipped one), ``table.csv`` (one row per design) and
-``manifest.json``; :func:`open_results` reads them back as a Dataset whose dimensions
+``manifest.json``; `open_results` reads them back as a Dataset whose dimensions
 are the sweep axes.
 """
 

@@ -39,7 +39,7 @@ def robot_from_file_mapping(config: Any, *, source: str = "robot", base_dir: str
 def load_robot(source: str | os.PathLike | Mapping[str, Any]) -> PlanarRobot | SpatialRobot:
     """Load and validate a robot from a YAML file path or an already parsed mapping.
 
-    Returns a :class:`~spacearm.models.planar.PlanarRobot` for a planar file and a
+    Returns a `PlanarRobot` for a planar file and a
     spatial robot for a file with an ``arm:`` key.
 
     Raises:

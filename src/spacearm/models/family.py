@@ -10,7 +10,7 @@ family gives, for ONE posture (no batch axes):
 
 Everything else (J* = J_M - J_S I_S^-1 I_M, w*, ellipses and ellipsoids, base rates,
 straight-path fields, averages) is written once over these in
-:mod:`spacearm.kinematics` and above. A family may register closed forms in
+`spacearm.kinematics` and above. A family may register closed forms in
 ``fast_paths`` (kernel name -> function with the public kernel's signature); the
 generic layer picks them by type at trace time, so a closed form is an optimization,
 never a second definition (the tests check each one against the generic path).

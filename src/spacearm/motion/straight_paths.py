@@ -111,7 +111,7 @@ def generic_straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
 
     Derivatives are with respect to the joint-space arc length sigma. Returns a function
     of y giving ``(n+2,)``: [dphi0, dphi_M (unit norm), ds]. The joint rates come from
-    :func:`spacearm.kinematics.straight_path_rates` on J* (eq. 6), the base rate from
+    `spacearm.kinematics.straight_path_rates` on J* (eq. 6), the base rate from
     eq. (5): both written once over the family's primitives.
     """
     n = robot.n_links
@@ -393,14 +393,14 @@ def straight_tip_path(
         max_steps: step budget (static); paths that exhaust it get reason 3.
         tableau: "dop853" (8th order with its embedded error control, default) or "rk4"
             (fixed steps, a baseline; static).
-        lanes: paths integrated side by side (static; None: :func:`lane_count` of the
+        lanes: paths integrated side by side (static; None: `lane_count` of the
             padded batch, 64 to 512); a lane whose path ends takes the next one, so short
             paths do not wait for long ones (``lanes`` = the batch size is a plain vmap).
             The batch is padded to 512 paths or the next power of two (one compiled
             program per bucket, not per batch size); the padding is never integrated.
 
     Returns:
-        :class:`StraightPath` with batch shape ``(...)``.
+        `StraightPath` with batch shape ``(...)``.
     """
     phi_start, direction, max_length = _prepare_straight(robot, phi_start, direction, max_length)
     batch, flat_robot, batched, (phi_flat, dir_flat, len_flat) = flatten_batch(
@@ -463,7 +463,7 @@ def _history_flat(robot, phi_start, direction, joint_arc, robot_batched, interva
 
 def compile_straight_tip_path_history(robot: PlanarRobot, count: int = 1, n_samples: int = 101, *,
                                       substeps: int = 4, tableau: str = "dop853") -> None:
-    """Compile, without running, the sampler :func:`straight_tip_path_history` uses for
+    """Compile, without running, the sampler `straight_tip_path_history` uses for
     ``count`` paths of one design; a later call with those sizes finds the program.
 
     XLA compiles outside Python's GIL, so a caller can compile this on a second core (in
@@ -488,7 +488,7 @@ def straight_tip_path_history(
 ) -> tuple[jax.Array, jax.Array]:
     """Postures and inertial tips along a straight tip path, for plots (Fig. 3a, 9).
 
-    Finds the end with :func:`straight_tip_path` (``options`` are passed on), then
+    Finds the end with `straight_tip_path` (``options`` are passed on), then
     samples the path at ``n_samples`` points equally spaced in joint-space arc length.
 
     Returns:

@@ -2,19 +2,19 @@
 
 Umetani & Yoshida 1990, section 3.2, Fig. 5: point C cannot be reached from the
 current posture by a straight tip path, "but can be reached after reorienting the
-base by a suitable cyclic maneuver" (planned in :mod:`spacearm.planning.reorientation`).
+base by a suitable cyclic maneuver" (planned in `spacearm.planning.reorientation`).
 
-Reaching (:func:`plan_reach`). Rotating the base by Delta rotates the whole system
+Reaching (`plan_reach`). Rotating the base by Delta rotates the whole system
 rigidly about the system centroid (joints unchanged), so the Straight-Path workspace
 from (phi0 + Delta, q0) is the one from (phi0, q0) rotated by Delta. The target T is
 reachable after the maneuver iff R(-Delta) T lies in the current Straight-Path
-workspace: one batched call of :func:`spacearm.motion.straight_tip_path` over a grid
+workspace: one batched call of `spacearm.motion.straight_tip_path` over a grid
 of Delta finds the smallest useful reorientation. Targets whose distance from the
 system centroid no rotation of the current workspace covers are reached by first
 moving the joints to a posture whose tip lies at the target's radius (then the
 maneuver brings the tip onto the target). Targets outside the Maximum Reachable
 space (radius K0 + ... + Kn about the system centroid) are refused with
-:class:`~spacearm.ConfigError`.
+`ConfigError`.
 """
 
 
@@ -60,7 +60,7 @@ PHASE_STRAIGHT = 2
 
 @dataclasses.dataclass(frozen=True)
 class ReachPlan:
-    """A plan that brings the tip to a target (see :func:`plan_reach`).
+    """A plan that brings the tip to a target (see `plan_reach`).
 
     Attributes:
         mode: "straight" (a straight tip path from the start), "reorient" (a
@@ -101,7 +101,7 @@ def reachable_bounds(robot: PlanarRobot) -> tuple[float, float]:
     """Inner and outer radius of the Maximum Reachable space (Area 3) about the system centroid, m.
 
     Outer K0 + .. + Kn (sec. 3.1 (3-a)); inner max(0, 2 max_k K_k - sum_k K_k), the hole
-    when one coefficient outweighs the rest (both from :mod:`spacearm.workspace`). Joint
+    when one coefficient outweighs the rest (both from `spacearm.workspace`). Joint
     limits are not taken into account here (they can only shrink the space).
     """
 
@@ -222,7 +222,7 @@ def plan_reach(
        Straight-Path workspace about the system centroid, so the straight path from the
        current posture towards R(-Delta) target tells, for every Delta of a grid in one
        batched call, whether the target is reachable after the maneuver. The smallest
-       such Delta (with margin) is planned with :func:`plan_reorientation_details`, then
+       such Delta (with margin) is planned with `plan_reorientation_details`, then
        the straight path runs from the posture after the loop.
     3. When no rotation of the current workspace covers the target's distance from the
        centroid, the joints first move straight in joint space to the nearest posture
@@ -236,12 +236,12 @@ def plan_reach(
         history_samples: samples of the straight path in the history.
         tolerance: accepted distance of the final tip from the target, m (default 1e-6
             in float64, 1e-3 in float32).
-        settings: :class:`LoopSettings` for the reorientation loop.
+        settings: `LoopSettings` for the reorientation loop.
         modes: the strategies allowed, tried in the order above ("straight",
             "reorient", "reposition"); e.g. ``("reposition",)`` forces the third.
 
     Returns:
-        a :class:`ReachPlan`.
+        a `ReachPlan`.
 
     Raises:
         ConfigError: bad input; the target outside the Maximum Reachable space (radius

@@ -3,7 +3,7 @@
 Umetani & Yoshida 1990, section 3.2, Fig. 5: point C "can be reached after reorienting
 the base by a suitable cyclic maneuver". This module plans that maneuver.
 
-Reorientation (:func:`plan_reorientation`). Along a closed joint-space loop the
+Reorientation (`plan_reorientation`). Along a closed joint-space loop the
 joints come back but the base turns by the line integral of eq. (5),
 
     delta_phi0 = -(loop integral) (I_M / I_S) . dq,
@@ -19,7 +19,7 @@ matter. The planner
    candidate number of repetitions N;
 2. refines every candidate loop (Fourier coefficients of a closed curve through q0,
    sampled into waypoints) with optax Adam through the integrator
-   (:func:`spacearm.motion.integrate_joint_path`): squared rotation error, total
+   (`spacearm.motion.integrate_joint_path`): squared rotation error, total
    joint travel, soft penalties on joint limits and on the excursion from q0; all
    candidates in one vmapped, jitted call;
 3. finishes each candidate with Newton steps on a scale factor of the loop about q0,
@@ -250,7 +250,7 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
 
 @dataclasses.dataclass(frozen=True)
 class ReorientationLoop:
-    """A planned reorientation maneuver (see :func:`plan_reorientation_details`).
+    """A planned reorientation maneuver (see `plan_reorientation_details`).
 
     Attributes:
         waypoints: ``(N k + 1, n)`` joint waypoints, rad; the loop repeated N times,
@@ -292,7 +292,7 @@ def check_posture(robot: PlanarRobot, phi_start) -> np.ndarray:
 
 
 def compile_loop_optimizer(robot: PlanarRobot, settings: LoopSettings = LoopSettings()) -> None:
-    """Compile, without running, the loop optimizer :func:`plan_reorientation_details`
+    """Compile, without running, the loop optimizer `plan_reorientation_details`
     runs for this design's shapes and ``settings``; a later plan finds the program.
 
     XLA compiles outside Python's GIL, so a caller can compile this on a second core (in
@@ -317,12 +317,12 @@ def plan_reorientation_details(
         robot: one design.
         phi_start: ``(n+1,)`` start posture [phi0, q0], rad (phi0 does not matter).
         delta_phi0: requested base rotation, rad (any sign and size).
-        settings: :class:`LoopSettings` (static; a new value compiles once).
+        settings: `LoopSettings` (static; a new value compiles once).
         tolerance: largest accepted |rotation error| of the integrated waypoints, rad
             (default 1e-9 in float64, 1e-4 in float32).
 
     Returns:
-        a :class:`ReorientationLoop`.
+        a `ReorientationLoop`.
 
     Raises:
         ConfigError: bad input, or no candidate loop reaches the rotation within the
@@ -395,7 +395,7 @@ def plan_reorientation(robot: PlanarRobot, phi_start, delta_phi0: float, **optio
         robot: one design.
         phi_start: ``(n+1,)`` start posture [phi0, phi1..phin], rad.
         delta_phi0: base rotation, rad.
-        **options: ``settings`` (:class:`LoopSettings`), ``tolerance`` (rad).
+        **options: ``settings`` (`LoopSettings`), ``tolerance`` (rad).
 
     Returns:
         ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the

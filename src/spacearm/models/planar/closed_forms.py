@@ -7,7 +7,7 @@ The angular momentum about the system centroid is then
 
     L = sum_l h_l(theta) dtheta_l,   h_l = I_l + sum_k W_kl cos(theta_k - theta_l),
 
-with the design-only matrix W_kl = sum_i m_i R_ik R_il. :func:`design_coefficients`
+with the design-only matrix W_kl = sum_i m_i R_ik R_il. `design_coefficients`
 computes K, W and the inertias once per design; the per-posture work is n sines and
 cosines, a few products and the reverse sums that turn absolute rates into joint
 rates. Public kernels are jitted at the entry point (nested calls inline), so a
@@ -347,7 +347,7 @@ def manipulability_from_angles(coeffs: DesignCoefficients, cos_theta, sin_theta)
     """w* from precomputed coefficients and absolute link angles (robot frame).
 
     Args:
-        coeffs: from :func:`design_coefficients` of one design.
+        coeffs: from `design_coefficients` of one design.
         cos_theta, sin_theta: sequences of n arrays (links 1..n), broadcastable.
 
     The entry point for structured grids, where the unit vectors come from 1-D
@@ -463,8 +463,8 @@ def fixed_base_manipulability(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Arr
 def straight_path_field(robot: PlanarRobot, direction: jax.Array, sign0):
     """Closed form of the regularized straight-path field (one path), y = [phi0, phi_1..phi_n, s].
 
-    The same field as the generic one in :mod:`spacearm.motion.straight_paths` (joint
-    rates from :func:`spacearm.kinematics.straight_path_rates`, base rate from eq. 5),
+    The same field as the generic one in `spacearm.motion.straight_paths` (joint
+    rates from `spacearm.kinematics.straight_path_rates`, base rate from eq. 5),
     written over the scalar columns of J* so that J* and the momentum rows share their
     sines, cosines and reverse sums: about twice as fast as the generic field, and equal
     to it to rounding (tests/test_seam.py).

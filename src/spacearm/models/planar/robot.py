@@ -1,7 +1,7 @@
 """The planar family's design: a planar serial chain of n >= 2 revolute links on a free base.
 
 The design is data: every number a sweep or an optimizer may change is an array
-leaf of :class:`PlanarRobot`, so ``jit``, ``vmap`` and ``grad`` work over designs
+leaf of `PlanarRobot`, so ``jit``, ``vmap`` and ``grad`` work over designs
 and a batch of designs is the same pytree with a leading axis (Umetani & Yoshida
 1990, Fig. 1 and Table 1, generalized to n links).
 """
@@ -123,7 +123,7 @@ def _is_concrete(x) -> bool:
 
 
 def _looks_valid(robot: PlanarRobot) -> bool:
-    """All checks of :func:`_check_fields` in a few vectorized comparisons (NaN fails each one);
+    """All checks of `_check_fields` in a few vectorized comparisons (NaN fails each one);
     only a design that fails them pays for the field-by-field pass that names the culprit.
     Keeps building designs in a Python loop cheap (~10x faster than the detailed pass)."""
     link_a = np.asarray(robot.link_a)
@@ -151,7 +151,7 @@ def _validate(robot: PlanarRobot) -> None:
 
 
 def _check_fields(robot: PlanarRobot) -> None:
-    """The field-by-field checks behind :func:`_validate`."""
+    """The field-by-field checks behind `_validate`."""
     link_a = np.asarray(robot.link_a)
     if link_a.ndim < 1:
         raise ConfigError("links: the per-link arrays need a trailing link axis")

@@ -1,4 +1,4 @@
-"""The planar robot file (DESIGN.md, "Planar robot file"): mapping <-> :class:`PlanarRobot`."""
+"""The planar robot file (DESIGN.md, "Planar robot file"): mapping <-> `PlanarRobot`."""
 
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ def _limits(where: str, link: Mapping) -> tuple[float, float]:
 
 
 def robot_from_mapping(config: Mapping[str, Any], *, source: str = "robot") -> PlanarRobot:
-    """Build a validated :class:`PlanarRobot` from the YAML schema of DESIGN.md.
+    """Build a validated `PlanarRobot` from the YAML schema of DESIGN.md.
 
     Args:
         config: the parsed mapping (``name``, ``base: {mass, inertia, attach}``,
@@ -111,7 +111,7 @@ def robot_from_mapping(config: Mapping[str, Any], *, source: str = "robot") -> P
 
 
 def robot_to_mapping(robot: PlanarRobot) -> dict[str, Any]:
-    """The YAML mapping of a single design (inverse of :func:`robot_from_mapping`)."""
+    """The YAML mapping of a single design (inverse of `robot_from_mapping`)."""
     if robot.batch_shape:
         raise ValueError("robot_to_mapping takes a single design, not a batch")
     links = []

@@ -1,11 +1,11 @@
 """The spatial family: URDF arms on a free-floating bus (issue 14).
 
-- :mod:`.urdf`: the stdlib-XML URDF reader (fixed and locked joints merged);
-- :mod:`.robot`: the :class:`SpatialRobot` pytree and its validation;
-- :mod:`.schema`: the robot file (``arm:`` key) and :func:`load_spatial_robot`;
-- :mod:`.primitives`: per-posture primitives and closed forms (one design, one posture);
-- :mod:`.family`: :data:`SPATIAL`, the family the generic kernels dispatch on;
-- :mod:`.metrics`: spatial-only batched kernels (rotational/full/dynamic
+- `urdf`: the stdlib-XML URDF reader (fixed and locked joints merged);
+- `robot`: the `SpatialRobot` pytree and its validation;
+- `schema`: the robot file (``arm:`` key) and `load_spatial_robot`;
+- `primitives`: per-posture primitives and closed forms (one design, one posture);
+- `family`: `SPATIAL`, the family the generic kernels dispatch on;
+- `metrics`: spatial-only batched kernels (rotational/full/dynamic
   manipulability, H_m, H*, C(q), rotational and fixed-base ellipsoids).
 """
 

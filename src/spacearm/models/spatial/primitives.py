@@ -3,7 +3,7 @@
 Everything is expressed in the bus frame (base_rotation = identity); the generic layer
 rotates results by the bus attitude R (blkdiag(R, R) for twists, R for points).
 
-Design-only work (:func:`chain_constants`) happens once per design: the mount
+Design-only work (`chain_constants`) happens once per design: the mount
 rotation, each body re-expressed in a frame whose z axis is its joint axis (so a joint
 rotation is Rz(q) and costs a sine, a cosine and 12 products), the bus and root body
 folded into one constant body, subtree masses. The posture work is then one forward
@@ -31,7 +31,7 @@ with P = [p_1 .. p_n], r_t the tip about G, and J_v, J_w the fixed-base Jacobian
 (Umetani & Yoshida 1990, eq. 6, in 3-D). It equals J_M - J_S I_S^-1 I_M for the
 momentum map below; only a 3x3 system is solved.
 
-Base twist coordinates of :func:`momentum_map` and :func:`jacobians`: b = [v; w], the
+Base twist coordinates of `momentum_map` and `jacobians`: b = [v; w], the
 velocity of the bus centroid and the bus angular velocity, bus axes (J* does not
 depend on this choice; ``-I_S^-1 I_M`` is then the bus centroid's twist per joint rate).
 """
@@ -231,7 +231,7 @@ def _second_moment(c: jax.Array) -> jax.Array:
 
 
 def chain_constants(robot: SpatialRobot) -> ChainConstants:
-    """Design-only constants of one (unbatched) design; see :class:`ChainConstants`."""
+    """Design-only constants of one (unbatched) design; see `ChainConstants`."""
     n = robot.n_joints
     frames = jax.vmap(_axis_frame)(jnp.asarray(robot.joint_axis))  # (n, 3, 3) Q_k
     identity = jnp.eye(3, dtype=frames.dtype)
@@ -468,7 +468,7 @@ BLOCK = 2048
 def batched(kernel, axes: int):
     """A batch-last kernel as a function of ``(robot, q (..., n))`` -> ``(..., *result)``.
 
-    Large batches run in blocks of :data:`BLOCK` postures with ``lax.map`` (padded to
+    Large batches run in blocks of `BLOCK` postures with ``lax.map`` (padded to
     whole blocks), so memory stays bounded and each block's arrays stay in cache.
     """
 

@@ -2,7 +2,7 @@
 
 The design is data. Every number (bus inertials, mount pose, joint placements and
 axes, link inertials, tip offset, joint limits) is an array leaf of
-:class:`SpatialRobot`, so ``jit``, ``vmap`` and ``grad`` work over designs and a
+`SpatialRobot`, so ``jit``, ``vmap`` and ``grad`` work over designs and a
 batch of designs is the same pytree with leading axes on every leaf. The topology
 (the number of joints and which are prismatic) is static and part of the tree
 structure. Labels (the robot name, joint names, the URDF path) ride along in the tree
@@ -154,7 +154,7 @@ class SpatialRobot:
 
     @property
     def n_links(self) -> int:
-        """Number of moving bodies, n (one per arm joint; the same as :attr:`n_joints`)."""
+        """Number of moving bodies, n (one per arm joint; the same as `n_joints`)."""
         return len(self.joint_kinds)
 
     @property
@@ -216,7 +216,7 @@ def _joint_label(robot: SpatialRobot, i: int) -> str:
 
 
 def _looks_valid(robot: SpatialRobot, values: dict) -> bool:
-    """Every check of :func:`_check_fields`, vectorized over designs and bodies (NaN fails each);
+    """Every check of `_check_fields`, vectorized over designs and bodies (NaN fails each);
     only a batch that fails pays for the per-design pass that names the culprit."""
     n = robot.n_joints
     batch = values["base_mass"].shape
@@ -264,7 +264,7 @@ def _validate(robot: SpatialRobot) -> None:
 
 
 def _check_fields(robot: SpatialRobot) -> None:
-    """The per-design, per-field checks behind :func:`_validate` (they name the culprit)."""
+    """The per-design, per-field checks behind `_validate` (they name the culprit)."""
     n = robot.n_joints
     if n < 1:
         raise ConfigError("joint_kinds: the arm needs at least one movable joint")
@@ -331,7 +331,7 @@ def robot_from_chain(
     mount_rpy,
     name: str = "robot",
 ) -> SpatialRobot:
-    """Build a validated :class:`SpatialRobot` from a URDF arm and the bus and mount.
+    """Build a validated `SpatialRobot` from a URDF arm and the bus and mount.
 
     Raises:
         ConfigError: naming the field.

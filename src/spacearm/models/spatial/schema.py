@@ -103,7 +103,7 @@ def _urdf_path(source: str, arm: Mapping, base_dir: str) -> str:
 def spatial_robot_from_mapping(
     config: Mapping[str, Any], *, source: str = "robot", base_dir: str | os.PathLike = "."
 ) -> SpatialRobot:
-    """Build a validated :class:`SpatialRobot` from a parsed robot file.
+    """Build a validated `SpatialRobot` from a parsed robot file.
 
     Args:
         config: the mapping (``name``, ``base``, ``mount``, ``arm``).

@@ -23,7 +23,7 @@ principal moments, as Pinocchio does (MuJoCo refuses such files unless told to
 balance the inertia). Negative masses and negative principal moments are always
 refused.
 
-Every problem raises :class:`~spacearm.robot.ConfigError` with one message naming the
+Every problem raises `ConfigError` with one message naming the
 file and the link, joint or attribute.
 """
 
@@ -480,10 +480,10 @@ def read_urdf(
     lock_joints: Mapping[str, float] | None = None,
     inertia_as_written: bool = False,
 ) -> ArmChain:
-    """Read the arm from a URDF file (see :func:`parse_urdf`).
+    """Read the arm from a URDF file (see `parse_urdf`).
 
     Raises:
-        ConfigError: for a missing or unreadable file, and as :func:`parse_urdf`.
+        ConfigError: for a missing or unreadable file, and as `parse_urdf`.
     """
     path = os.fspath(path)
     try:
