@@ -1,5 +1,10 @@
 """Motion of the free-floating arm: the base attitude along joint paths and straight tip paths."""
 
+from .attitude import (
+    geodesic_distance as geodesic_distance,
+    integrate_spatial_joint_path as integrate_spatial_joint_path,
+    spatial_joint_path_history as spatial_joint_path_history,
+)
 from .joint_paths import (
     integrate_joint_path as integrate_joint_path,
     joint_path_base_increments as joint_path_base_increments,
@@ -18,6 +23,9 @@ from .straight_paths import (
 
 __all__ = [
     "integrate_joint_path",
+    "integrate_spatial_joint_path",
+    "spatial_joint_path_history",
+    "geodesic_distance",
     "joint_path_history",
     "joint_path_base_increments",
     "StraightPath",
