@@ -12,7 +12,6 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ..._core.batching import map_leading
 from . import primitives
 from .family import root_gram_determinant
 from .robot import SpatialRobot
@@ -30,7 +29,7 @@ __all__ = [
 
 
 def _map(function, robot, q):
-    return map_leading(lambda p: function(robot, p), q, core_ndims=(1,))
+    return function(robot, q)  # the primitives take any leading batch shape
 
 
 def _rotate_rows(J, base_rotation):
