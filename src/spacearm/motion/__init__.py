@@ -10,6 +10,11 @@ from .joint_paths import (
     joint_path_base_increments as joint_path_base_increments,
     joint_path_history as joint_path_history,
 )
+from .spatial_paths import (
+    SpatialStraightPath as SpatialStraightPath,
+    spatial_go_and_back as spatial_go_and_back,
+    spatial_straight_tip_path as spatial_straight_tip_path,
+)
 from .straight_paths import (
     REASON_JOINT_LIMIT as REASON_JOINT_LIMIT,
     REASON_MAX_LENGTH as REASON_MAX_LENGTH,
@@ -26,6 +31,9 @@ __all__ = [
     "integrate_spatial_joint_path",
     "spatial_joint_path_history",
     "geodesic_distance",
+    "SpatialStraightPath",
+    "spatial_straight_tip_path",
+    "spatial_go_and_back",
     "joint_path_history",
     "joint_path_base_increments",
     "StraightPath",

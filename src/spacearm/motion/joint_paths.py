@@ -24,7 +24,7 @@ from .._core.errors import ConfigError
 from ..models.planar.closed_forms import momentum_inertias, tip_position
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.robot import SpatialRobot
-from .attitude import DEFAULT_ORDER, DEFAULT_STEPS, integrate_spatial_joint_path
+from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = ["integrate_joint_path", "joint_path_history", "joint_path_base_increments"]
@@ -96,7 +96,7 @@ def integrate_joint_path(
     nodes: int = 24,
     pieces: int = 8,
     base_rotation: jax.Array | None = None,
-    steps: int = DEFAULT_STEPS,
+    steps: int | None = None,
     order=DEFAULT_ORDER,
 ):
     """Posture at the end of a joint-space polyline, the base attitude following eq. (5).
@@ -104,7 +104,8 @@ def integrate_joint_path(
     Spatial robots: ``R_end, q_end = integrate_joint_path(robot, q_start,
     joint_waypoints, base_rotation=R0)`` integrates the bus attitude on SO(3)
     (:func:`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` 6th-order
-    Magnus steps per segment, ``order`` the scheme); ``nodes`` and ``pieces`` are
+    Magnus steps per segment, by default from the segment lengths; ``order`` the
+    scheme); ``nodes`` and ``pieces`` are
     planar only. The rest of this docstring is the planar case.
 
     The base rotation is the line integral of -(I_M . dq)/I_S along the straight
