@@ -40,8 +40,8 @@ def test_three_rotation_components_to_1e_9(arm3):
 def test_public_dispatch_and_limits(arm3):
     q0 = np.array([0.2, 0.6, -1.1])
     target = np.asarray(attitude.expm(jnp.array([0.0, 0.03, -0.02])))
-    tight = arm3.replace(joint_lower=np.array([-0.3, 0.2, -1.6]), joint_upper=np.array([0.7, 1.0, -0.6]))
-    path = sa.plan_reorientation(tight, q0, target, **{k: getattr(FAST, k) for k in ("segments", "loop_counts", "seeds", "adam_steps")})
+    tight = arm3.replace(joint_lower=np.array([-0.6, -0.2, -1.9]), joint_upper=np.array([1.0, 1.4, -0.3]))
+    path = sa.plan_reorientation(tight, q0, target, **{k: getattr(FAST, k) for k in ("segments", "seeds", "adam_steps")})
     assert np.all(path >= np.asarray(tight.joint_lower)) and np.all(path <= np.asarray(tight.joint_upper))
     R_end, _ = sa.integrate_joint_path(tight, q0, path, steps=64)
     assert float(attitude.geodesic_distance(target, R_end)) < 1e-9
