@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 
 from .._core.errors import ConfigError
-from ..kinematics import generalized_jacobian, tip_position
+from ..kinematics import generalized_jacobian, square_determinant, tip_position
 from ..models.planar.closed_forms import robot_frame_tip_position
 from ..models.planar.robot import PlanarRobot
 
@@ -53,8 +53,7 @@ class SingularSet:
 
 def _det_generalized_jacobian(robot, phi1, phi2):
     phi = jnp.stack(jnp.broadcast_arrays(jnp.zeros_like(phi1), phi1, phi2), axis=-1)
-    J = generalized_jacobian(robot, phi)
-    return J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    return square_determinant(generalized_jacobian(robot, phi))
 
 
 @functools.partial(jax.jit, static_argnames=("n_phi1", "n_phi2", "bisection_steps", "max_roots"))

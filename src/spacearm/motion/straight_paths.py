@@ -52,7 +52,7 @@ from ..kinematics import (
 )
 from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
-from . import dop853
+from .dop853 import error_norm, rk_step
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = [
@@ -203,10 +203,10 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, *, max_steps, table
         # The error controller's step bounds the event-limited step (either sign).
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
-    y_new, slopes = dop853.rk_step(field, y, h, tableau, return_slopes=True)
+    y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True)
     f_new = field(y_new)
     if adaptive:
-        error = dop853.error_norm(h, slopes, f_new, y, y_new, rtol)
+        error = error_norm(h, slopes, f_new, y, y_new, rtol)
         accept = error <= 1.0
         factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
         limited = jnp.abs(h) < 0.999 * h_control
@@ -394,8 +394,9 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
     h = joint_arc / (intervals * substeps)
 
     def advance(y, _):
-        for _ in range(substeps):
-            y = dop853.rk_step(field, y, h, tableau)
+        # A loop over the substeps rather than an unrolled body: the DOP853 stages are
+        # already unrolled inside one step, so unrolling the substeps only lengthens compiles.
+        y = jax.lax.fori_loop(0, substeps, lambda _, y: rk_step(field, y, h, tableau), y)
         return y, y
 
     y0 = jnp.concatenate([phi_start, jnp.zeros((1,), dtype)])

@@ -157,8 +157,8 @@ def _tip_columns(coeffs: DesignCoefficients, c, s):
     return xs, ys
 
 
-def _momentum_rows(coeffs: DesignCoefficients, c, s):
-    """Reverse sums H_j = sum_{l>=j} h_l: H_0 = I_S and H_1..H_n = I_M (eq. 5)."""
+def _momentum_terms(coeffs: DesignCoefficients, c, s):
+    """h_l = I_l + sum_k W_kl cos(theta_k - theta_l): the angular momentum per absolute link rate."""
     W, inertia = coeffs.inertia_coupling, coeffs.inertia
     count = len(c)
     h = []
@@ -169,6 +169,13 @@ def _momentum_rows(coeffs: DesignCoefficients, c, s):
                 # cos(theta_k - theta_l); W is symmetric, so each pair is used twice.
                 total = total + W[..., k, l] * (c[k] * c[l] + s[k] * s[l])
         h.append(total)
+    return h
+
+
+def _momentum_rows(coeffs: DesignCoefficients, c, s):
+    """Reverse sums H_j = sum_{l>=j} h_l: H_0 = I_S and H_1..H_n = I_M (eq. 5)."""
+    h = _momentum_terms(coeffs, c, s)
+    count = len(c)
     rows, acc = [None] * count, 0.0
     for j in reversed(range(count)):
         acc = acc + h[j]
@@ -176,13 +183,20 @@ def _momentum_rows(coeffs: DesignCoefficients, c, s):
     return rows
 
 
-def _generalized_columns(coeffs: DesignCoefficients, c, s):
-    """Columns of J* = J_M - J_S I_M / I_S (eq. 6) as lists (x_j, y_j), j = 1..n."""
+def _generalized_columns_and_momentum(coeffs: DesignCoefficients, c, s):
+    """Columns of J* = J_M - J_S I_M / I_S (eq. 6) as lists (x_j, y_j), j = 1..n, and the
+    momentum rows H_0 = I_S, H_1..H_n = I_M they were built from (eq. 5)."""
     xs, ys = _tip_columns(coeffs, c, s)
     H = _momentum_rows(coeffs, c, s)
     inv_is = 1.0 / H[0]
     gx = [xs[j] - xs[0] * (H[j] * inv_is) for j in range(1, len(c))]
     gy = [ys[j] - ys[0] * (H[j] * inv_is) for j in range(1, len(c))]
+    return gx, gy, H
+
+
+def _generalized_columns(coeffs: DesignCoefficients, c, s):
+    """Columns of J* = J_M - J_S I_M / I_S (eq. 6) as lists (x_j, y_j), j = 1..n."""
+    gx, gy, _ = _generalized_columns_and_momentum(coeffs, c, s)
     return gx, gy
 
 
@@ -461,12 +475,7 @@ def straight_path_field(robot: PlanarRobot, direction: jax.Array, sign0):
 
     def field(y):
         c, s = _unit_vectors(y[: n + 1])
-        xs, ys = _tip_columns(coeffs, c, s)
-        H = _momentum_rows(coeffs, c, s)
-        inv_is = 1.0 / H[0]
-        # Columns of J* = J_M - J_S I_M / I_S (eq. 6), inertial frame.
-        gx = [xs[j] - xs[0] * (H[j] * inv_is) for j in range(1, n + 1)]
-        gy = [ys[j] - ys[0] * (H[j] * inv_is) for j in range(1, n + 1)]
+        gx, gy, H = _generalized_columns_and_momentum(coeffs, c, s)
         if n == 2:
             det = gx[0] * gy[1] - gx[1] * gy[0]
             v = [sign0 * (gy[1] * dx - gx[1] * dy), sign0 * (-gy[0] * dx + gx[0] * dy)]
@@ -483,7 +492,7 @@ def straight_path_field(robot: PlanarRobot, direction: jax.Array, sign0):
         positive = norm_sq > 0
         inv_norm = jnp.where(positive, 1.0 / jnp.sqrt(jnp.where(positive, norm_sq, 1.0)), 0.0)
         dq = [vj * inv_norm for vj in v]
-        dphi0 = -sum(H[j + 1] * dq[j] for j in range(n)) * inv_is  # eq. (5)
+        dphi0 = -sum(H[j + 1] * dq[j] for j in range(n)) / H[0]  # eq. (5)
         return jnp.stack([dphi0] + dq + [rate * inv_norm])
 
     return field

@@ -11,7 +11,18 @@ import jax
 import jax.numpy as jnp
 
 from ..family import RobotFamily
-from . import closed_forms
+from .closed_forms import (
+    arm_jacobian,
+    base_jacobian,
+    base_rate,
+    fixed_base_jacobian,
+    fixed_base_manipulability,
+    generalized_jacobian,
+    manipulability,
+    momentum_inertias,
+    straight_path_field,
+    tip_position,
+)
 from .robot import PlanarRobot
 
 __all__ = ["PlanarFamily", "PLANAR"]
@@ -26,30 +37,30 @@ class PlanarFamily(RobotFamily):
     posture_offset = 1
     rotates_with_base = False
     fast_paths = {
-        "tip_position": closed_forms.tip_position,
-        "generalized_jacobian": closed_forms.generalized_jacobian,
-        "manipulability": closed_forms.manipulability,
-        "base_rate": closed_forms.base_rate,
-        "fixed_base_jacobian": closed_forms.fixed_base_jacobian,
-        "fixed_base_manipulability": closed_forms.fixed_base_manipulability,
-        "straight_path_field": closed_forms.straight_path_field,
+        "tip_position": tip_position,
+        "generalized_jacobian": generalized_jacobian,
+        "manipulability": manipulability,
+        "base_rate": base_rate,
+        "fixed_base_jacobian": fixed_base_jacobian,
+        "fixed_base_manipulability": fixed_base_manipulability,
+        "straight_path_field": straight_path_field,
     }
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links
 
     def tip(self, robot: PlanarRobot, posture: jax.Array) -> jax.Array:
-        return closed_forms.tip_position(robot, posture)
+        return tip_position(robot, posture)
 
     def jacobians(self, robot: PlanarRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return closed_forms.base_jacobian(robot, posture)[:, None], closed_forms.arm_jacobian(robot, posture)
+        return base_jacobian(robot, posture)[:, None], arm_jacobian(robot, posture)
 
     def momentum_map(self, robot: PlanarRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
-        i_s, i_m = closed_forms.momentum_inertias(robot, posture)
+        i_s, i_m = momentum_inertias(robot, posture)
         return jnp.reshape(i_s, (1, 1)), i_m[None, :]
 
     def fixed_base_jacobian(self, robot: PlanarRobot, joints: jax.Array) -> jax.Array:
-        return closed_forms.fixed_base_jacobian(robot, joints)
+        return fixed_base_jacobian(robot, joints)
 
 
 PLANAR = PlanarFamily()
