@@ -15,11 +15,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import jax
 import jax.numpy as jnp
+import matplotlib.pyplot as plt
 import numpy as np
 
-from .. import results
+from ..io import save_figure
 from ..models import load_robot
 from ..models.spatial import primitives
 from ..motion.attitude import log, spatial_joint_path_history
@@ -30,17 +30,7 @@ CONFIG = Path(__file__).resolve().parents[3] / "configs" / "ur5-smallsat.yaml"
 LOOP_START = np.array([0.3, -1.2, 1.6, -0.9, 1.2, 0.2])
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _robot():
-    jax.config.update("jax_enable_x64", True)
     if not CONFIG.exists():
         raise FileNotFoundError(f"{CONFIG}: the spatial figures use the repository's configs/ur5-smallsat.yaml")
     return load_robot(os.fspath(CONFIG))
@@ -104,7 +94,6 @@ def fig_spatial_loop(out_dir: Path) -> list[Path]:
     """The UR5 and its bus along a closed joint loop (inertial axes, about the system centroid)."""
     robot = _robot()
     R, q = loop_history(robot)
-    plt = _pyplot()
     fig = plt.figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(projection="3d")
     picks = np.linspace(0, len(q) - 1, 7).astype(int)
@@ -121,7 +110,7 @@ def fig_spatial_loop(out_dir: Path) -> list[Path]:
     ax.set_title(f"UR5 on a 500 kg bus: closed joint loop turns the bus by {np.degrees(angle):.2f} deg")
     _equal(ax, np.vstack(everything + [tips]))
     ax.legend(loc="upper left", fontsize=8)
-    path = results.save_figure(fig, Path(out_dir) / "spatial_loop.png", dpi=130, bbox_inches="tight")
+    path = save_figure(fig, Path(out_dir) / "spatial_loop.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
     return [path]
 
@@ -133,7 +122,6 @@ def fig_spatial_attitude(out_dir: Path) -> list[Path]:
     R, q = loop_history(robot)
     vectors = np.asarray(log(jnp.asarray(np.swapaxes(R[:1], -1, -2) @ R)))
     s = np.linspace(0.0, 1.0, len(R))
-    plt = _pyplot()
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
     for i, name in enumerate("xyz"):
         top.plot(s, np.degrees(vectors[:, i]), label=f"bus {name}")
@@ -146,7 +134,7 @@ def fig_spatial_attitude(out_dir: Path) -> list[Path]:
     bottom.set_ylabel("joint, rad")
     bottom.legend(fontsize=7, ncol=3)
     fig.suptitle("Bus attitude along a closed joint loop (6th-order Magnus on SO(3))")
-    path = results.save_figure(fig, Path(out_dir) / "spatial_attitude.png", dpi=130, bbox_inches="tight")
+    path = save_figure(fig, Path(out_dir) / "spatial_attitude.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
     return [path]
 
@@ -161,7 +149,6 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     samples = spatial_straight_tip_path(robot, np.broadcast_to(q0, (25, 6)), np.broadcast_to(direction, (25, 3)), lengths)
     q, R = np.asarray(samples.end_joints), np.asarray(samples.end_rotation)
     tips = np.asarray(samples.end_tip)
-    plt = _pyplot()
     fig = plt.figure(figsize=(11, 5))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     _draw(ax, robot, q[0], R[0], "C0", label="start")
@@ -178,6 +165,6 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     right.set_xlabel("tip distance along the line, m")
     right.set_ylabel("bus rotation log(R0^T R), deg")
     right.legend(fontsize=8)
-    path = results.save_figure(fig, Path(out_dir) / "spatial_straight.png", dpi=130, bbox_inches="tight")
+    path = save_figure(fig, Path(out_dir) / "spatial_straight.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
     return [path]

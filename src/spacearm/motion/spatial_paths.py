@@ -37,7 +37,7 @@ import numpy as np
 from .._core.errors import ConfigError
 from ..kinematics import square_determinant, straight_path_rates
 from ..models.spatial import primitives
-from ..models.spatial.family import root_gram_determinant
+from .._core.linalg import gram_root_determinant
 from ..models.spatial.robot import SpatialRobot
 from . import dop853
 from .attitude import hat
@@ -192,7 +192,7 @@ def _one_path(robot, q0, R0, direction, max_length, max_step, tol, rtol, sing_ra
         end_tip=R @ primitives.tip(robot, q),
         length=y[-1],
         reason=lane["reason"],
-        fixed_manipulability=root_gram_determinant(fixed),
+        fixed_manipulability=gram_root_determinant(fixed),
         joint_arc=lane["arc"],
         steps=lane["count"],
     )
