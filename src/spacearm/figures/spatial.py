@@ -39,9 +39,10 @@ def _robot():
 def arm_points(robot, q, rotation) -> tuple[np.ndarray, np.ndarray]:
     """Joint origins then tip ``(n + 1, 3)``, and the bus centroid ``(3,)``, inertial axes
     about the system centroid, m, for one posture ``q (n,)`` and bus attitude ``rotation``."""
-    state = primitives._chain_pass(robot, jnp.asarray(q, float))
+    state = primitives._chain_pass(robot, jnp.asarray(q, float))  # one posture: (n,) batch-last
     centroid = np.array([float(x) for x in state.centroid])
-    chain = np.array([[float(x) for x in o] for o in state.origins] + [[float(x) for x in state.tip]])
+    origins = np.stack([np.asarray(c, float) for c in state.origins], axis=-1)  # (n, 3): joint origins
+    chain = np.vstack([origins, [[float(x) for x in state.tip]]])
     bus = np.asarray(robot.base_com, float)
     R = np.asarray(rotation, float)
     return (chain - centroid) @ R.T, R @ (bus - centroid)
@@ -103,7 +104,8 @@ def fig_spatial_loop(out_dir: Path) -> list[Path]:
         color = cmap(i / (len(picks) - 1))
         _draw(ax, robot, q[k], R[k], color, alpha=0.9 if k in (0, len(q) - 1) else 0.45,
               label="start" if k == 0 else ("end (joints back, bus turned)" if k == len(q) - 1 else None))
-        everything.append(arm_points(robot, q[k], R[k])[0])
+        chain, bus = arm_points(robot, q[k], R[k])
+        everything.append(np.vstack([chain, bus]))
     tips = np.array([arm_points(robot, qk, Rk)[0][-1] for qk, Rk in zip(q, R)])
     ax.plot(*tips.T, color="C3", lw=1.0, label="tip")
     angle = float(np.linalg.norm(np.asarray(log(jnp.asarray(R[0].T @ R[-1])))))
@@ -154,8 +156,9 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     _draw(ax, robot, q[0], R[0], "C0", label="start")
     _draw(ax, robot, q[-1], R[-1], "C3", label="end")
     ax.plot(*tips.T, "k-", lw=1.5, label="tip path")
-    _equal(ax, np.vstack([arm_points(robot, q[0], R[0])[0], arm_points(robot, q[-1], R[-1])[0], tips]))
-    reason = {0: "J*_v loses rank", 1: "0.6 m reached", 2: "joint limit", 3: "step budget"}[int(end.reason)]
+    ends = [np.vstack(arm_points(robot, q[k], R[k])) for k in (0, -1)]
+    _equal(ax, np.vstack(ends + [tips]))
+    reason = {0: "J*_v loses rank", 1: "0.6 m reached", 2: "joint limit", 3: "approaching rank loss"}[int(end.reason)]
     ax.set_title(f"straight tip path, {float(end.length):.3f} m ({reason})", fontsize=10)
     ax.legend(fontsize=8)
     right = fig.add_subplot(1, 2, 2)

@@ -216,7 +216,7 @@ def spatial_straight_tip_path(
     max_step: float = 0.1,
     tol: float = 1e-11,
     rtol: float = 1e-12,
-    sing_rate: float = 1e-10,
+    sing_rate: float = 1e-6,
     max_steps: int = 4000,
 ) -> SpatialStraightPath:
     """Move the tip along a straight inertial line until J*_v loses rank (or a limit).
@@ -231,7 +231,9 @@ def spatial_straight_tip_path(
         tol: the events are located to this joint arc length, rad.
         rtol: DOP853 relative tolerance.
         sing_rate: for n > 3, the path also ends (singular) once the tip advances less
-            than this per radian of joint motion, m/rad.
+            than this per radian of joint motion, m/rad (the minimum-norm flow of a
+            redundant arm may approach rank loss only asymptotically; some UR5 paths
+            still spend the step budget on that approach, reason 3).
         max_steps: step budget per path (static).
 
     Returns:
@@ -269,8 +271,11 @@ def spatial_go_and_back(
 ) -> tuple[SpatialStraightPath, SpatialStraightPath]:
     """The tip out along ``direction`` by ``length`` and straight back (Fig. 9 in 3-D).
 
-    The tip returns to its start (about the system centroid), but the joints and the
-    bus attitude in general do not: the motion is nonholonomic.
+    The field of the straight path is odd in the direction (the regularized rates of
+    :func:`spacearm.kinematics.straight_path_rates` and the bus rate both change sign
+    with d), so away from singular ends the way back retraces the way out: joints and
+    bus attitude return to the start up to the integration tolerance. Where the way out
+    ends at a singularity (``out.reason == 0``) the way back may leave on another branch.
 
     Returns:
         ``(out, back)``: the two :class:`SpatialStraightPath`; ``back.length`` equals
