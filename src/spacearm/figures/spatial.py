@@ -74,7 +74,7 @@ def _equal(ax, points):
 
 
 def demo_loop(segments: int = 16) -> np.ndarray:
-    """``(segments + 1, n)`` a closed loop through :data:`LOOP_START` (shoulder and elbow circle, wrist nod)."""
+    """``(segments + 1, n)`` a closed loop through :data:`LOOP_START` (pan, shoulder and elbow; wrists still)."""
     s = np.linspace(0.0, 1.0, segments + 1)
     loop = np.repeat(LOOP_START[None], segments + 1, axis=0)
     loop[:, 1] += 0.6 * (np.cos(2 * np.pi * s) - 1.0)
