@@ -171,3 +171,51 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     path = save_figure(fig, Path(out_dir) / "spatial_straight.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
     return [path]
+
+
+def draw_spatial_reach(robot, q_start, plan, path, *, base_rotation=None, samples: int = 16) -> Path:
+    """Draw a :class:`~spacearm.planning.spatial_reach.SpatialReachPlan` in 3-D (for ``spacearm reach``).
+
+    The arm at the start, after the bus-turning loop (joints back at q0, bus turned) and
+    at the end; the tip along the loop and along the final straight path (sampled by
+    re-running the straight path to ``samples`` intermediate lengths, one batch).
+
+    Args:
+        q_start: ``(n,)`` joints at the start. plan: the plan. path: the PNG to write.
+        base_rotation: ``(3, 3)`` bus attitude at the start (default identity).
+    """
+    R0 = np.eye(3) if base_rotation is None else np.asarray(base_rotation, float)
+    q0 = np.asarray(q_start, float)
+    fig = plt.figure(figsize=(7.5, 6.5))
+    ax = fig.add_subplot(projection="3d")
+    points = []
+    _draw(ax, robot, q0, R0, "C0", label="start")
+    points.append(np.vstack(arm_points(robot, q0, R0)))
+    R_after = R0
+    if len(plan.loop_waypoints) > 1:
+        R_loop, q_loop = spatial_joint_path_history(robot, q0, plan.loop_waypoints, base_rotation=R0, samples_per_segment=4, steps=1)
+        R_loop, q_loop = np.asarray(R_loop), np.asarray(q_loop)
+        loop_tips = np.array([arm_points(robot, q, R)[0][-1] for q, R in zip(q_loop, R_loop)])
+        ax.plot(*loop_tips.T, color="C2", lw=0.8, label="tip along the loop")
+        R_after = R_loop[-1]
+        _draw(ax, robot, q0, R_after, "C2", alpha=0.7, label="after the loop")
+        points += [loop_tips, np.vstack(arm_points(robot, q0, R_after))]
+    start_tip = arm_points(robot, q0, R_after)[0][-1]
+    offset = np.asarray(plan.end_tip) - start_tip
+    lengths = np.linspace(0.0, float(plan.straight_length), samples)
+    direction = offset / max(float(np.linalg.norm(offset)), 1e-300)
+    sampled = spatial_straight_tip_path(
+        robot, np.broadcast_to(q0, (samples, q0.size)), np.broadcast_to(direction, (samples, 3)), lengths,
+        base_rotation=np.broadcast_to(R_after, (samples, 3, 3)),
+    )
+    tips = np.asarray(sampled.end_tip)
+    ax.plot(*tips.T, "k-", lw=1.5, label="straight tip path")
+    _draw(ax, robot, np.asarray(plan.end_joints), np.asarray(plan.end_rotation), "C3", label="end")
+    points += [tips, np.vstack(arm_points(robot, plan.end_joints, plan.end_rotation))]
+    ax.scatter(*np.asarray(plan.end_tip), color="C3", marker="x", s=40)
+    ax.set_title(f"reach ({plan.mode}): tip error {plan.error:.1e} m", fontsize=10)
+    _equal(ax, np.vstack(points))
+    ax.legend(fontsize=8, loc="upper left")
+    written = save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return written
