@@ -3,6 +3,7 @@ over the naive model of tests/reference.py, momentum conservation, loop reversal
 convergence, and the singular ends of straight tip paths."""
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
@@ -308,3 +309,21 @@ def test_go_and_back_returns_the_base_and_reproduces_fig9_claim(table1):
     assert np.max(np.abs(tips[:, :, 0] - tips[:, :1, 0])) < 1e-9  # along Y
     peak = np.max(np.abs(history[:, :, 0]), axis=-1)
     assert peak[0] > 3 * peak[1] > 0  # measured 6.99 deg vs 1.41 deg for 0.2 m
+
+
+def test_default_joint_path_rule_sizes_its_panels_from_the_longest_segment(table1):
+    """The default rule (24 nodes per pi/2 of joint excursion) reaches rounding level on
+    short and on 4 pi segments, and under jit (traced waypoints: 8 panels)."""
+    from spacearm.motion.joint_paths import _default_pieces
+
+    rng = np.random.default_rng(3)
+    phi0 = jnp.array([0.0, -1.0, 2.0])
+    for span in (0.5, 4 * np.pi):
+        waypoints = jnp.concatenate([phi0[None, 1:], phi0[1:] + rng.uniform(-span, span, (3, 2))])
+        converged = sa.integrate_joint_path(table1, phi0, waypoints, nodes=40, pieces=64)
+        default = sa.integrate_joint_path(table1, phi0, waypoints)
+        np.testing.assert_allclose(default, converged, atol=1e-13)
+        traced = jax.jit(lambda w: sa.integrate_joint_path(table1, phi0, w))(waypoints)
+        np.testing.assert_allclose(traced, converged, atol=1e-13 if span < 4 else 1e-12)
+    assert _default_pieces(np.zeros((2, 2)) + [[0, 0], [1.5, 0]], None) == 1
+    assert _default_pieces(np.zeros((2, 2)) + [[0, 0], [4 * np.pi, 0]], None) == 8

@@ -15,6 +15,7 @@ exact to rounding for these analytic integrands. Written for one path and batche
 from __future__ import annotations
 
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
@@ -58,6 +59,27 @@ def _segment_integrals(robot: PlanarRobot, starts: jax.Array, steps: jax.Array, 
     return jnp.sum(integrand * weights, axis=-1)
 
 
+# Widest panel of the default rule, in rad of the largest joint excursion: 24 nodes per
+# pi/2 reach rounding level (docs/explanation/integrators.md: Table 1 and random 2-,
+# 3- and 4-link designs, segments up to 4 pi per joint; 16 nodes per pi/2 leave 7e-12
+# on 3-link designs). This is the panel width of the former fixed default, 8 panels of
+# 24 nodes, on 4 pi segments; segments up to pi/2 now take one panel (8x cheaper).
+_PANEL_WIDTH = 0.5 * np.pi
+_TRACED_PIECES = 8  # traced waypoints: the longest segment is unknown; 4 pi per joint
+
+
+def _default_pieces(joint_waypoints, pieces):
+    """``pieces`` if given; else enough panels that none spans more than pi/2 of any joint."""
+    if pieces is not None:
+        return int(pieces)
+    if is_traced(joint_waypoints):
+        return _TRACED_PIECES
+    longest = float(np.max(np.abs(np.diff(np.asarray(joint_waypoints), axis=-2)), initial=0.0))
+    if not np.isfinite(longest):
+        return _TRACED_PIECES
+    return max(1, math.ceil(longest / _PANEL_WIDTH - 1e-9))
+
+
 @functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
 def _joint_path_flat(robot, phi_start, waypoints, robot_batched, nodes, pieces):
     t, w = _composite_gauss(nodes, pieces)
@@ -94,7 +116,7 @@ def integrate_joint_path(
     joint_waypoints: jax.Array,
     *,
     nodes: int = 24,
-    pieces: int = 8,
+    pieces: int | None = None,
     base_rotation: jax.Array | None = None,
     steps: int | None = None,
     order=DEFAULT_ORDER,
@@ -105,21 +127,24 @@ def integrate_joint_path(
     joint_waypoints, base_rotation=R0)`` integrates the bus attitude on SO(3)
     (:func:`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` 6th-order
     Magnus steps per segment, by default from the segment lengths; ``order`` the
-    scheme); ``nodes`` and ``pieces`` are
-    planar only. The rest of this docstring is the planar case.
+    scheme); ``nodes`` and ``pieces`` are planar only. The rest of this docstring is the planar case.
 
     The base rotation is the line integral of -(I_M . dq)/I_S along the straight
     joint-space segments (Umetani & Yoshida 1990, eq. 5, zero momentum), evaluated with
     a composite Gauss-Legendre rule per segment (``pieces`` panels of ``nodes`` points).
-    The integrand is analytic, so the defaults reach rounding level (about 1e-13 rad for
-    segments up to a full turn of every joint; see tests/test_motion.py).
+    The integrand is analytic, so the default reaches rounding level (a few 1e-15 rad
+    for segments up to two full turns of every joint; see tests/test_motion.py): by
+    default each segment gets ceil(e / (pi/2)) panels, e the largest joint excursion of
+    any segment in the batch (8 when the waypoints are traced), so short segments cost
+    less (1 panel, 24 points, up to pi/2 rad per joint).
 
     Args:
         robot: the design, or a batch of designs broadcasting with the path batch.
         phi_start: ``(..., n+1)`` initial posture [phi0, phi1..phin], rad.
         joint_waypoints: ``(..., k, n)`` joint angles joined by straight segments, rad;
             the first row equals ``phi_start[..., 1:]``.
-        nodes, pieces: quadrature points per panel and panels per segment (static).
+        nodes: quadrature points per panel (static).
+        pieces: panels per segment (static; ``None``: from the longest segment, as above).
 
     Returns:
         ``(..., n+1)`` posture at the last waypoint, base attitude included, rad.
@@ -131,6 +156,7 @@ def integrate_joint_path(
     if base_rotation is not None:
         raise TypeError("base_rotation applies to spatial robots; a planar posture carries its base angle phi0")
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
+    pieces = _default_pieces(joint_waypoints, pieces)
     batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
         robot, [(phi_start, 1), (joint_waypoints, 2)]
     )
@@ -150,12 +176,14 @@ def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
 
 
 def joint_path_base_increments(
-    robot: PlanarRobot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int = 8
+    robot: PlanarRobot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int | None = None
 ) -> jax.Array:
     """Base rotation over each segment of a joint polyline (eq. 5).
 
     Args:
         joint_waypoints: ``(..., k, n)`` joint angles, rad.
+        nodes: quadrature points per panel, as in :func:`integrate_joint_path`.
+        pieces: panels per segment, as in :func:`integrate_joint_path`.
 
     Returns:
         ``(..., k-1)`` increments of phi0, rad.
@@ -164,6 +192,7 @@ def joint_path_base_increments(
     check_arm_axis(robot, "joint_waypoints", joint_waypoints, robot.n_links)
     if joint_waypoints.ndim < 2 or joint_waypoints.shape[-2] < 2:
         raise ConfigError(f"joint_waypoints: expected shape (..., k, n) with k >= 2, got {joint_waypoints.shape}")
+    pieces = _default_pieces(joint_waypoints, pieces)
     batch, flat_robot, batched, (wp_flat,) = flatten_batch(robot, [(joint_waypoints, 2)])
     out = _increments_flat(flat_robot, wp_flat, batched, nodes, pieces)
     return out.reshape(batch + (joint_waypoints.shape[-2] - 1,))

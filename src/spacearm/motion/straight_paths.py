@@ -26,8 +26,9 @@ where ds/dsigma = 0, i.e. where the tip stops advancing along the line. For n > 
 minimum-norm rates J*^T (J* J*^T)^-1 d are regularized the same way with
 adj(J* J*^T). The scheme is the 8th-order Dormand-Prince method (DOP853) with its
 embedded error control, written out in ``lax.while_loop`` so that the event steps, the
-step control and the batch share one compiled loop; see README "Motion" for the
-measured comparison with diffrax and with fixed-step RK4.
+step control and the batch share one compiled loop; see
+docs/explanation/integrators.md for the measured comparison with diffrax, SciPy and
+fixed-step RK4.
 """
 
 from __future__ import annotations
