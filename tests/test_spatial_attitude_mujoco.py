@@ -92,6 +92,7 @@ def simulate(robot, q0, u, v, amplitude=0.8, duration=4.0, dt=1e-3):
     return np.array(samples), R, momentum
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_ur5_loop_matches_mujoco():
     robot = sa.load_robot(CONFIG)
     rng = np.random.default_rng(3)

@@ -18,6 +18,7 @@ def ur5():
     return sa.load_robot(os.path.join(CONFIGS, "ur5-smallsat.yaml"))
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_straight_paths_follow_the_line_to_a_singularity(ur5):
     rng = np.random.default_rng(0)
     q0 = rng.uniform(-1.5, 1.5, (3, 6))
@@ -40,6 +41,7 @@ def test_straight_paths_follow_the_line_to_a_singularity(ur5):
     assert np.all(np.asarray(attitude.geodesic_distance(R0, R)) > 1e-4)
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_go_and_back_retraces_the_way_out(ur5):
     q0 = np.array([0.3, -1.2, 1.6, -0.9, 1.2, 0.2])
     out, back = spatial_go_and_back(ur5, q0, np.array([0.3, -0.5, 0.8]), 0.2)
@@ -66,6 +68,7 @@ def test_reaction_null_space_and_disturbance_map(ur5):
     assert np.all(np.asarray(reaction.disturbance(ur5, q, u)) <= np.asarray(m.largest) * (1 + 1e-12))
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_reaction_free_tip_motion_keeps_the_bus_still(ur5):
     rng = np.random.default_rng(0)
     q0, d = rng.uniform(-1.5, 1.5, (3, 6))[:2], rng.normal(size=(3, 3))[:2]

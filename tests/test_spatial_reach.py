@@ -3,6 +3,7 @@
 import os
 
 import numpy as np
+import pytest
 
 import spacearm as sa
 from spacearm.planning import SpatialLoopSettings
@@ -10,6 +11,7 @@ from spacearm.planning import SpatialLoopSettings
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_straight_then_reorient_first():
     robot = sa.load_robot(os.path.join(CONFIGS, "arm3dof-100kg.yaml"))
     q0 = np.array([0.2, 0.6, -1.1])

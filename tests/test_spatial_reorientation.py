@@ -19,6 +19,7 @@ def arm3():
     return sa.load_robot(os.path.join(CONFIGS, "arm3dof-100kg.yaml"))
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_three_rotation_components_to_1e_9(arm3):
     q0 = np.array([0.2, 0.6, -1.1])
     lower, upper = np.asarray(arm3.joint_lower), np.asarray(arm3.joint_upper)
@@ -37,6 +38,7 @@ def test_three_rotation_components_to_1e_9(arm3):
         assert plan.rotation_error < 1e-9
 
 
+@pytest.mark.slow  # compiles a DOP853 loop or the planner: minutes on 2 shared cores
 def test_public_dispatch_and_limits(arm3):
     q0 = np.array([0.2, 0.6, -1.1])
     target = np.asarray(attitude.expm(jnp.array([0.0, 0.03, -0.02])))
