@@ -31,6 +31,7 @@ from .._core.errors import ConfigError
 from ..analysis import maximum_reachable_inner_radius, maximum_reachable_radius
 from ..kinematics import tip_position
 from ..models.planar.robot import PlanarRobot
+from ..models.spatial.robot import SpatialRobot
 from ..motion import (
     REASON_MAX_LENGTH,
     compile_straight_tip_path_history,
@@ -45,6 +46,7 @@ from .reorientation import (
     compile_loop_optimizer,
     plan_reorientation_details,
 )
+from .spatial_reach import plan_spatial_reach
 
 __all__ = ["ReachPlan", "plan_reach", "reachable_bounds", "MODE_STRAIGHT", "MODE_REORIENT", "MODE_REPOSITION",
            "PHASE_REPOSITION", "PHASE_LOOP", "PHASE_STRAIGHT"]
@@ -203,7 +205,7 @@ def _reposition_joints(robot: PlanarRobot, q0: np.ndarray, radius: float) -> np.
 
 
 def plan_reach(
-    robot: PlanarRobot,
+    robot: PlanarRobot | SpatialRobot,
     phi_start,
     target,
     *,
@@ -212,8 +214,14 @@ def plan_reach(
     tolerance: float | None = None,
     settings: LoopSettings = LoopSettings(),
     modes: tuple[str, ...] = (MODE_STRAIGHT, MODE_REORIENT, MODE_REPOSITION),
+    **spatial_options,
 ) -> ReachPlan:
     """Plan how the tip reaches an inertial target from a posture (sec. 3.2, points B and C).
+
+    Spatial robots: ``plan_reach(robot, q_start, target_xyz, base_rotation=R0)`` returns a
+    :class:`~spacearm.planning.spatial_reach.SpatialReachPlan`
+    (:func:`~spacearm.planning.spatial_reach.plan_spatial_reach`; its keyword options
+    pass through). The rest of this docstring is the planar case.
 
     1. Point B: if the straight tip path towards the target (J* inverted, base
        following eq. 5) gets there before a singularity of J* or a joint limit, that
@@ -247,6 +255,8 @@ def plan_reach(
         ConfigError: bad input; the target outside the Maximum Reachable space (radius
             K0 + .. + Kn about the system centroid); or no plan found.
     """
+    if isinstance(robot, SpatialRobot):  # 3-D: straight, or turn the bus first (planning/spatial_reach.py)
+        return plan_spatial_reach(robot, phi_start, target, **spatial_options)
     phi = check_posture(robot, phi_start)
     if tolerance is None:
         tolerance = 1e-6 if jax.config.jax_enable_x64 else 1e-3
