@@ -29,6 +29,15 @@ from .workspaces import (
     workspace_relations as workspace_relations,
     maximum_reachable_radii as maximum_reachable_radii,
 )
+from .reaction import (
+    reaction_null_space as reaction_null_space,
+    disturbance as disturbance,
+    disturbance_map as disturbance_map,
+    DisturbanceMap as DisturbanceMap,
+    ReactionFreePath as ReactionFreePath,
+    reaction_free_rates as reaction_free_rates,
+    reaction_free_tip_path as reaction_free_tip_path,
+)
 from .singularities import (
     SingularSet as SingularSet,
     dynamic_singularities as dynamic_singularities,
@@ -48,6 +57,14 @@ from .straight_workspace import (
 )
 
 __all__ = [
+    'reaction_null_space',
+    'disturbance',
+    'disturbance_map',
+    'DisturbanceMap',
+    'ReactionFreePath',
+    'reaction_free_rates',
+    'reaction_free_tip_path',
+
     "average_manipulability",
     "fixed_base_average_manipulability",
     "check_average_options",

@@ -1,4 +1,9 @@
-"""``spacearm reach ROBOT --from PHI0,..,PHIn --to X,Y``: plan how the tip reaches a point."""
+"""``spacearm reach ROBOT --from ... --to ...``: plan how the tip reaches a point.
+
+Planar robots: ``--from PHI0,PHI1,..,PHIn`` (base attitude, joints) and ``--to X,Y``.
+Spatial robots (files with ``arm:``): ``--from Q1,..,Qn`` (joints), ``--to X,Y,Z`` and an
+optional start bus attitude ``--attitude-rpy R,P,Y``.
+"""
 
 from __future__ import annotations
 
@@ -33,18 +38,25 @@ def register(subparsers) -> None:
             "Maximum Reachable space."
         ),
     )
-    parser.add_argument("robot", help="robot YAML file, e.g. configs/umetani1990.yaml")
+    parser.add_argument("robot", help="robot YAML file, e.g. configs/umetani1990.yaml or configs/ur5-smallsat.yaml")
     parser.add_argument(
         "--from",
         dest="start",
         required=True,
         metavar="PHI0,PHI1,..",
-        help="start posture: base attitude then joint angles, in DEGREES (radians with --radians); "
+        help="start posture, in DEGREES (radians with --radians): planar robots the base attitude then "
+        "the joint angles; spatial robots the joints only (prismatic joints in m); "
         "write --from=-10,20,30 when the first value is negative",
     )
     parser.add_argument(
-        "--to", dest="target", required=True, metavar="X,Y",
-        help="target in the inertial frame, m, origin at the system centroid (--to=-2,1 for a negative x)",
+        "--to", dest="target", required=True, metavar="X,Y[,Z]",
+        help="target in the inertial frame, m, origin at the system centroid: X,Y planar, X,Y,Z spatial "
+        "(--to=-2,1 for a negative x)",
+    )
+    parser.add_argument(
+        "--attitude-rpy", dest="attitude", default=None, metavar="R,P,Y",
+        help="spatial robots: the bus attitude at the start as roll, pitch, yaw (URDF convention), "
+        "degrees (radians with --radians); default the identity",
     )
     parser.add_argument("--radians", action="store_true", help="read --from in radians")
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
@@ -52,12 +64,22 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..figures.planning import animate_reach, draw_reach
-    from ..io import write_npz
     from ..models import load_robot
-    from ..planning import plan_reach
+    from ..models.spatial import SpatialRobot
 
     robot = load_robot(args.robot)
+    if isinstance(robot, SpatialRobot):
+        return _run_spatial(args, robot)
+    if args.attitude is not None:
+        raise ConfigError("--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude")
+    return _run_planar(args, robot)
+
+
+def _run_planar(args: argparse.Namespace, robot) -> int:
+    from ..figures.planning import animate_reach, draw_reach
+    from ..io import write_npz
+    from ..planning import plan_reach
+
     phi = _numbers(args.start, robot.n_links + 1, "--from")
     if not args.radians:
         phi = np.radians(phi)
@@ -85,6 +107,54 @@ def run(args: argparse.Namespace) -> int:
         phase=plan.phase,
         joint_waypoints_rad=plan.joint_waypoints,
         target_m=plan.target,
+    )
+    print("\n".join(lines))
+    return 0
+
+
+def _run_spatial(args: argparse.Namespace, robot) -> int:
+    from ..figures.spatial import draw_spatial_reach
+    from ..io import write_npz
+    from ..models.spatial.urdf import rpy_matrix
+    from ..motion.attitude import geodesic_distance
+    from ..planning import plan_reach
+
+    n = robot.n_joints
+    q = _numbers(args.start, n, "--from")
+    prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
+    if not args.radians:
+        q = np.where(prismatic, q, np.radians(q))
+    R0 = np.eye(3)
+    if args.attitude is not None:
+        rpy = _numbers(args.attitude, 3, "--attitude-rpy")
+        R0 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
+    target = _numbers(args.target, 3, "--to")
+    if args.animate:
+        raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
+    plan = plan_reach(robot, q, target, base_rotation=R0)
+    out = Path(args.out)
+    figure_path = draw_spatial_reach(robot, q, plan, out / "reach.png", base_rotation=R0)
+    turn = float(geodesic_distance(np.asarray(plan.bus_rotation), np.eye(3)))
+    lines = [
+        f"mode           {plan.mode}",
+        f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
+        f"bus rotation   {np.degrees(turn):.6f} deg by a loop of {len(plan.loop_waypoints) - 1} segment(s)",
+        f"straight path  {plan.straight_length:.6f} m",
+        "end joints     " + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
+        + " (deg; m for prismatic joints)",
+        f"tip error      {plan.error:.3e} m",
+        f"figure         {figure_path}",
+    ]
+    write_npz(
+        out / "reach.npz",
+        loop_waypoints=plan.loop_waypoints,
+        bus_rotation=plan.bus_rotation,
+        end_joints=plan.end_joints,
+        end_rotation=plan.end_rotation,
+        end_tip_m=plan.end_tip,
+        target_m=target,
+        start_joints=q,
+        start_rotation=R0,
     )
     print("\n".join(lines))
     return 0

@@ -15,11 +15,13 @@ from .spatial_paths import (
     spatial_go_and_back as spatial_go_and_back,
     spatial_straight_tip_path as spatial_straight_tip_path,
 )
-from .straight_paths import (
+from .path_ends import (
     REASON_JOINT_LIMIT as REASON_JOINT_LIMIT,
     REASON_MAX_LENGTH as REASON_MAX_LENGTH,
     REASON_SINGULAR as REASON_SINGULAR,
     REASON_STEP_BUDGET as REASON_STEP_BUDGET,
+)
+from .straight_paths import (
     StraightPath as StraightPath,
     compile_straight_tip_path_history as compile_straight_tip_path_history,
     go_and_back as go_and_back,

@@ -39,10 +39,10 @@ from ..kinematics import square_determinant, straight_path_rates
 from ..models.spatial import primitives
 from .._core.linalg import gram_root_determinant
 from ..models.spatial.robot import SpatialRobot
-from . import dop853
+from .dop853 import error_norm, rk_step
 from .attitude import hat
 from .batching import flatten_batch, is_traced
-from .straight_paths import REASON_SINGULAR, REASON_STEP_BUDGET
+from .path_ends import REASON_SINGULAR, REASON_STEP_BUDGET
 
 __all__ = ["SpatialStraightPath", "spatial_straight_tip_path", "spatial_go_and_back", "polar_rotation"]
 
@@ -152,9 +152,9 @@ def _step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_steps):
     reached = reached | stalled
     h = jnp.clip(jnp.minimum(h_event, max_h), -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
-    y_new, slopes = dop853.rk_step(field, y, h, "dop853", return_slopes=True)
+    y_new, slopes = rk_step(field, y, h, "dop853", return_slopes=True)
     f_new = field(y_new)
-    error = dop853.error_norm(h, slopes, f_new, y, y_new, rtol)
+    error = error_norm(h, slopes, f_new, y, y_new, rtol)
     accept = error <= 1.0
     factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
     limited = jnp.abs(h) < 0.999 * h_control

@@ -54,7 +54,10 @@ from ..kinematics import (
 )
 from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
+from ..models.spatial.robot import SpatialRobot
 from .dop853 import error_norm, rk_step
+from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR, REASON_STEP_BUDGET
+from .spatial_paths import spatial_straight_tip_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = [
@@ -69,10 +72,6 @@ __all__ = [
     "REASON_STEP_BUDGET",
 ]
 
-REASON_SINGULAR = 0
-REASON_MAX_LENGTH = 1
-REASON_JOINT_LIMIT = 2
-REASON_STEP_BUDGET = 3
 
 
 # Straight tip paths ----------------------------------------------------------------------
@@ -371,6 +370,7 @@ def straight_tip_path(
     max_steps: int = 4096,
     tableau: str = "dop853",
     lanes: int | None = None,
+    base_rotation: jax.Array | None = None,
 ) -> StraightPath:
     """Move the tip along a straight inertial line until J* loses rank (Fig. 3a).
 
@@ -401,7 +401,21 @@ def straight_tip_path(
 
     Returns:
         `StraightPath` with batch shape ``(...)``.
+
+    Spatial robots: ``straight_tip_path(robot, q_start, direction_xyz, max_length=...,
+    base_rotation=R0)`` runs `spacearm.motion.spatial_paths.spatial_straight_tip_path`
+    (the bus attitude integrated with the joints) and returns its `SpatialStraightPath`.
     """
+    if isinstance(robot, SpatialRobot):
+        if tableau != "dop853" or lanes is not None:
+            raise TypeError("straight_tip_path: tableau and lanes apply to planar robots only")
+        spatial = {"max_step": max_step} if max_step != 0.25 else {}
+        spatial.update({k: v for k, v in (("tol", tol), ("rtol", rtol)) if v is not None})
+        return spatial_straight_tip_path(
+            robot, phi_start, direction, max_length, base_rotation=base_rotation, max_steps=max_steps, **spatial
+        )
+    if base_rotation is not None:
+        raise TypeError("base_rotation applies to spatial robots; a planar posture carries its base attitude")
     phi_start, direction, max_length = _prepare_straight(robot, phi_start, direction, max_length)
     batch, flat_robot, batched, (phi_flat, dir_flat, len_flat) = flatten_batch(
         robot, [(phi_start, 1), (direction, 1), (max_length, 0)]

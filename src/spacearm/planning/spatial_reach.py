@@ -28,7 +28,7 @@ from ..models.spatial.robot import SpatialRobot
 from ..motion.attitude import expm
 from ..motion.joint_paths import integrate_joint_path
 from ..motion.spatial_paths import spatial_straight_tip_path
-from ..motion.straight_paths import REASON_MAX_LENGTH
+from ..motion.path_ends import REASON_MAX_LENGTH
 from .spatial_reorientation import SpatialLoopSettings, plan_spatial_reorientation_details
 
 __all__ = ["SpatialReachPlan", "plan_spatial_reach", "candidate_rotations"]
