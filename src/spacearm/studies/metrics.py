@@ -21,6 +21,7 @@ from ..analysis import (
     normalized_workspace_areas,
     straight_path_workspace,
 )
+from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
 
@@ -45,6 +46,8 @@ class Metric:
     description: str = ""
     # Checks that need the base robot (e.g. its number of links).
     check_robot: Callable[[str, dict, PlanarRobot], None] = lambda where, options, robot: None
+    # The robot families the metric is defined for ("planar", "spatial").
+    families: tuple[str, ...] = ("planar",)
 
 
 def _no_options(where: str, options: dict) -> None:
@@ -128,6 +131,35 @@ def _straight_area(robot, options):
     return {"S_straight": area / (jnp.pi * robot.reach**2)}
 
 
+def _check_posture(where: str, options: dict) -> None:
+    check_keys(f"{where}: ", options, {"q_deg"})
+    q = options.get("q_deg")
+    if q is not None and (not isinstance(q, (list, tuple)) or not all(is_number(v) for v in q)):
+        raise ConfigError(f"{where}.q_deg: must be a list of joint positions in degrees, one per joint")
+
+
+def _check_posture_robot(where: str, options: dict, robot) -> None:
+    q = options.get("q_deg")
+    if q is not None and len(q) != robot.n_joints:
+        raise ConfigError(f"{where}.q_deg: needs {robot.n_joints} joint positions (one per joint), got {len(q)}")
+
+
+def _posture(robot, options):
+    """w*, 1/kappa(J*_v) and ||C_w||_F at one posture (joint positions in degrees,
+    default 30 deg for every joint; a prismatic joint's entry is taken in m)."""
+    n = len(robot.joint_kinds)
+    q_deg = jnp.asarray(options.get("q_deg", [30.0] * n), dtype=robot.base_mass.dtype)
+    prismatic = jnp.asarray([kind == "prismatic" for kind in robot.joint_kinds])
+    q = jnp.where(prismatic, q_deg, jnp.radians(q_deg))
+    singular = jnp.linalg.svd(generalized_jacobian(robot, q)[:3], compute_uv=False)
+    largest = singular[0]
+    return {
+        "w_star_m3": manipulability(robot, q),
+        "inverse_condition": jnp.where(largest > 0, singular[-1] / jnp.where(largest > 0, largest, 1.0), 0.0),
+        "C_w_fro": jnp.linalg.norm(base_rate_matrix(robot, q)[3:]),
+    }
+
+
 METRICS: dict[str, Metric] = {
     "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, check_robot=_check_wbar_robot, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
     "S_M": Metric(_areas, lambda o: ["S_M"], description="Maximum Reachable area / (pi L^2)"),
@@ -140,6 +172,10 @@ METRICS: dict[str, Metric] = {
     "straight_path_area": Metric(_straight_area, lambda o: ["S_straight"], check=_check_straight,
                                  check_robot=_check_straight_robot,
                                  description="Straight-Path workspace area from phi_start_deg / (pi L^2)"),
+    "posture": Metric(_posture, lambda o: ["w_star_m3", "inverse_condition", "C_w_fro"], check=_check_posture,
+                      check_robot=_check_posture_robot, families=("spatial",),
+                      description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
+                                  "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)"),
 }
 
 

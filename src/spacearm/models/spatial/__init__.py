@@ -5,6 +5,8 @@
 - :mod:`.schema`: the robot file (``arm:`` key) and :func:`load_spatial_robot`;
 - :mod:`.primitives`: per-posture primitives and closed forms (one design, one posture);
 - :mod:`.family`: :data:`SPATIAL`, the family the generic kernels dispatch on;
+- :mod:`.fields`: named design numbers (``mount.xyz[0]``, ``arm.length``, ...) that sweeps
+  and design problems set;
 - :mod:`.metrics`: spatial-only batched kernels (rotational/full/dynamic
   manipulability, H_m, H*, C(q), rotational and fixed-base ellipsoids).
 """
