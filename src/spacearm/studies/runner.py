@@ -2,8 +2,12 @@
 finished chunks kept on disk so an interrupted sweep resumes, then the table, the grids,
 the report and the manifest (through :mod:`spacearm.io`). No figures here.
 
-All designs are stacked into one :class:`~spacearm.models.planar.PlanarRobot` with a
-leading axis and evaluated by one compiled function in chunks of bounded size.
+All designs are stacked into one robot pytree (planar or spatial) with a leading axis
+and evaluated by one compiled function in chunks of bounded size. Under
+``jax.distributed`` (``spacearm sweep --coordinator ...``) the device mesh spans every
+process: each chunk is sharded over all of their devices, the results are gathered,
+and process 0 alone writes the chunks, the table and the manifest; the others return
+an empty :class:`SweepResult`.
 """
 
 from __future__ import annotations
@@ -29,7 +33,6 @@ from .._core.errors import ConfigError
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
 from ..io import manifest as provenance
-from ..models.planar import PlanarRobot
 from .designs import build_designs, design_columns
 from .metrics import design_function, metric_columns
 from .spec import SweepSpec
@@ -54,7 +57,7 @@ def _chunks(total: int, size: int) -> list[tuple[int, int]]:
     return [(start, min(start + size, total)) for start in range(0, total, size)]
 
 
-def _take(robot: PlanarRobot, start: int, stop: int, size: int, devices: int) -> PlanarRobot:
+def _take(robot, start: int, stop: int, size: int, devices: int):
     """Rows start:stop, padded to ``size`` by repeating the last row (static shapes),
     as ``(devices, size // devices, ...)``: one row of designs per device."""
     index = np.minimum(np.arange(start, start + size), stop - 1).reshape(devices, -1)
@@ -141,6 +144,13 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
                 continue
             if all(v.shape == (stop - start,) for v in piece.values()):
                 pieces[number] = piece
+    if jax.process_count() > 1:
+        # Many processes: process 0's saved chunks decide (only it writes them, and the
+        # others may not share its disk); every process must run the same chunks.
+        saved_mask = np.array([n in pieces for n in range(len(spans))])
+        saved_mask = np.asarray(multihost_utils.broadcast_one_to_all(saved_mask)).astype(bool)
+        if jax.process_index() != 0:
+            pieces = {n: None for n in np.flatnonzero(saved_mask)}
     todo = [n for n in range(len(spans)) if n not in pieces]
     run_start = time.perf_counter()
     bar = tqdm(total=total, desc=f"sweep {spec.name}", unit="design", disable=not progress, file=sys.stderr,
@@ -171,14 +181,13 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
         bar.close()
     run_s = time.perf_counter() - run_start - compile_s
 
+    if jax.process_index() != 0:  # multi-host: the first process writes the results
+        return SweepResult(out_dir, {}, {}, [])
     metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
     table: dict[str, np.ndarray] = {"design": np.arange(total)}
     table.update(points)
     table.update(design_columns(robot, spec.axes))
     table.update(metric_values)
-
-    if jax.process_index() != 0:  # multi-host: the first process writes the results
-        return SweepResult(out_dir, table, {}, [])
     files = [write_csv(out_dir / "table.csv", table)]
     grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
     grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
