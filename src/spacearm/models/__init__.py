@@ -10,10 +10,10 @@ import os
 from collections.abc import Mapping
 from typing import Any
 
-from .._core.errors import ConfigError
 from .._core.schema import read_yaml
 from .family import RobotFamily as RobotFamily, family_of as family_of
 from .planar import PlanarRobot, is_planar_mapping, robot_from_mapping
+from .spatial import SpatialRobot, spatial_robot_from_mapping
 
 __all__ = ["load_robot", "robot_from_file_mapping", "RobotFamily", "family_of", "is_robot_mapping"]
 
@@ -32,11 +32,11 @@ def robot_from_file_mapping(config: Any, *, source: str = "robot", base_dir: str
         base_dir: the folder relative paths in the file (a URDF) are resolved against.
     """
     if isinstance(config, Mapping) and "arm" in config:
-        raise ConfigError(f"{source}: arm: spatial robot files are not supported by this build")
+        return spatial_robot_from_mapping(config, source=source, base_dir=base_dir or os.getcwd())
     return robot_from_mapping(config, source=source)
 
 
-def load_robot(source: str | os.PathLike | Mapping[str, Any]) -> PlanarRobot:
+def load_robot(source: str | os.PathLike | Mapping[str, Any]) -> PlanarRobot | SpatialRobot:
     """Load and validate a robot from a YAML file path or an already parsed mapping.
 
     Returns a :class:`~spacearm.models.planar.PlanarRobot` for a planar file and a

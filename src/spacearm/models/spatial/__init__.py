@@ -1,0 +1,30 @@
+"""The spatial family: URDF arms on a free-floating bus (issue 14).
+
+- :mod:`.urdf`: the stdlib-XML URDF reader (fixed and locked joints merged);
+- :mod:`.robot`: the :class:`SpatialRobot` pytree and its validation;
+- :mod:`.schema`: the robot file (``arm:`` key) and :func:`load_spatial_robot`;
+- :mod:`.primitives`: per-posture primitives and closed forms (one design, one posture);
+- :mod:`.family`: :data:`SPATIAL`, the family the generic kernels dispatch on;
+- :mod:`.metrics`: spatial-only batched kernels (rotational/full/dynamic
+  manipulability, H_m, H*, C(q), rotational and fixed-base ellipsoids).
+"""
+
+from .family import SPATIAL as SPATIAL, SpatialFamily as SpatialFamily
+from .metrics import (
+    arm_inertia as arm_inertia,
+    base_twist_map as base_twist_map,
+    dynamic_manipulability as dynamic_manipulability,
+    fixed_base_ellipsoid as fixed_base_ellipsoid,
+    full_manipulability as full_manipulability,
+    mass_matrix as mass_matrix,
+    rotational_ellipsoid as rotational_ellipsoid,
+    rotational_manipulability as rotational_manipulability,
+)
+from .robot import Labels as Labels, SpatialRobot as SpatialRobot, stack_spatial_robots as stack_spatial_robots
+from .schema import (
+    is_spatial_config as is_spatial_config,
+    load_spatial_robot as load_spatial_robot,
+    locate_package_file as locate_package_file,
+    spatial_robot_from_mapping as spatial_robot_from_mapping,
+)
+from .urdf import ArmChain as ArmChain, parse_urdf as parse_urdf, read_urdf as read_urdf

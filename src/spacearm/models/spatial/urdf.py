@@ -1,0 +1,503 @@
+"""A URDF reader on the standard library's XML parser: the serial arm from a root link to a tip.
+
+No mesh library: geometry (``<visual>``, ``<collision>``) is ignored. The reader keeps
+the tree, joint types, origins, axes and limits, and each link's ``<inertial>``. Only
+the direct ``<link>`` and ``<joint>`` children of ``<robot>`` count (``<joint>`` names
+repeated inside ``<transmission>`` blocks are not joints).
+
+The arm is the kinematic path from ``root_link`` to ``tip``. Its movable joints
+(revolute, continuous, prismatic) become the arm joints, in path order. Everything
+else below ``root_link`` is merged rigidly into the body it hangs from: fixed joints,
+and movable joints named in ``lock_joints`` (held at the given value), on the path or
+in side branches (a camera, fingers). Merging composes the transforms and sums the
+spatial inertias. Links above ``root_link`` (a ``world`` link, a mobile base) are
+dropped. The ``tip`` is a link; its origin is the tip point and its axes the tip frame.
+
+Inertias as written: a link without ``<inertial>`` has zero mass and zero inertia. A
+link with mass 0 is taken as written, inertia included, as Pinocchio does (vendor
+files often give the base link mass 0, sometimes with a non-zero inertia). A link with
+a positive mass needs a positive-definite inertia that satisfies the triangle
+inequality (each principal moment at most the sum of the other two, what a physical
+body has); ``inertia_as_written=True`` skips the triangle inequality and accepts zero
+principal moments, as Pinocchio does (MuJoCo refuses such files unless told to
+balance the inertia). Negative masses and negative principal moments are always
+refused.
+
+Every problem raises :class:`~spacearm.robot.ConfigError` with one message naming the
+file and the link, joint or attribute.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..._core.errors import ConfigError
+from ..._core.schema import did_you_mean
+
+__all__ = [
+    "ArmChain",
+    "read_urdf",
+    "parse_urdf",
+    "rpy_matrix",
+    "check_inertia",
+]
+
+MOVABLE = ("revolute", "continuous", "prismatic")
+_KNOWN_TYPES = MOVABLE + ("fixed", "floating", "planar")
+# Relative tolerance for the symmetric-positive and triangle checks (URDF numbers are
+# printed with a few digits; a body that is a thin rod sits on the triangle's edge).
+_INERTIA_RTOL = 1e-9
+
+
+@dataclasses.dataclass(frozen=True)
+class ArmChain:
+    """The arm read from a URDF, with fixed and locked parts merged (numpy, float64).
+
+    Body 0 is the root body (``root_link`` and everything rigidly attached to it);
+    body i (1..n) is the child link of arm joint i with its rigid attachments. Each
+    body's frame is its URDF link frame (the child frame of its joint).
+
+    Attributes:
+        source: the URDF path (for messages).
+        root_link, tip: link names.
+        joint_names: ``n`` arm joint names in path order.
+        joint_kinds: ``n`` of ``"revolute"`` or ``"prismatic"`` (continuous joints are
+            revolute with free limits).
+        urdf_types: ``n`` URDF joint types as written (``"continuous"`` kept).
+        joint_rotation: ``(n, 3, 3)`` joint frame axes in the parent body frame.
+        joint_translation: ``(n, 3)`` joint frame origin in the parent body frame, m.
+        joint_axis: ``(n, 3)`` unit axis in the joint frame.
+        joint_lower, joint_upper: ``(n,)`` limits, rad or m (``-inf``/``+inf`` when free).
+        body_mass: ``(n+1,)`` kg.
+        body_com: ``(n+1, 3)`` centroid in the body frame, m.
+        body_inertia: ``(n+1, 3, 3)`` about the centroid, body axes, kg m^2.
+        body_links: the URDF links merged into each body.
+        tip_rotation: ``(3, 3)`` tip frame axes in the last body frame.
+        tip_translation: ``(3,)`` tip origin in the last body frame, m.
+    """
+
+    source: str
+    root_link: str
+    tip: str
+    joint_names: tuple[str, ...]
+    joint_kinds: tuple[str, ...]
+    urdf_types: tuple[str, ...]
+    joint_rotation: np.ndarray
+    joint_translation: np.ndarray
+    joint_axis: np.ndarray
+    joint_lower: np.ndarray
+    joint_upper: np.ndarray
+    body_mass: np.ndarray
+    body_com: np.ndarray
+    body_inertia: np.ndarray
+    body_links: tuple[tuple[str, ...], ...]
+    tip_rotation: np.ndarray
+    tip_translation: np.ndarray
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joint_names)
+
+
+# Small rigid-body helpers (numpy) ------------------------------------------------------
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """URDF roll-pitch-yaw (fixed axes x, y, z): R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+
+
+def _second_moment(vector: np.ndarray) -> np.ndarray:
+    """S(c) = |c|^2 1 - c c^T: the inertia of a unit point mass at c about the origin."""
+    return float(vector @ vector) * np.eye(3) - np.outer(vector, vector)
+
+
+def check_inertia(where: str, inertia: np.ndarray, *, positive: bool, triangle: bool) -> None:
+    """Refuse a 3x3 inertia that is not symmetric, not (semi)definite, or breaks the triangle inequality.
+
+    Args:
+        where: the message prefix naming the file and the field.
+        positive: require positive definite (else positive semidefinite).
+        triangle: require each principal moment <= the sum of the other two.
+    """
+    inertia = np.asarray(inertia, dtype=float)
+    if inertia.shape != (3, 3):
+        raise ConfigError(f"{where}: must be a 3x3 matrix, got shape {inertia.shape}")
+    if not np.all(np.isfinite(inertia)):
+        raise ConfigError(f"{where}: must be finite numbers, got {inertia.tolist()}")
+    scale = max(float(np.max(np.abs(inertia))), 1e-300)
+    if np.max(np.abs(inertia - inertia.T)) > _INERTIA_RTOL * scale:
+        raise ConfigError(f"{where}: must be symmetric, got {inertia.tolist()}")
+    moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
+    shown = ", ".join(f"{m:.6g}" for m in moments)
+    if positive and moments[0] <= _INERTIA_RTOL * scale:
+        raise ConfigError(f"{where}: must be positive definite; principal moments {shown}")
+    if moments[0] < -_INERTIA_RTOL * scale:
+        raise ConfigError(f"{where}: must be positive semidefinite; principal moments {shown}")
+    if triangle and moments[2] > moments[0] + moments[1] + _INERTIA_RTOL * scale:
+        raise ConfigError(
+            f"{where}: violates the triangle inequality (largest principal moment above the sum "
+            f"of the other two); principal moments {shown}"
+        )
+
+
+# Parsing ---------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass
+class _Link:
+    name: str
+    mass: float
+    com: np.ndarray  # in the link frame
+    inertia: np.ndarray  # about the com, link axes
+
+
+@dataclasses.dataclass
+class _Joint:
+    name: str
+    kind: str
+    parent: str
+    child: str
+    rotation: np.ndarray
+    translation: np.ndarray
+    axis: np.ndarray
+    lower: float
+    upper: float
+
+
+def _floats(where: str, text: str | None, count: int, default=None) -> np.ndarray:
+    if text is None:
+        if default is None:
+            raise ConfigError(f"{where}: missing")
+        return np.array(default, dtype=float)
+    parts = text.split()
+    try:
+        values = np.array([float(p) for p in parts])
+    except ValueError:
+        raise ConfigError(f"{where}: expected {count} numbers, got {text!r}") from None
+    if values.shape != (count,):
+        raise ConfigError(f"{where}: expected {count} numbers, got {text!r}")
+    if not np.all(np.isfinite(values)):
+        raise ConfigError(f"{where}: must be finite numbers, got {text!r}")
+    return values
+
+
+def _origin(where: str, element) -> tuple[np.ndarray, np.ndarray]:
+    origin = element.find("origin")
+    if origin is None:
+        return np.eye(3), np.zeros(3)
+    xyz = _floats(f"{where}origin xyz", origin.get("xyz"), 3, default=(0.0, 0.0, 0.0))
+    rpy = _floats(f"{where}origin rpy", origin.get("rpy"), 3, default=(0.0, 0.0, 0.0))
+    return rpy_matrix(rpy), xyz
+
+
+def _read_link(source: str, element, inertia_as_written: bool) -> _Link:
+    name = element.get("name")
+    where = f"{source}: link '{name}': "
+    inertial = element.find("inertial")
+    if inertial is None:
+        return _Link(name, 0.0, np.zeros(3), np.zeros((3, 3)))
+    rotation, com = _origin(f"{where}inertial ", inertial)
+    mass_element = inertial.find("mass")
+    mass = 0.0
+    if mass_element is not None:
+        mass = float(_floats(f"{where}inertial mass value", mass_element.get("value"), 1)[0])
+    if mass < 0:
+        raise ConfigError(f"{where}inertial mass: must not be negative, got {mass!r}")
+    tensor = np.zeros((3, 3))
+    inertia_element = inertial.find("inertia")
+    if inertia_element is not None:
+        values = {}
+        for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+            text = inertia_element.get(key, "0")
+            values[key] = float(_floats(f"{where}inertial inertia {key}", text, 1)[0])
+        tensor = np.array(
+            [
+                [values["ixx"], values["ixy"], values["ixz"]],
+                [values["ixy"], values["iyy"], values["iyz"]],
+                [values["ixz"], values["iyz"], values["izz"]],
+            ]
+        )
+    # Zero mass: taken as written (inertia included), as Pinocchio does.
+    check_inertia(
+        f"{where}inertial inertia",
+        tensor,
+        positive=mass > 0 and not inertia_as_written,
+        triangle=not inertia_as_written,
+    )
+    return _Link(name, mass, com, rotation @ tensor @ rotation.T)
+
+
+def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
+    name = element.get("name")
+    where = f"{source}: joint '{name}': "
+    kind = element.get("type")
+    if kind in ("floating", "planar"):
+        raise ConfigError(
+            f"{where}type '{kind}' is not supported (the bus is the only free body; arm joints are "
+            "revolute, continuous, prismatic or fixed)"
+        )
+    if kind not in _KNOWN_TYPES:
+        extra = did_you_mean(str(kind), _KNOWN_TYPES)
+        raise ConfigError(f"{where}unknown type {kind!r}{extra}")
+    ends = {}
+    for end in ("parent", "child"):
+        tag = element.find(end)
+        link = tag.get("link") if tag is not None else None
+        if link is None:
+            raise ConfigError(f"{where}{end}: missing <{end} link=...>")
+        if link not in links:
+            extra = did_you_mean(link, list(links))
+            raise ConfigError(f"{where}{end} link '{link}' is not defined{extra}")
+        ends[end] = link
+    rotation, translation = _origin(where, element)
+    axis = np.array([1.0, 0.0, 0.0])
+    if kind != "fixed":
+        axis_element = element.find("axis")
+        if axis_element is not None:
+            axis = _floats(f"{where}axis xyz", axis_element.get("xyz"), 3, default=(1.0, 0.0, 0.0))
+        norm = float(np.linalg.norm(axis))
+        if norm == 0.0:
+            raise ConfigError(f"{where}axis xyz: must not be zero")
+        axis = axis / norm
+    lower, upper = -math.inf, math.inf
+    if kind in ("revolute", "prismatic"):
+        limit = element.find("limit")
+        if limit is not None:
+            lower = float(_floats(f"{where}limit lower", limit.get("lower", "0"), 1)[0])
+            upper = float(_floats(f"{where}limit upper", limit.get("upper", "0"), 1)[0])
+            if lower > upper:
+                raise ConfigError(f"{where}limit: lower {lower} is above upper {upper}")
+            if lower == upper:  # URDF's default 0, 0: no usable range given; treat as free
+                lower, upper = -math.inf, math.inf
+    return _Joint(name, kind, ends["parent"], ends["child"], rotation, translation, axis, lower, upper)
+
+
+def _joint_motion(joint: _Joint, value: float) -> tuple[np.ndarray, np.ndarray]:
+    """The joint's own motion at a fixed value, in the joint frame."""
+    if joint.kind == "prismatic":
+        return np.eye(3), joint.axis * value
+    if joint.kind == "fixed":
+        return np.eye(3), np.zeros(3)
+    return _axis_angle(joint.axis, value), np.zeros(3)
+
+
+def parse_urdf(
+    text: str,
+    *,
+    source: str = "urdf",
+    root_link: str,
+    tip: str,
+    lock_joints: Mapping[str, float] | None = None,
+    inertia_as_written: bool = False,
+) -> ArmChain:
+    """Read the arm from URDF text. See the module docstring for the rules.
+
+    Args:
+        text: the URDF XML.
+        source: a label for messages (the file path).
+        root_link: the link the arm starts from (fixed to the bus at the mount).
+        tip: the link whose origin is the tip point.
+        lock_joints: movable joints held fixed, name -> value (rad or m).
+        inertia_as_written: skip the triangle inequality and accept zero principal moments.
+
+    Raises:
+        ConfigError: naming the file and the link, joint or attribute.
+    """
+    lock_joints = dict(lock_joints or {})
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as error:
+        line, column = error.position
+        message = str(error).split(":")[0]
+        raise ConfigError(f"{source}: malformed XML at line {line}, column {column + 1}: {message}") from None
+    if root.tag != "robot":
+        raise ConfigError(f"{source}: the root element must be <robot>, got <{root.tag}>")
+
+    links: dict[str, _Link] = {}
+    for element in root.findall("link"):
+        name = element.get("name")
+        if not name:
+            raise ConfigError(f"{source}: a <link> has no name")
+        if name in links:
+            raise ConfigError(f"{source}: link '{name}' is defined twice")
+        links[name] = _read_link(source, element, inertia_as_written)
+    joints: dict[str, _Joint] = {}
+    children: dict[str, list[_Joint]] = {name: [] for name in links}
+    parent_joint: dict[str, _Joint] = {}
+    for element in root.findall("joint"):
+        name = element.get("name")
+        if not name:
+            raise ConfigError(f"{source}: a <joint> has no name")
+        if name in joints:
+            raise ConfigError(f"{source}: joint '{name}' is defined twice")
+        joint = _read_joint(source, element, links)
+        if joint.child in parent_joint:
+            raise ConfigError(
+                f"{source}: joint '{name}': link '{joint.child}' already has parent joint "
+                f"'{parent_joint[joint.child].name}' (a URDF is a tree)"
+            )
+        joints[name] = joint
+        parent_joint[joint.child] = joint
+        children[joint.parent].append(joint)
+
+    for name, value in lock_joints.items():
+        if name not in joints:
+            extra = did_you_mean(str(name), list(joints))
+            raise ConfigError(f"{source}: lock_joints: unknown joint '{name}'{extra}")
+        if joints[name].kind == "fixed":
+            raise ConfigError(f"{source}: lock_joints: joint '{name}' is fixed already; only movable joints are locked")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ConfigError(f"{source}: lock_joints: joint '{name}': the value must be a finite number, got {value!r}")
+    for role, name in (("root_link", root_link), ("tip", tip)):
+        if name not in links:
+            extra = did_you_mean(str(name), list(links))
+            raise ConfigError(f"{source}: {role}: link '{name}' is not in the URDF{extra}")
+
+    # The path from root_link to tip, walking up from the tip.
+    path: list[_Joint] = []
+    link = tip
+    seen = {tip}
+    while link != root_link:
+        if link not in parent_joint:
+            raise ConfigError(f"{source}: tip: link '{tip}' is not below root_link '{root_link}'")
+        joint = parent_joint[link]
+        path.append(joint)
+        link = joint.parent
+        if link in seen:
+            raise ConfigError(f"{source}: joint '{joint.name}': the joints form a loop")
+        seen.add(link)
+    path.reverse()
+    on_path = {joint.name for joint in path}
+    arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
+    if not arm:
+        raise ConfigError(
+            f"{source}: no movable joint between root_link '{root_link}' and tip '{tip}' "
+            "(all fixed or locked)"
+        )
+    arm_names = {j.name for j in arm}
+
+    def rigid_closure(start: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """Links rigidly attached to ``start`` (not across an arm joint), with poses in start's frame."""
+        out = [(start, np.eye(3), np.zeros(3))]
+        stack = [(start, np.eye(3), np.zeros(3))]
+        while stack:
+            name, rotation, translation = stack.pop()
+            for joint in children[name]:
+                if joint.name in arm_names:
+                    continue
+                if joint.kind in MOVABLE and joint.name not in lock_joints:
+                    raise ConfigError(
+                        f"{source}: joint '{joint.name}' ({joint.kind}) is off the path from "
+                        f"'{root_link}' to '{tip}' and not locked; add it to arm.lock_joints "
+                        f"(e.g. {{{joint.name}: 0.0}}) to hold it fixed"
+                    )
+                motion_r, motion_t = _joint_motion(joint, float(lock_joints.get(joint.name, 0.0)))
+                r = rotation @ joint.rotation
+                t = translation + rotation @ joint.translation
+                r, t = r @ motion_r, t + r @ motion_t
+                out.append((joint.child, r, t))
+                stack.append((joint.child, r, t))
+        return out
+
+    starts = [root_link] + [j.child for j in arm]
+    bodies = [rigid_closure(start) for start in starts]
+    pose_in_body = [{name: (r, t) for name, r, t in body} for body in bodies]
+
+    n = len(arm)
+    joint_rotation = np.zeros((n, 3, 3))
+    joint_translation = np.zeros((n, 3))
+    for i, joint in enumerate(arm):
+        r, t = pose_in_body[i][joint.parent]
+        joint_rotation[i] = r @ joint.rotation
+        joint_translation[i] = t + r @ joint.translation
+    if tip not in pose_in_body[n]:  # cannot happen: the tip is on the path below the last arm joint
+        raise ConfigError(f"{source}: tip: link '{tip}' is not rigidly attached to the last arm joint")
+    tip_rotation, tip_translation = pose_in_body[n][tip]
+
+    body_mass = np.zeros(n + 1)
+    body_com = np.zeros((n + 1, 3))
+    body_inertia = np.zeros((n + 1, 3, 3))
+    for b, body in enumerate(bodies):
+        mass, moment, about_origin = 0.0, np.zeros(3), np.zeros((3, 3))
+        for name, r, t in body:
+            link = links[name]
+            com = t + r @ link.com
+            mass += link.mass
+            moment += link.mass * com
+            about_origin += r @ link.inertia @ r.T + link.mass * _second_moment(com)
+        com = moment / mass if mass > 0 else np.zeros(3)
+        body_mass[b] = mass
+        body_com[b] = com
+        inertia = about_origin - mass * _second_moment(com)
+        body_inertia[b] = 0.5 * (inertia + inertia.T)
+
+    return ArmChain(
+        source=source,
+        root_link=root_link,
+        tip=tip,
+        joint_names=tuple(j.name for j in arm),
+        joint_kinds=tuple("prismatic" if j.kind == "prismatic" else "revolute" for j in arm),
+        urdf_types=tuple(j.kind for j in arm),
+        joint_rotation=joint_rotation,
+        joint_translation=joint_translation,
+        joint_axis=np.array([j.axis for j in arm]),
+        joint_lower=np.array([j.lower for j in arm]),
+        joint_upper=np.array([j.upper for j in arm]),
+        body_mass=body_mass,
+        body_com=body_com,
+        body_inertia=body_inertia,
+        body_links=tuple(tuple(name for name, _, _ in body) for body in bodies),
+        tip_rotation=tip_rotation,
+        tip_translation=tip_translation,
+    )
+
+
+def read_urdf(
+    path: str | os.PathLike,
+    *,
+    root_link: str,
+    tip: str,
+    lock_joints: Mapping[str, float] | None = None,
+    inertia_as_written: bool = False,
+) -> ArmChain:
+    """Read the arm from a URDF file (see :func:`parse_urdf`).
+
+    Raises:
+        ConfigError: for a missing or unreadable file, and as :func:`parse_urdf`.
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as handle:
+            text = handle.read()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such URDF file") from None
+    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as error:
+        raise ConfigError(f"{path}: cannot read the URDF file ({type(error).__name__})") from None
+    return parse_urdf(
+        text,
+        source=path,
+        root_link=root_link,
+        tip=tip,
+        lock_joints=lock_joints,
+        inertia_as_written=inertia_as_written,
+    )
