@@ -6,9 +6,11 @@ primitives work in bus axes; the generic layer applies blkdiag(R, R) to twists a
 to points.
 
 Fast paths (each equals the generic path over the primitives; tests/test_spatial_kinematics.py):
-J* by the 3x3 closed form of :mod:`.primitives` instead of a 6x6 solve; w* from it by
-Cauchy-Binet (the sum of squared 3x3 minors, accurate near singular postures); the
-tip; the base rate; the fixed-base manipulability by Cauchy-Binet.
+the primitives' batch-last pass over any leading batch shape (posture batch as the
+contiguous minor axis, instead of ``vmap`` over a per-posture function); J* by the 3x3
+closed form instead of a 6x6 solve; w* from it by Cauchy-Binet (the sum of squared
+3x3 minors, accurate near singular postures); the tip; the base rate; the fixed-base
+Jacobian and manipulability.
 """
 
 from __future__ import annotations
@@ -18,12 +20,11 @@ import itertools
 import jax
 import jax.numpy as jnp
 
-from ..._core.batching import map_leading
 from ..family import RobotFamily
 from . import primitives
 from .robot import SpatialRobot
 
-__all__ = ["SpatialFamily", "SPATIAL", "root_gram_determinant"]
+__all__ = ["SPATIAL", "SpatialFamily", "root_gram_determinant"]
 
 
 def root_gram_determinant(J: jax.Array) -> jax.Array:
@@ -47,7 +48,7 @@ def root_gram_determinant(J: jax.Array) -> jax.Array:
 
 def _det_small(J, columns):
     t = len(columns)
-    a = lambda r, c: J[..., r, columns[c]]  # noqa: E731
+    a = lambda r, c: J[..., r, columns[c]]
     if t == 1:
         return a(0, 0)
     if t == 2:
@@ -59,26 +60,17 @@ def _det_small(J, columns):
     )
 
 
-def _tip_position(robot, posture):
-    return map_leading(lambda q: primitives.tip(robot, q), posture, core_ndims=(1,))
-
-
-def _generalized_jacobian(robot, posture):
-    return map_leading(lambda q: primitives.generalized_jacobian(robot, q), posture, core_ndims=(1,))
-
-
 def _manipulability(robot, posture):
-    return root_gram_determinant(_generalized_jacobian(robot, posture)[..., :3, :])
+    return root_gram_determinant(primitives.generalized_jacobian(robot, posture)[..., :3, :])
 
 
 def _base_rate(robot, posture, joint_rates):
-    C = map_leading(lambda q: primitives.base_twist_map(robot, q), posture, core_ndims=(1,))
+    C = primitives.base_twist_map(robot, posture)
     return jnp.einsum("...ij,...j->...i", C, joint_rates)
 
 
 def _fixed_base_manipulability(robot, joints):
-    J = map_leading(lambda q: primitives.fixed_base_jacobian(robot, q), joints, core_ndims=(1,))
-    return root_gram_determinant(J[..., :3, :])
+    return root_gram_determinant(primitives.fixed_base_jacobian(robot, joints)[..., :3, :])
 
 
 class SpatialFamily(RobotFamily):
@@ -94,10 +86,11 @@ class SpatialFamily(RobotFamily):
     posture_offset = 0
     rotates_with_base = True
     fast_paths = {
-        "tip_position": _tip_position,
-        "generalized_jacobian": _generalized_jacobian,
+        "tip_position": primitives.tip,
+        "generalized_jacobian": primitives.generalized_jacobian,
         "manipulability": _manipulability,
         "base_rate": _base_rate,
+        "fixed_base_jacobian": primitives.fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
     }
 

@@ -12,25 +12,24 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ..._core.batching import map_leading
 from . import primitives
 from .family import root_gram_determinant
 from .robot import SpatialRobot
 
 __all__ = [
-    "rotational_manipulability",
+    "arm_inertia",
+    "base_twist_map",
+    "dynamic_manipulability",
+    "fixed_base_ellipsoid",
     "full_manipulability",
     "mass_matrix",
-    "arm_inertia",
-    "dynamic_manipulability",
-    "base_twist_map",
     "rotational_ellipsoid",
-    "fixed_base_ellipsoid",
+    "rotational_manipulability",
 ]
 
 
 def _map(function, robot, q):
-    return map_leading(lambda p: function(robot, p), q, core_ndims=(1,))
+    return function(robot, q)  # the primitives take any leading batch shape
 
 
 def _rotate_rows(J, base_rotation):

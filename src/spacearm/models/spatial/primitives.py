@@ -47,17 +47,17 @@ from .robot import SpatialRobot
 
 __all__ = [
     "ChainConstants",
+    "arm_inertia",
+    "base_twist_map",
     "chain_constants",
+    "fixed_base_jacobian",
+    "generalized_jacobian",
+    "jacobians",
+    "mass_matrix",
+    "momentum_map",
+    "rpy_to_matrix",
     "tip",
     "tip_pose",
-    "jacobians",
-    "momentum_map",
-    "fixed_base_jacobian",
-    "mass_matrix",
-    "generalized_jacobian",
-    "base_twist_map",
-    "arm_inertia",
-    "rpy_to_matrix",
 ]
 
 
@@ -114,7 +114,7 @@ def _from_columns(c0, c1, c2):
 def _sym_rotate(rot, inertia):
     """R I R^T for a symmetric I given as a full 3x3 tuple; returns the 6 unique entries."""
     a = _matmul(rot, inertia)
-    entry = lambda r, c: a[r][0] * rot[c][0] + a[r][1] * rot[c][1] + a[r][2] * rot[c][2]  # noqa: E731
+    entry = lambda r, c: a[r][0] * rot[c][0] + a[r][1] * rot[c][1] + a[r][2] * rot[c][2]
     return (entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2))
 
 
@@ -147,11 +147,12 @@ def _sym_solve(s, columns):
     return [_scale(inv_det, _matvec(adj, b)) for b in columns]
 
 
-def _stack(rows):
-    """A matrix from nested lists of scalars (arrays or Python floats)."""
-    flat = jnp.broadcast_arrays(*[jnp.asarray(x) for row in rows for x in row])
-    ncol = len(rows[0])
-    return jnp.stack([jnp.stack(flat[r * ncol:(r + 1) * ncol], axis=-1) for r in range(len(rows))], axis=-2)
+def _pack(nested):
+    """Stack nested lists of scalars along new LEADING axes (batch axes stay last)."""
+    if isinstance(nested, (list, tuple)):
+        parts = [_pack(x) for x in nested]
+        return jnp.stack(jnp.broadcast_arrays(*parts), axis=0)
+    return jnp.asarray(nested)
 
 
 # Design-only constants ---------------------------------------------------------------
@@ -189,15 +190,17 @@ def _axis_frame(axis: jax.Array) -> jax.Array:
 class ChainConstants:
     """Design-only arrays of one design (computed once per design).
 
-    Body i's frame here is its URDF frame turned by a constant rotation so that its
+    Body k's frame here is its URDF frame turned by a constant rotation so that its
     joint axis is z; positions and inertias are re-expressed accordingly.
 
     Attributes:
-        first_rotation: ``(3, 3)`` body 1 axes in the bus frame at q_1 = 0.
-        first_origin: ``(3,)`` joint 1 origin in the bus frame, m.
-        placement: ``(n, 3, 3)`` joint frame k in body k-1 (turned frames).
+        mount_rotation: ``(3, 3)`` root body axes in the bus frame.
+        mount_xyz: ``(3,)`` root body origin in the bus frame, m.
+        placement: ``(n, 3, 3)`` joint frame k in body k-1 (turned frames; body 0 = root).
         offset: ``(n, 3)`` joint k origin in body k-1, m.
-        link_mass: ``(n,)`` kg.  link_com: ``(n, 3)`` m.  link_inertia: ``(n, 3, 3)`` kg m^2.
+        prismatic: ``(n,)`` 1.0 for a prismatic joint, 0.0 for a revolute one.
+        link_mass: ``(n,)`` kg.  link_com: ``(n, 3)`` m.
+        link_inertia: ``(n, 3, 3)`` about the centroid, kg m^2.
         subtree_mass: ``(n,)`` M_k = mass of bodies k..n, kg.
         total_mass: ``()`` M, kg.
         fixed_moment: ``(3,)`` first mass moment of bus + root body, bus frame, kg m.
@@ -206,10 +209,11 @@ class ChainConstants:
         base_com: ``(3,)`` bus centroid, bus frame, m.
     """
 
-    first_rotation: jax.Array
-    first_origin: jax.Array
+    mount_rotation: jax.Array
+    mount_xyz: jax.Array
     placement: jax.Array
     offset: jax.Array
+    prismatic: jax.Array
     link_mass: jax.Array
     link_com: jax.Array
     link_inertia: jax.Array
@@ -237,136 +241,144 @@ def chain_constants(robot: SpatialRobot) -> ChainConstants:
     mount_rotation = rpy_to_matrix(robot.mount_rpy)
     mount_xyz = jnp.asarray(robot.mount_xyz)
 
-    link_com = jnp.einsum("kji,kj->ki", frames, robot.link_com)
-    link_inertia = jnp.einsum("kji,kjl,klm->kim", frames, robot.link_inertia, frames)
     link_mass = jnp.asarray(robot.link_mass)
-    subtree_mass = jnp.cumsum(link_mass[::-1])[::-1]
-
     root_com = mount_xyz + mount_rotation @ robot.root_com
     root_inertia = mount_rotation @ robot.root_inertia @ mount_rotation.T
-    fixed_moment = robot.base_mass * robot.base_com + robot.root_mass * root_com
-    fixed_inertia = (
-        robot.base_inertia
-        + robot.base_mass * _second_moment(jnp.asarray(robot.base_com))
-        + root_inertia
-        + robot.root_mass * _second_moment(root_com)
-    )
-    total_mass = robot.base_mass + robot.root_mass + jnp.sum(link_mass)
     last = frames[n - 1]
     return ChainConstants(
-        first_rotation=mount_rotation @ placement[0],
-        first_origin=mount_xyz + mount_rotation @ offset[0],
+        mount_rotation=mount_rotation,
+        mount_xyz=mount_xyz,
         placement=placement,
         offset=offset,
+        prismatic=jnp.array([k == "prismatic" for k in robot.joint_kinds], dtype=placement.dtype),
         link_mass=link_mass,
-        link_com=link_com,
-        link_inertia=link_inertia,
-        subtree_mass=subtree_mass,
-        total_mass=total_mass,
-        fixed_moment=fixed_moment,
-        fixed_inertia=fixed_inertia,
+        link_com=jnp.einsum("kji,kj->ki", frames, robot.link_com),
+        link_inertia=jnp.einsum("kji,kjl,klm->kim", frames, robot.link_inertia, frames),
+        subtree_mass=jnp.cumsum(link_mass[::-1])[::-1],
+        total_mass=robot.base_mass + robot.root_mass + jnp.sum(link_mass),
+        fixed_moment=robot.base_mass * robot.base_com + robot.root_mass * root_com,
+        fixed_inertia=(
+            robot.base_inertia
+            + robot.base_mass * _second_moment(jnp.asarray(robot.base_com))
+            + root_inertia
+            + robot.root_mass * _second_moment(root_com)
+        ),
         tip_offset=last.T @ robot.tip_translation,
         tip_rotation=last.T @ robot.tip_rotation,
         base_com=jnp.asarray(robot.base_com),
     )
 
 
-# The per-posture pass ------------------------------------------------------------------
+# The pass over the chain ----------------------------------------------------------------
+#
+# Posture arrays carry their batch axes LAST here (q is (n, *batch)), so every scalar of
+# the arithmetic below is one contiguous array over postures and every operation an
+# elementwise loop over it. The chain is walked with lax.scan, one step per joint: a
+# small block of scalar arithmetic whose outputs are stored. (Unrolled over the joints,
+# XLA's CPU fusion copies cheap producers into every consumer and recomputes each sine
+# some hundred times; the scan also compiles one step instead of n.)
+
+
+def _forward_step(carry, x):
+    rot, origin = carry
+    placement, offset, c, s, slide, com, inertia = x
+    rot_t = rot
+    d = _matmul(rot_t, _mat(placement))
+    joint_origin = _add(origin, _matvec(rot_t, _vec(offset)))
+    axis = _column(d, 2)
+    d0, d1 = _column(d, 0), _column(d, 1)
+    new_rot = _from_columns(_add(_scale(c, d0), _scale(s, d1)), _sub(_scale(c, d1), _scale(s, d0)), axis)
+    body_origin = _add(joint_origin, _scale(slide, axis))
+    centroid = _add(body_origin, _matvec(new_rot, _vec(com)))
+    inertia_bus = _sym_rotate(new_rot, _mat(inertia))
+    # Tuples of scalar arrays throughout: no stacking (a concatenation per step) in the loop.
+    return (new_rot, body_origin), (new_rot, joint_origin, axis, centroid, inertia_bus)
+
+
+def _backward_step(carry, x):
+    moment, about = carry
+    mass, centroid, inertia, axis, origin, subtree_mass, prismatic = x
+    c, a, o = centroid, axis, origin
+    moment = _add(moment, _scale(mass, c))
+    about = _sym_add(_sym_add(about, inertia), _point_inertia(mass, c))
+    revolute = 1.0 - prismatic
+    p_rev = _cross(a, _sub(moment, _scale(subtree_mass, o)))
+    l_rev = _sub(_sym_matvec(about, a), _cross(moment, _cross(a, o)))
+    p = _add(_scale(revolute, p_rev), _scale(prismatic * subtree_mass, a))
+    l = _add(_scale(revolute, l_rev), _scale(prismatic, _cross(moment, a)))
+    return (moment, about), (p, l)
 
 
 @dataclasses.dataclass
 class _Pass:
-    rotations: list  # body axes in the bus frame (turned frames), 3x3 tuples
-    origins: list  # joint origins o_k
-    axes: list  # unit joint axes a_k
+    """One pass over the chain, as tuples of components.
+
+    Per-joint quantities are 3-tuples of ``(n, *batch)`` arrays (the joint axis leading,
+    so the post-processing is written once for all joints); per-posture ones are
+    3-tuples of ``(*batch)`` arrays.
+    """
+
+    last_rotation: tuple  # body n axes (turned frame), 3x3 tuple
+    origins: tuple  # joint origins o_k
+    axes: tuple  # unit joint axes a_k
     tip: tuple  # tip origin, bus frame
-    momentum: list  # p_k
-    angular: list  # L_k about the bus-frame origin
-    centroid: tuple  # G
-    mass: jax.Array  # M
-    inertia_g: tuple  # I~ about G, 6 entries
-    inertia_origin: tuple  # K about the origin, 6 entries
-
-
-def _forward(cst: ChainConstants, kinds, q):
-    """Body frames, joint origins and axes, and body centroids and inertias in bus axes."""
-    rotations, origins, axes, centroids, inertias = [], [], [], [], []
-    rot = None
-    origin = _vec(cst.first_origin)
-    for k, kind in enumerate(kinds):
-        if k == 0:
-            d = _mat(cst.first_rotation)
-        else:
-            d = _matmul(rot, _mat(cst.placement[k]))
-            origin = _add(origin, _matvec(rot, _vec(cst.offset[k])))
-        axis = _column(d, 2)
-        if kind == "revolute":
-            c, s = jnp.cos(q[k]), jnp.sin(q[k])
-            d0, d1 = _column(d, 0), _column(d, 1)
-            rot = _from_columns(_add(_scale(c, d0), _scale(s, d1)), _sub(_scale(c, d1), _scale(s, d0)), axis)
-            body_origin = origin
-        else:  # prismatic: the child frame slides along the axis
-            rot = d
-            body_origin = _add(origin, _scale(q[k], axis))
-        rotations.append(rot)
-        origins.append(origin)
-        axes.append(axis)
-        centroids.append(_add(body_origin, _matvec(rot, _vec(cst.link_com[k]))))
-        inertias.append(_sym_rotate(rot, _mat(cst.link_inertia[k])))
-        origin = body_origin
-    tip = _add(origin, _matvec(rot, _vec(cst.tip_offset)))
-    return rotations, origins, axes, centroids, inertias, tip
+    prismatic: jax.Array  # (n, 1, ...) 1.0 for prismatic joints, broadcastable
+    momentum: tuple = None  # p_k
+    angular: tuple = None  # L_k about the bus-frame origin
+    centroid: tuple = None  # G
+    mass: jax.Array = None  # M
+    inertia_g: tuple = None  # I~ about G, 6 entries (xx, yy, zz, xy, xz, yz)
 
 
 def _chain_pass(robot: SpatialRobot, q, with_momentum: bool = True) -> _Pass:
+    """Forward and backward pass for joint positions ``q (n, *batch)`` (batch axes last)."""
     cst = chain_constants(robot)
-    kinds = robot.joint_kinds
     q = jnp.asarray(q)
-    rotations, origins, axes, centroids, inertias, tip = _forward(cst, kinds, q)
+    batch = q.shape[1:]
+    flags = jnp.asarray([k == "prismatic" for k in robot.joint_kinds], dtype=q.dtype)
+    flags = flags.reshape((-1,) + (1,) * len(batch))
+    angle = q * (1.0 - flags)  # prismatic joints turn by 0 and slide by q
+    xs = (cst.placement, cst.offset, jnp.cos(angle), jnp.sin(angle), q * flags, cst.link_com, cst.link_inertia)
+    spread = lambda x: jnp.broadcast_to(x, batch)
+    start = (
+        tuple(tuple(spread(cst.mount_rotation[r, c]) for c in range(3)) for r in range(3)),
+        tuple(spread(cst.mount_xyz[r]) for r in range(3)),
+    )
+    (rot, origin), (_, origins, axes, centroids, inertias) = jax.lax.scan(_forward_step, start, xs)
+    tip = _add(origin, _matvec(rot, _vec(cst.tip_offset)))
+    state = _Pass(last_rotation=rot, origins=origins, axes=axes, tip=tip, prismatic=flags)
     if not with_momentum:
-        return _Pass(rotations, origins, axes, tip, [], [], (), cst.total_mass, (), ())
-    n = len(kinds)
-    momentum, angular = [None] * n, [None] * n
-    moment = (0.0, 0.0, 0.0)
-    about_origin = (0.0,) * 6
-    for k in reversed(range(n)):
-        m = cst.link_mass[k]
-        moment = _add(moment, _scale(m, centroids[k]))
-        about_origin = _sym_add(about_origin, _sym_add(inertias[k], _point_inertia(m, centroids[k])))
-        a, o, mk = axes[k], origins[k], cst.subtree_mass[k]
-        if kinds[k] == "revolute":
-            momentum[k] = _cross(a, _sub(moment, _scale(mk, o)))
-            angular[k] = _sub(_sym_matvec(about_origin, a), _cross(moment, _cross(a, o)))
-        else:
-            momentum[k] = _scale(mk, a)
-            angular[k] = _cross(moment, a)
+        return state
+    xs = (cst.link_mass, centroids, inertias, axes, origins, cst.subtree_mass, flags.reshape(-1))
+    zero = jnp.zeros(batch, q.dtype)
+    (moment, about), (momentum, angular) = jax.lax.scan(_backward_step, ((zero,) * 3, (zero,) * 6), xs, reverse=True)
     fixed = cst.fixed_inertia
     moment = _add(moment, _vec(cst.fixed_moment))
-    about_origin = _sym_add(
-        about_origin, (fixed[0, 0], fixed[1, 1], fixed[2, 2], fixed[0, 1], fixed[0, 2], fixed[1, 2])
-    )
+    about = _sym_add(about, (fixed[0, 0], fixed[1, 1], fixed[2, 2], fixed[0, 1], fixed[0, 2], fixed[1, 2]))
     mass = cst.total_mass
     centroid = _scale(1.0 / mass, moment)
-    inertia_g = tuple(x - y for x, y in zip(about_origin, _point_inertia(mass, centroid)))
-    return _Pass(rotations, origins, axes, tip, momentum, angular, centroid, mass, inertia_g, about_origin)
+    state.momentum, state.angular = momentum, angular
+    state.centroid, state.mass = centroid, mass
+    state.inertia_g = tuple(x - y for x, y in zip(about, _point_inertia(mass, centroid)))
+    return state
 
 
-def _fixed_columns(state: _Pass, kinds):
-    """Fixed-base Jacobian columns (v, w) of the tip origin, bus axes."""
-    columns = []
-    for k, kind in enumerate(kinds):
-        a = state.axes[k]
-        if kind == "revolute":
-            columns.append((_cross(a, _sub(state.tip, state.origins[k])), a))
-        else:
-            columns.append((a, (0.0, 0.0, 0.0)))
-    return columns
+def _fixed_columns(state: _Pass):
+    """Fixed-base Jacobian of the tip origin, all joints at once: (v, w) 3-tuples of ``(n, *batch)``."""
+    revolute = 1.0 - state.prismatic
+    lever = _cross(state.axes, _sub(state.tip, state.origins))
+    v = _add(_scale(revolute, lever), _scale(state.prismatic, state.axes))
+    return v, _scale(revolute, state.axes)
 
 
 def _coupling(state: _Pass):
-    """I~_q columns (angular momentum about G per joint rate) and A = I~^-1 I~_q."""
-    coupling = [_sub(l, _cross(state.centroid, p)) for l, p in zip(state.angular, state.momentum)]
-    return coupling, _sym_solve(state.inertia_g, coupling)
+    """I~_q (angular momentum about G per joint rate) and A = I~^-1 I~_q, 3-tuples of ``(n, *batch)``."""
+    coupling = _sub(state.angular, _cross(state.centroid, state.momentum))
+    return coupling, _sym_solve(state.inertia_g, [coupling])[0]
+
+
+def _skew(v):
+    return ((0.0, -v[2], v[1]), (v[2], 0.0, -v[0]), (-v[1], v[0], 0.0))
 
 
 def _sym_full(s):
@@ -374,132 +386,163 @@ def _sym_full(s):
     return ((xx, xy, xz), (xy, yy, yz), (xz, yz, zz))
 
 
-def _skew(v):
-    return ((0.0, -v[2], v[1]), (v[2], 0.0, -v[0]), (-v[1], v[0], 0.0))
+def _rows(*vectors):
+    """``(3 * len(vectors), n, *batch)``: the components of 3-tuples of ``(n, *batch)`` as rows."""
+    return _pack([component for vector in vectors for component in vector])
 
 
-# Primitives (one design, one posture) --------------------------------------------------
+def _batch_last(posture: jax.Array) -> jax.Array:
+    return jnp.moveaxis(jnp.asarray(posture), -1, 0)
 
 
-def tip(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """``(3,)`` tip origin about the system centroid, bus axes, m.
+def _batch_first(matrix: jax.Array, axes: int) -> jax.Array:
+    """``(a_1..a_axes, *batch)`` -> ``(*batch, a_1..a_axes)``."""
+    return jnp.moveaxis(matrix, tuple(range(axes)), tuple(range(-axes, 0)))
 
-    Args:
-        q: ``(n,)`` joint positions (rad or m), path order.
-    """
+
+# Kernels in batch-last form (q (n, *batch)) ----------------------------------------------
+
+
+def _tip_minor(robot, q):
     state = _chain_pass(robot, q)
-    return jnp.stack(jnp.broadcast_arrays(*_sub(state.tip, state.centroid)))
+    return _pack(_sub(state.tip, state.centroid))
+
+
+def _fixed_minor(robot, q):
+    return _rows(*_fixed_columns(_chain_pass(robot, q, with_momentum=False)))
+
+
+def _jstar_minor(robot, q):
+    state = _chain_pass(robot, q)
+    _, solved = _coupling(state)
+    v, w = _fixed_columns(state)
+    r_t = _sub(state.tip, state.centroid)
+    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    return _rows(v_star, _sub(w, solved))
+
+
+def _base_twist_minor(robot, q):
+    state = _chain_pass(robot, q)
+    _, solved = _coupling(state)
+    r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
+    # w_bus = -A qdot; v_bus = -P/M qdot - w_bus x r_g.
+    v = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(r_g, solved))
+    return _rows(v, _scale(-1.0, solved))
+
+
+def _outer(a, b):
+    """``(n, n, *batch)``: a_j . b_k for 3-tuples of ``(n, *batch)``."""
+    return sum(a[c][:, None] * b[c][None, :] for c in range(3))
+
+
+def _symmetric_from_upper(upper):
+    n = upper.shape[0]
+    mask = (jnp.arange(n)[:, None] <= jnp.arange(n)[None, :]).reshape((n, n) + (1,) * (upper.ndim - 2))
+    return jnp.where(mask, upper, jnp.swapaxes(upper, 0, 1))
+
+
+def _mass_from(state: _Pass):
+    # Row j, column k >= j: the generalized force of joint j from subtree k moving at unit rate.
+    revolute = 1.0 - state.prismatic
+    lever = _cross(state.axes, state.origins)
+    upper = revolute[:, None] * (_outer(state.axes, state.angular) - _outer(lever, state.momentum))
+    upper = upper + state.prismatic[:, None] * _outer(state.axes, state.momentum)
+    return _symmetric_from_upper(upper)
+
+
+def _mass_minor(robot, q):
+    return _mass_from(_chain_pass(robot, q))
+
+
+def _arm_inertia_minor(robot, q):
+    state = _chain_pass(robot, q)
+    coupling, solved = _coupling(state)
+    return _mass_from(state) - _outer(state.momentum, state.momentum) / state.mass - _outer(coupling, solved)
+
+
+# Postures per block: the arrays of one block stay in the core's cache (measured on the
+# UR5 J*: ~2k postures per block runs 5x faster than one pass over 10^5).
+BLOCK = 2048
+
+
+def batched(kernel, axes: int):
+    """A batch-last kernel as a function of ``(robot, q (..., n))`` -> ``(..., *result)``.
+
+    Large batches run in blocks of :data:`BLOCK` postures with ``lax.map`` (padded to
+    whole blocks), so memory stays bounded and each block's arrays stay in cache.
+    """
+
+    def apply(robot: SpatialRobot, posture: jax.Array) -> jax.Array:
+        posture = jnp.asarray(posture)
+        batch, n = posture.shape[:-1], posture.shape[-1]
+        flat = posture.reshape((-1, n))
+        count = flat.shape[0]
+        if count <= BLOCK:
+            out = _batch_first(kernel(robot, flat.T), axes)
+        else:
+            blocks = -(-count // BLOCK)
+            padded = jnp.concatenate([flat, jnp.zeros((blocks * BLOCK - count, n), flat.dtype)])
+            out = jax.lax.map(lambda block: _batch_first(kernel(robot, block.T), axes), padded.reshape(blocks, BLOCK, n))
+            out = out.reshape((blocks * BLOCK,) + out.shape[2:])[:count]
+        return out.reshape(batch + out.shape[1:])
+
+    apply.__name__ = kernel.__name__.strip("_").replace("_minor", "")
+    return apply
+
+
+# Primitives (one design, one posture; also any leading batch of postures) -----------------
+
+tip = batched(_tip_minor, 1)
+tip.__doc__ = """``(..., 3)`` tip origin about the system centroid, bus axes, m, for ``q (..., n)``."""
+
+fixed_base_jacobian = batched(_fixed_minor, 2)
+fixed_base_jacobian.__doc__ = """``(..., 6, n)`` tip twist [v; w] per joint rate with the bus held fixed, bus axes."""
+
+generalized_jacobian = batched(_jstar_minor, 2)
+generalized_jacobian.__doc__ = """``(..., 6, n)`` J*: tip twist [v; w] per joint rate at zero momentum, bus axes.
+
+The closed form of the module docstring (Umetani & Yoshida 1990, eq. 6, in 3-D):
+only a 3x3 system is solved, one pass over the chain per posture."""
+
+base_twist_map = batched(_base_twist_minor, 2)
+base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate at zero momentum, bus axes."""
+
+mass_matrix = batched(_mass_minor, 2)
+mass_matrix.__doc__ = """``(..., n, n)`` H_m: the arm's joint-space inertia with the bus held fixed."""
+
+arm_inertia = batched(_arm_inertia_minor, 2)
+arm_inertia.__doc__ = """``(..., n, n)`` H* = H_m - H_bm^T H_b^-1 H_bm: the arm inertia at zero momentum.
+
+In system-centroid coordinates H_b = blkdiag(M 1, I~) and H_bm = [P; I~_q], so
+H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q (Yoshida's generalized inertia)."""
 
 
 def tip_pose(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Tip frame in the bus frame (bus held still): ``(3, 3)`` axes and ``(3,)`` origin (bus-frame origin)."""
+    """Tip frame with the bus frame fixed, one posture: ``(3, 3)`` axes and ``(3,)`` origin."""
     cst = chain_constants(robot)
-    rotations, _, _, _, _, position = _forward(cst, robot.joint_kinds, jnp.asarray(q))
-    rot = _matmul(rotations[-1], _mat(cst.tip_rotation))
-    return _stack(rot), jnp.stack(jnp.broadcast_arrays(*position))
-
-
-def fixed_base_jacobian(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """``(6, n)`` tip twist [v; w] per joint rate with the bus held fixed, bus axes."""
-    state = _chain_pass(robot, q, with_momentum=False)
-    columns = _fixed_columns(state, robot.joint_kinds)
-    return _stack([[col[0][r] for col in columns] for r in range(3)] + [[col[1][r] for col in columns] for r in range(3)])
+    state = _chain_pass(robot, jnp.asarray(q), with_momentum=False)
+    return _pack(_matmul(state.last_rotation, _mat(cst.tip_rotation))), _pack(state.tip)
 
 
 def jacobians(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """J_S ``(6, 6)`` (tip twist per bus twist [v of bus centroid; w]) and J_M ``(6, n)``, bus axes."""
-    state = _chain_pass(robot, q, with_momentum=False)
-    r = _sub(state.tip, _vec(chain_constants(robot).base_com))
-    skew = _skew(r)
-    j_s = [[1.0 if c == row else 0.0 for c in range(3)] + [-skew[row][c] for c in range(3)] for row in range(3)]
-    j_s += [[0.0] * 3 + [1.0 if c == row else 0.0 for c in range(3)] for row in range(3)]
-    return _stack(j_s), fixed_base_jacobian(robot, q)
+    """One posture: J_S ``(6, 6)`` (tip twist per bus twist [v of bus centroid; w]) and J_M ``(6, n)``, bus axes."""
+    state = _chain_pass(robot, jnp.asarray(q), with_momentum=False)
+    skew = _skew(_sub(state.tip, _vec(jnp.asarray(robot.base_com))))
+    j_s = [[1.0 if c == r else 0.0 for c in range(3)] + [-skew[r][c] for c in range(3)] for r in range(3)]
+    j_s += [[0.0] * 3 + [1.0 if c == r else 0.0 for c in range(3)] for r in range(3)]
+    return _pack(j_s), _rows(*_fixed_columns(state))
 
 
 def momentum_map(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """I_S ``(6, 6)`` and I_M ``(6, n)``: total [linear; angular about the bus centroid] momentum
-    is I_S [v; w] + I_M qdot (bus twist [v of bus centroid; w]), bus axes."""
-    state = _chain_pass(robot, q)
-    base_com = _vec(chain_constants(robot).base_com)
+    """One posture: I_S ``(6, 6)`` and I_M ``(6, n)``; total [linear; angular about the bus
+    centroid] momentum is I_S [v; w] + I_M qdot (bus twist [v of bus centroid; w]), bus axes."""
+    state = _chain_pass(robot, jnp.asarray(q))
+    base_com = _vec(jnp.asarray(robot.base_com))
     mass = state.mass
     r_g = _sub(state.centroid, base_com)
     skew = _skew(r_g)
     about_com = _sym_full(_sym_add(state.inertia_g, _point_inertia(mass, r_g)))
-    i_s = [[mass if c == row else 0.0 for c in range(3)] + [-mass * skew[row][c] for c in range(3)] for row in range(3)]
-    i_s += [[mass * skew[row][c] for c in range(3)] + list(about_com[row]) for row in range(3)]
-    angular = [_sub(l, _cross(base_com, p)) for l, p in zip(state.angular, state.momentum)]
-    i_m = [[p[row] for p in state.momentum] for row in range(3)] + [[l[row] for l in angular] for row in range(3)]
-    return _stack(i_s), _stack(i_m)
-
-
-def generalized_jacobian(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """J* ``(6, n)``: tip twist [v; w] per joint rate at zero momentum, bus axes (closed form).
-
-    Umetani & Yoshida 1990, eq. (6), in 3-D; only a 3x3 system is solved (module docstring).
-    """
-    state = _chain_pass(robot, q)
-    _, solved = _coupling(state)
-    r_t = _sub(state.tip, state.centroid)
-    inv_mass = 1.0 / state.mass
-    rows_v, rows_w = [[], [], []], [[], [], []]
-    for (jv, jw), p, x in zip(_fixed_columns(state, robot.joint_kinds), state.momentum, solved):
-        v = _add(_sub(jv, _scale(inv_mass, p)), _cross(r_t, x))
-        w = _sub(jw, x)
-        for r in range(3):
-            rows_v[r].append(v[r])
-            rows_w[r].append(w[r])
-    return _stack(rows_v + rows_w)
-
-
-def base_twist_map(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """C(q) ``(6, n)``: bus twist [v of bus centroid; w] per joint rate at zero momentum, bus axes."""
-    state = _chain_pass(robot, q)
-    _, solved = _coupling(state)
-    r_g = _sub(state.centroid, _vec(chain_constants(robot).base_com))
-    inv_mass = 1.0 / state.mass
-    rows = [[] for _ in range(6)]
-    for p, x in zip(state.momentum, solved):
-        # v_bus = -P/M qdot - w x r_g with w = -x qdot.
-        v = _sub(_scale(-inv_mass, p), _cross(r_g, x))
-        for r in range(3):
-            rows[r].append(v[r])
-            rows[3 + r].append(-x[r])
-    return _stack(rows)
-
-
-def mass_matrix(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """H_m ``(n, n)``: the arm's joint-space inertia with the bus held fixed, kg m^2 (or kg)."""
-    state = _chain_pass(robot, q)
-    return _stack(_mass_rows(state, robot.joint_kinds))
-
-
-def _mass_rows(state: _Pass, kinds):
-    n = len(kinds)
-    entries = [[None] * n for _ in range(n)]
-    for j in range(n):
-        a = state.axes[j]
-        for k in range(j, n):
-            if kinds[j] == "revolute":
-                value = _dot(a, state.angular[k]) - _dot(_cross(a, state.origins[j]), state.momentum[k])
-            else:
-                value = _dot(a, state.momentum[k])
-            entries[j][k] = entries[k][j] = value
-    return entries
-
-
-def arm_inertia(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """H* = H_m - H_bm^T H_b^-1 H_bm ``(n, n)``: the arm inertia at zero momentum.
-
-    In system-centroid coordinates H_b = blkdiag(M 1, I~) and H_bm = [P; I~_q], so
-    H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q (Yoshida's generalized inertia).
-    """
-    state = _chain_pass(robot, q)
-    coupling, solved = _coupling(state)
-    h_m = _mass_rows(state, robot.joint_kinds)
-    n = len(coupling)
-    inv_mass = 1.0 / state.mass
-    rows = [
-        [h_m[j][k] - inv_mass * _dot(state.momentum[j], state.momentum[k]) - _dot(coupling[j], solved[k]) for k in range(n)]
-        for j in range(n)
-    ]
-    return _stack(rows)
+    i_s = [[mass if c == r else 0.0 for c in range(3)] + [-mass * skew[r][c] for c in range(3)] for r in range(3)]
+    i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
+    angular = _sub(state.angular, _cross(base_com, state.momentum))
+    return _pack(i_s), _rows(state.momentum, angular)
