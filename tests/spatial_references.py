@@ -137,7 +137,7 @@ def pinocchio_reference(combined: str, joint_names, tip: str, q):
     M = pin.crba(model, data, config)
     M = np.triu(M) + np.triu(M, 1).T
     M = M[np.ix_(order, order)]
-    frame = model.getFrameId(tip)
+    frame = model.getFrameId(tip, pin.BODY)
     J = pin.computeFrameJacobian(model, data, config, frame, pin.LOCAL_WORLD_ALIGNED)[:, order]
     pin.framesForwardKinematics(model, data, config)
     com = pin.centerOfMass(model, data, config)
@@ -279,8 +279,8 @@ def random_chain_urdf(rng, n: int, kinds=None):
              '<joint name="world_joint" type="fixed"><parent link="world"/><child link="root"/></joint>',
              f'<link name="root">{_inertial(rng, 3.0)}</link>',
              f'<link name="root_box">{_inertial(rng, 1.5)}</link>',
-             f'<joint name="root_box_joint" type="fixed"><origin xyz="{_fmt(rng.uniform(-0.3, 0.3, 3))}" rpy="{_fmt(rng.uniform(-1, 1, 3))}"/>'
-             '<parent link="root"/><child link="root_box"/></joint>']
+             (f'<joint name="root_box_joint" type="fixed"><origin xyz="{_fmt(rng.uniform(-0.3, 0.3, 3))}" rpy="{_fmt(rng.uniform(-1, 1, 3))}"/>'
+             '<parent link="root"/><child link="root_box"/></joint>')]
     parent, names = "root", []
     for i in range(n):
         kind = kinds[i]

@@ -29,13 +29,13 @@ from .spatial_references import (
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 TOLERANCE = 1e-10
 
-BUS = dict(
-    base_mass=80.0,
-    base_com=[0.1, -0.2, 0.05],
-    base_inertia=np.array([[9.0, 0.3, -0.2], [0.3, 8.0, 0.1], [-0.2, 0.1, 7.5]]),
-    mount_xyz=[0.4, 0.1, 0.3],
-    mount_rpy=[0.3, -0.5, 1.1],
-)
+BUS = {
+    "base_mass": 80.0,
+    "base_com": [0.1, -0.2, 0.05],
+    "base_inertia": np.array([[9.0, 0.3, -0.2], [0.3, 8.0, 0.1], [-0.2, 0.1, 7.5]]),
+    "mount_xyz": [0.4, 0.1, 0.3],
+    "mount_rpy": [0.3, -0.5, 1.1],
+}
 
 
 def _random_case(seed, n=6, kinds=None):

@@ -24,7 +24,7 @@ from ..family import RobotFamily
 from . import primitives
 from .robot import SpatialRobot
 
-__all__ = ["SpatialFamily", "SPATIAL", "root_gram_determinant"]
+__all__ = ["SPATIAL", "SpatialFamily", "root_gram_determinant"]
 
 
 def root_gram_determinant(J: jax.Array) -> jax.Array:
@@ -48,7 +48,7 @@ def root_gram_determinant(J: jax.Array) -> jax.Array:
 
 def _det_small(J, columns):
     t = len(columns)
-    a = lambda r, c: J[..., r, columns[c]]  # noqa: E731
+    a = lambda r, c: J[..., r, columns[c]]
     if t == 1:
         return a(0, 0)
     if t == 2:

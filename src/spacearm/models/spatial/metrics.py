@@ -17,14 +17,14 @@ from .family import root_gram_determinant
 from .robot import SpatialRobot
 
 __all__ = [
-    "rotational_manipulability",
+    "arm_inertia",
+    "base_twist_map",
+    "dynamic_manipulability",
+    "fixed_base_ellipsoid",
     "full_manipulability",
     "mass_matrix",
-    "arm_inertia",
-    "dynamic_manipulability",
-    "base_twist_map",
     "rotational_ellipsoid",
-    "fixed_base_ellipsoid",
+    "rotational_manipulability",
 ]
 
 

@@ -47,17 +47,17 @@ from .robot import SpatialRobot
 
 __all__ = [
     "ChainConstants",
+    "arm_inertia",
+    "base_twist_map",
     "chain_constants",
+    "fixed_base_jacobian",
+    "generalized_jacobian",
+    "jacobians",
+    "mass_matrix",
+    "momentum_map",
+    "rpy_to_matrix",
     "tip",
     "tip_pose",
-    "jacobians",
-    "momentum_map",
-    "fixed_base_jacobian",
-    "mass_matrix",
-    "generalized_jacobian",
-    "base_twist_map",
-    "arm_inertia",
-    "rpy_to_matrix",
 ]
 
 
@@ -114,7 +114,7 @@ def _from_columns(c0, c1, c2):
 def _sym_rotate(rot, inertia):
     """R I R^T for a symmetric I given as a full 3x3 tuple; returns the 6 unique entries."""
     a = _matmul(rot, inertia)
-    entry = lambda r, c: a[r][0] * rot[c][0] + a[r][1] * rot[c][1] + a[r][2] * rot[c][2]  # noqa: E731
+    entry = lambda r, c: a[r][0] * rot[c][0] + a[r][1] * rot[c][1] + a[r][2] * rot[c][2]
     return (entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2))
 
 
@@ -311,25 +311,23 @@ def _backward_step(carry, x):
 
 @dataclasses.dataclass
 class _Pass:
-    """One pass over the chain; tuples of scalar arrays, each of the posture batch shape."""
+    """One pass over the chain, as tuples of components.
 
-    rotations: list  # n body axes (turned frames), 3x3 tuples
-    origins: list  # n joint origins o_k
-    axes: list  # n unit joint axes a_k
+    Per-joint quantities are 3-tuples of ``(n, *batch)`` arrays (the joint axis leading,
+    so the post-processing is written once for all joints); per-posture ones are
+    3-tuples of ``(*batch)`` arrays.
+    """
+
+    last_rotation: tuple  # body n axes (turned frame), 3x3 tuple
+    origins: tuple  # joint origins o_k
+    axes: tuple  # unit joint axes a_k
     tip: tuple  # tip origin, bus frame
-    prismatic: list  # n Python floats, 1.0 for prismatic
-    momentum: list = None  # n p_k
-    angular: list = None  # n L_k about the bus-frame origin
+    prismatic: jax.Array  # (n, 1, ...) 1.0 for prismatic joints, broadcastable
+    momentum: tuple = None  # p_k
+    angular: tuple = None  # L_k about the bus-frame origin
     centroid: tuple = None  # G
     mass: jax.Array = None  # M
     inertia_g: tuple = None  # I~ about G, 6 entries (xx, yy, zz, xy, xz, yz)
-
-
-def _unstack(array, rank):
-    """Leading-axes array -> nested tuples of scalar arrays (rank 1: vector, 2: matrix)."""
-    if rank == 1:
-        return tuple(array[i] for i in range(array.shape[0]))
-    return tuple(_unstack(array[i], rank - 1) for i in range(array.shape[0]))
 
 
 def _chain_pass(robot: SpatialRobot, q, with_momentum: bool = True) -> _Pass:
@@ -337,29 +335,21 @@ def _chain_pass(robot: SpatialRobot, q, with_momentum: bool = True) -> _Pass:
     cst = chain_constants(robot)
     q = jnp.asarray(q)
     batch = q.shape[1:]
-    prismatic = [1.0 if k == "prismatic" else 0.0 for k in robot.joint_kinds]
-    flags = jnp.asarray(prismatic, dtype=q.dtype).reshape((-1,) + (1,) * len(batch))
+    flags = jnp.asarray([k == "prismatic" for k in robot.joint_kinds], dtype=q.dtype)
+    flags = flags.reshape((-1,) + (1,) * len(batch))
     angle = q * (1.0 - flags)  # prismatic joints turn by 0 and slide by q
     xs = (cst.placement, cst.offset, jnp.cos(angle), jnp.sin(angle), q * flags, cst.link_com, cst.link_inertia)
-    spread = lambda x: jnp.broadcast_to(x, batch)  # noqa: E731 (carries keep one shape)
+    spread = lambda x: jnp.broadcast_to(x, batch)
     start = (
         tuple(tuple(spread(cst.mount_rotation[r, c]) for c in range(3)) for r in range(3)),
         tuple(spread(cst.mount_xyz[r]) for r in range(3)),
     )
-    (rot, origin), (rotations, origins, axes, centroids, inertias) = jax.lax.scan(_forward_step, start, xs)
+    (rot, origin), (_, origins, axes, centroids, inertias) = jax.lax.scan(_forward_step, start, xs)
     tip = _add(origin, _matvec(rot, _vec(cst.tip_offset)))
-    n = len(prismatic)
-    pick = lambda tree, k: jax.tree_util.tree_map(lambda leaf: leaf[k], tree)  # noqa: E731
-    state = _Pass(
-        rotations=[pick(rotations, k) for k in range(n)],
-        origins=[pick(origins, k) for k in range(n)],
-        axes=[pick(axes, k) for k in range(n)],
-        tip=tip,
-        prismatic=prismatic,
-    )
+    state = _Pass(last_rotation=rot, origins=origins, axes=axes, tip=tip, prismatic=flags)
     if not with_momentum:
         return state
-    xs = (cst.link_mass, centroids, inertias, axes, origins, cst.subtree_mass, jnp.asarray(prismatic, q.dtype))
+    xs = (cst.link_mass, centroids, inertias, axes, origins, cst.subtree_mass, flags.reshape(-1))
     zero = jnp.zeros(batch, q.dtype)
     (moment, about), (momentum, angular) = jax.lax.scan(_backward_step, ((zero,) * 3, (zero,) * 6), xs, reverse=True)
     fixed = cst.fixed_inertia
@@ -367,29 +357,24 @@ def _chain_pass(robot: SpatialRobot, q, with_momentum: bool = True) -> _Pass:
     about = _sym_add(about, (fixed[0, 0], fixed[1, 1], fixed[2, 2], fixed[0, 1], fixed[0, 2], fixed[1, 2]))
     mass = cst.total_mass
     centroid = _scale(1.0 / mass, moment)
-    state.momentum = [pick(momentum, k) for k in range(n)]
-    state.angular = [pick(angular, k) for k in range(n)]
+    state.momentum, state.angular = momentum, angular
     state.centroid, state.mass = centroid, mass
     state.inertia_g = tuple(x - y for x, y in zip(about, _point_inertia(mass, centroid)))
     return state
 
 
 def _fixed_columns(state: _Pass):
-    """Fixed-base Jacobian columns (v, w) of the tip origin, bus axes."""
-    columns = []
-    for k, prismatic in enumerate(state.prismatic):
-        a = state.axes[k]
-        if prismatic:
-            columns.append((a, (0.0, 0.0, 0.0)))
-        else:
-            columns.append((_cross(a, _sub(state.tip, state.origins[k])), a))
-    return columns
+    """Fixed-base Jacobian of the tip origin, all joints at once: (v, w) 3-tuples of ``(n, *batch)``."""
+    revolute = 1.0 - state.prismatic
+    lever = _cross(state.axes, _sub(state.tip, state.origins))
+    v = _add(_scale(revolute, lever), _scale(state.prismatic, state.axes))
+    return v, _scale(revolute, state.axes)
 
 
 def _coupling(state: _Pass):
-    """I~_q columns (angular momentum about G per joint rate) and A = I~^-1 I~_q."""
-    coupling = [_sub(l, _cross(state.centroid, p)) for l, p in zip(state.angular, state.momentum)]
-    return coupling, _sym_solve(state.inertia_g, coupling)
+    """I~_q (angular momentum about G per joint rate) and A = I~^-1 I~_q, 3-tuples of ``(n, *batch)``."""
+    coupling = _sub(state.angular, _cross(state.centroid, state.momentum))
+    return coupling, _sym_solve(state.inertia_g, [coupling])[0]
 
 
 def _skew(v):
@@ -401,12 +386,9 @@ def _sym_full(s):
     return ((xx, xy, xz), (xy, yy, yz), (xz, yz, zz))
 
 
-def _columns_to_matrix(top, bottom=None):
-    """``(rows, n, *batch)`` from n column vectors (top rows, then bottom rows)."""
-    rows = [[col[r] for col in top] for r in range(len(top[0]))]
-    if bottom is not None:
-        rows += [[col[r] for col in bottom] for r in range(len(bottom[0]))]
-    return _pack(rows)
+def _rows(*vectors):
+    """``(3 * len(vectors), n, *batch)``: the components of 3-tuples of ``(n, *batch)`` as rows."""
+    return _pack([component for vector in vectors for component in vector])
 
 
 def _batch_last(posture: jax.Array) -> jax.Array:
@@ -427,63 +409,55 @@ def _tip_minor(robot, q):
 
 
 def _fixed_minor(robot, q):
-    columns = _fixed_columns(_chain_pass(robot, q, with_momentum=False))
-    return _columns_to_matrix([c[0] for c in columns], [c[1] for c in columns])
+    return _rows(*_fixed_columns(_chain_pass(robot, q, with_momentum=False)))
 
 
 def _jstar_minor(robot, q):
     state = _chain_pass(robot, q)
     _, solved = _coupling(state)
+    v, w = _fixed_columns(state)
     r_t = _sub(state.tip, state.centroid)
-    inv_mass = 1.0 / state.mass
-    top, bottom = [], []
-    for (jv, jw), p, x in zip(_fixed_columns(state), state.momentum, solved):
-        top.append(_add(_sub(jv, _scale(inv_mass, p)), _cross(r_t, x)))
-        bottom.append(_sub(jw, x))
-    return _columns_to_matrix(top, bottom)
+    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    return _rows(v_star, _sub(w, solved))
 
 
 def _base_twist_minor(robot, q):
     state = _chain_pass(robot, q)
     _, solved = _coupling(state)
     r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
-    inv_mass = 1.0 / state.mass
     # w_bus = -A qdot; v_bus = -P/M qdot - w_bus x r_g.
-    top = [_sub(_scale(-inv_mass, p), _cross(r_g, x)) for p, x in zip(state.momentum, solved)]
-    return _columns_to_matrix(top, [_scale(-1.0, x) for x in solved])
+    v = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(r_g, solved))
+    return _rows(v, _scale(-1.0, solved))
 
 
-def _mass_entries(state: _Pass):
-    n = len(state.prismatic)
-    entries = [[None] * n for _ in range(n)]
-    for j in range(n):
-        a = state.axes[j]
-        lever = None if state.prismatic[j] else _cross(a, state.origins[j])
-        for k in range(j, n):
-            if state.prismatic[j]:
-                value = _dot(a, state.momentum[k])
-            else:
-                value = _dot(a, state.angular[k]) - _dot(lever, state.momentum[k])
-            entries[j][k] = entries[k][j] = value
-    return entries
+def _outer(a, b):
+    """``(n, n, *batch)``: a_j . b_k for 3-tuples of ``(n, *batch)``."""
+    return sum(a[c][:, None] * b[c][None, :] for c in range(3))
+
+
+def _symmetric_from_upper(upper):
+    n = upper.shape[0]
+    mask = (jnp.arange(n)[:, None] <= jnp.arange(n)[None, :]).reshape((n, n) + (1,) * (upper.ndim - 2))
+    return jnp.where(mask, upper, jnp.swapaxes(upper, 0, 1))
+
+
+def _mass_from(state: _Pass):
+    # Row j, column k >= j: the generalized force of joint j from subtree k moving at unit rate.
+    revolute = 1.0 - state.prismatic
+    lever = _cross(state.axes, state.origins)
+    upper = revolute[:, None] * (_outer(state.axes, state.angular) - _outer(lever, state.momentum))
+    upper = upper + state.prismatic[:, None] * _outer(state.axes, state.momentum)
+    return _symmetric_from_upper(upper)
 
 
 def _mass_minor(robot, q):
-    return _pack(_mass_entries(_chain_pass(robot, q)))
+    return _mass_from(_chain_pass(robot, q))
 
 
 def _arm_inertia_minor(robot, q):
     state = _chain_pass(robot, q)
     coupling, solved = _coupling(state)
-    h = _mass_entries(state)
-    n = len(coupling)
-    inv_mass = 1.0 / state.mass
-    return _pack(
-        [
-            [h[j][k] - inv_mass * _dot(state.momentum[j], state.momentum[k]) - _dot(coupling[j], solved[k]) for k in range(n)]
-            for j in range(n)
-        ]
-    )
+    return _mass_from(state) - _outer(state.momentum, state.momentum) / state.mass - _outer(coupling, solved)
 
 
 # Postures per block: the arrays of one block stay in the core's cache (measured on the
@@ -547,7 +521,7 @@ def tip_pose(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Tip frame with the bus frame fixed, one posture: ``(3, 3)`` axes and ``(3,)`` origin."""
     cst = chain_constants(robot)
     state = _chain_pass(robot, jnp.asarray(q), with_momentum=False)
-    return _pack(_matmul(state.rotations[-1], _mat(cst.tip_rotation))), _pack(state.tip)
+    return _pack(_matmul(state.last_rotation, _mat(cst.tip_rotation))), _pack(state.tip)
 
 
 def jacobians(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -556,8 +530,7 @@ def jacobians(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     skew = _skew(_sub(state.tip, _vec(jnp.asarray(robot.base_com))))
     j_s = [[1.0 if c == r else 0.0 for c in range(3)] + [-skew[r][c] for c in range(3)] for r in range(3)]
     j_s += [[0.0] * 3 + [1.0 if c == r else 0.0 for c in range(3)] for r in range(3)]
-    columns = _fixed_columns(state)
-    return _pack(j_s), _columns_to_matrix([c[0] for c in columns], [c[1] for c in columns])
+    return _pack(j_s), _rows(*_fixed_columns(state))
 
 
 def momentum_map(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -571,5 +544,5 @@ def momentum_map(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Arra
     about_com = _sym_full(_sym_add(state.inertia_g, _point_inertia(mass, r_g)))
     i_s = [[mass if c == r else 0.0 for c in range(3)] + [-mass * skew[r][c] for c in range(3)] for r in range(3)]
     i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
-    angular = [_sub(l, _cross(base_com, p)) for l, p in zip(state.angular, state.momentum)]
-    return _pack(i_s), _columns_to_matrix(state.momentum, angular)
+    angular = _sub(state.angular, _cross(base_com, state.momentum))
+    return _pack(i_s), _rows(state.momentum, angular)

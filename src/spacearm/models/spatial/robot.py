@@ -22,10 +22,9 @@ import jax
 import numpy as np
 
 from ..._core.errors import ConfigError
-
 from .urdf import ArmChain, check_inertia, rpy_matrix
 
-__all__ = ["SpatialRobot", "Labels", "robot_from_chain", "stack_spatial_robots"]
+__all__ = ["Labels", "SpatialRobot", "robot_from_chain", "stack_spatial_robots"]
 
 # Leaf fields in a fixed order: (name, trailing shape given n) for validation.
 _LEAF_SHAPES = {
@@ -272,7 +271,7 @@ def robot_from_chain(
     Raises:
         ConfigError: naming the field.
     """
-    f = lambda x: np.asarray(x, dtype=np.float64)  # noqa: E731
+    f = lambda x: np.asarray(x, dtype=np.float64)
     return SpatialRobot(
         base_mass=f(base_mass),
         base_com=f(base_com),

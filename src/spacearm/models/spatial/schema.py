@@ -30,11 +30,10 @@ import numpy as np
 
 from ..._core.errors import ConfigError
 from ..._core.schema import check_keys, number, read_yaml
-
 from .robot import SpatialRobot, robot_from_chain
 from .urdf import check_inertia, read_urdf
 
-__all__ = ["is_spatial_config", "load_spatial_robot", "spatial_robot_from_mapping", "locate_package_file"]
+__all__ = ["is_spatial_config", "load_spatial_robot", "locate_package_file", "spatial_robot_from_mapping"]
 
 _TOP_KEYS = {"name", "description", "base", "mount", "arm"}
 _BASE_KEYS = {"mass", "com", "inertia"}

@@ -42,10 +42,10 @@ from ..._core.schema import did_you_mean
 
 __all__ = [
     "ArmChain",
-    "read_urdf",
-    "parse_urdf",
-    "rpy_matrix",
     "check_inertia",
+    "parse_urdf",
+    "read_urdf",
+    "rpy_matrix",
 ]
 
 MOVABLE = ("revolute", "continuous", "prismatic")
@@ -387,7 +387,7 @@ def parse_urdf(
             raise ConfigError(f"{source}: joint '{joint.name}': the joints form a loop")
         seen.add(link)
     path.reverse()
-    on_path = {joint.name for joint in path}
+    {joint.name for joint in path}
     arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
     if not arm:
         raise ConfigError(
