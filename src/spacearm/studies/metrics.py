@@ -21,6 +21,8 @@ from ..analysis import (
     normalized_workspace_areas,
     straight_path_workspace,
 )
+from ..analysis.averages import joint_average
+from ..analysis.joint_box import check_joint_box
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
@@ -160,6 +162,55 @@ def _posture(robot, options):
     }
 
 
+# Options of analysis.averages.joint_average a sweep file may set (designs_per_chunk is
+# the sweep's own business). The sweep default rtol is 1e-3, the library's 1e-4.
+AVERAGE_OPTIONS = ("rtol", "randomizations", "block", "min_samples", "max_samples", "seed")
+SWEEP_RTOL = 1e-3
+
+
+def _check_average(where: str, options: dict) -> None:
+    check_keys(f"{where}: ", options, AVERAGE_OPTIONS)
+    rtol = options.get("rtol", SWEEP_RTOL)
+    if not is_number(rtol) or not rtol > 0:
+        raise ConfigError(f"{where}.rtol: must be a positive number (the relative standard error), got {rtol!r}")
+    integer(f"{where}.randomizations", options.get("randomizations", 8), least=2)
+    block = integer(f"{where}.block", options.get("block", 1024), least=1)
+    if block & (block - 1):
+        raise ConfigError(f"{where}.block: must be a power of two, got {block}")
+    least = integer(f"{where}.min_samples", options.get("min_samples", 2**14), least=1)
+    most = integer(f"{where}.max_samples", options.get("max_samples", 2**24), least=1)
+    if most < least:
+        raise ConfigError(f"{where}.max_samples: must be at least min_samples ({least}), got {most}")
+    integer(f"{where}.seed", options.get("seed", 0), least=0)
+
+
+def _check_average_robot(where: str, options: dict, robot) -> None:
+    try:
+        check_joint_box(robot)
+    except ConfigError as error:
+        raise ConfigError(f"{where}: {error}") from None
+
+
+def _joint_average(kind: str, column: str):
+    """A joint-box average as sweep columns: the value and its standard error (same unit)."""
+
+    def evaluate(robot, options):
+        average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **options}, designs_per_chunk=1)
+        return {column: average.value, f"{column}_error": average.error}
+
+    return evaluate
+
+
+_AVERAGES = {
+    # metric name: (joint_average metric, column, description)
+    "w_avg": ("manipulability", "w_avg_m3", "mean translational w* over the joint box (m^3), with its standard error"),
+    "gci": ("conditioning", "gci", "global conditioning index: mean 1/kappa(J*_v) over the joint box"),
+    "base_disturbance": ("base_disturbance", "C_w_avg",
+                         "mean ||C_w||_F over the joint box (bus rad/s per joint rad/s)"),
+    "dynamic_manipulability": ("dynamic_manipulability", "w_d_avg", "mean dynamic manipulability w_d over the joint box"),
+}
+
+
 METRICS: dict[str, Metric] = {
     "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, check_robot=_check_wbar_robot, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
     "S_M": Metric(_areas, lambda o: ["S_M"], description="Maximum Reachable area / (pi L^2)"),
@@ -177,6 +228,10 @@ METRICS: dict[str, Metric] = {
                       description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
                                   "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)"),
 }
+for _name, (_kind, _column, _text) in _AVERAGES.items():
+    METRICS[_name] = Metric(_joint_average(_kind, _column), (lambda c: lambda o: [c, f"{c}_error"])(_column),
+                            check=_check_average, check_robot=_check_average_robot, families=("spatial",),
+                            description=_text + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})")
 
 
 def metric_columns(metrics: Sequence[MetricSpec]) -> list[str]:

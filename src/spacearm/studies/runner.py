@@ -53,6 +53,15 @@ def _mesh():
     return jax.sharding.Mesh(devices, ("designs",))
 
 
+def _shard_map(function, *, mesh, in_specs, out_specs):
+    """``jax.shard_map`` (jax >= 0.6) or its earlier home, without replication checks."""
+    if hasattr(jax, "shard_map"):
+        return jax.shard_map(function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_vma=False)
+    from jax.experimental.shard_map import shard_map  # noqa: PLC0415 - jax < 0.6
+
+    return shard_map(function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_rep=False)
+
+
 def _chunks(total: int, size: int) -> list[tuple[int, int]]:
     return [(start, min(start + size, total)) for start in range(0, total, size)]
 
@@ -126,7 +135,13 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     # slower per design on CPU), while chunk_size alone bounds the memory.
     per_device = chunk // devices
     step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(DESIGNS_PER_STEP, per_device)))
-    evaluate = jax.jit(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)))
+    # shard_map: each device runs its own rows with no collective inside. Under plain
+    # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
+    # needs the loop predicate reduced across devices every iteration, and that
+    # deadlocked with several CPU devices in one process.
+    evaluate = jax.jit(_shard_map(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)),
+                                  mesh=mesh, in_specs=jax.sharding.PartitionSpec("designs"),
+                                  out_specs=jax.sharding.PartitionSpec("designs")))
     columns = metric_columns(spec.metrics)
 
     compile_s = 0.0
