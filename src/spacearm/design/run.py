@@ -19,7 +19,7 @@ from ..io import manifest as provenance
 from .baselines import grid_search, nsga2_search
 import numpy as np
 
-from .fronts import hypervolume, hypervolume_2d
+from .fronts import hypervolume
 from .problem import DesignProblem
 from .search import SearchResult, pareto_search, value_and_grad_cost_ratio
 
@@ -58,7 +58,7 @@ def _grid_convergence(problem: DesignProblem, grid: SearchResult) -> list[dict]:
         sub = values[tuple(slice(None, None, s) for s in strides)].reshape(-1, values.shape[-1])
         rows.append(dict(points=list(level), evaluations=int(sub.shape[0]),
                          seconds=seconds_per_design * sub.shape[0],
-                         hypervolume=hypervolume_2d(sub, problem.reference_point)))
+                         hypervolume=hypervolume(sub, problem.reference_point)))
     return rows
 
 
@@ -118,7 +118,6 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, baselines
     started = time.perf_counter()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    two = len(problem.objectives) == 2
     log(f"optimize {problem.name}: {len(problem.variables)} variables ({', '.join(problem.variable_names)}), "
         f"objectives {', '.join(problem.objectives)}")
     gradient = pareto_search(problem)
@@ -134,7 +133,7 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, baselines
     if baselines and problem.grid_points is not None:
         grid = grid_search(problem)
         results["grid"] = grid
-        grid_rows = _grid_convergence(problem, grid) if two else None
+        grid_rows = _grid_convergence(problem, grid)
         log(f"  grid {'x'.join(map(str, problem.grid_points))}: {grid.evaluations} evaluations, "
             f"run {grid.run_seconds:.2f} s, hypervolume {grid.checkpoints[-1]['hypervolume']:.6g}")
     if baselines and problem.nsga2 is not None:
