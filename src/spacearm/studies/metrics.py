@@ -50,6 +50,10 @@ class Metric:
     check_robot: Callable[[str, dict, PlanarRobot], None] = lambda where, options, robot: None
     # The robot families the metric is defined for ("planar", "spatial").
     families: tuple[str, ...] = ("planar",)
+    # At most this many designs vmapped together per device step (None: the runner's
+    # default). Adaptive loops (the joint-box averages) run a vmapped step until its
+    # slowest design is done, so they want small steps.
+    designs_per_step: int | None = None
 
 
 def _no_options(where: str, options: dict) -> None:
@@ -231,6 +235,7 @@ METRICS: dict[str, Metric] = {
 for _name, (_kind, _column, _text) in _AVERAGES.items():
     METRICS[_name] = Metric(_joint_average(_kind, _column), (lambda c: lambda o: [c, f"{c}_error"])(_column),
                             check=_check_average, check_robot=_check_average_robot, families=("spatial",),
+                            designs_per_step=8,
                             description=_text + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})")
 
 

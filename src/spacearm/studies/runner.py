@@ -34,7 +34,7 @@ from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
 from ..io import manifest as provenance
 from .designs import build_designs, design_columns
-from .metrics import design_function, metric_columns
+from .metrics import METRICS, design_function, metric_columns
 from .spec import SweepSpec
 from .table2 import REPORTS
 
@@ -134,7 +134,9 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
     # slower per design on CPU), while chunk_size alone bounds the memory.
     per_device = chunk // devices
-    step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(DESIGNS_PER_STEP, per_device)))
+    per_step = min([DESIGNS_PER_STEP] + [METRICS[m.name].designs_per_step for m in spec.metrics
+                                         if METRICS[m.name].designs_per_step])
+    step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(per_step, per_device)))
     # shard_map: each device runs its own rows with no collective inside. Under plain
     # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
     # needs the loop predicate reduced across devices every iteration, and that
