@@ -12,8 +12,8 @@ from ._help import LazyEpilogHelp
 
 
 def _epilog() -> str:
-    from ..studies.designs import FIELD_HELP
-    from ..studies.metrics import METRICS, WBAR_OPTIONS
+    from ..studies.designs import FIELD_HELP, SPATIAL_FIELD_HELP
+    from ..studies.metrics import AVERAGE_OPTIONS, METRICS, WBAR_OPTIONS
 
     return (
         "examples:\n"
@@ -22,8 +22,11 @@ def _epilog() -> str:
         "  SPACEARM_COORDINATOR=127.0.0.1:8476 SPACEARM_NUM_PROCESSES=2 SPACEARM_PROCESS_ID=0 spacearm sweep FILE &\n"
         "  SPACEARM_COORDINATOR=127.0.0.1:8476 SPACEARM_NUM_PROCESSES=2 SPACEARM_PROCESS_ID=1 spacearm sweep FILE\n"
         "    (two processes, one sweep: jax.distributed over gloo; process 0 writes the results)\n"
-        f"design fields for axes: {FIELD_HELP}\n"
-        f"metrics: {', '.join(sorted(METRICS))}\n"
+        f"design fields for axes (planar robots): {FIELD_HELP}\n"
+        f"design fields for axes (spatial robots, files with arm:): {SPATIAL_FIELD_HELP}\n"
+        f"metrics (planar): {', '.join(sorted(n for n, m in METRICS.items() if 'planar' in m.families))}\n"
+        f"metrics (spatial): {', '.join(sorted(n for n, m in METRICS.items() if 'spatial' in m.families))}; "
+        f"the joint-box averages take {', '.join(AVERAGE_OPTIONS)}\n"
         f"wbar options ({{name: wbar, ...}}): {', '.join(WBAR_OPTIONS)}; rule: product trades the\n"
         "  default's ~1e-13 for ~1e-4 and a fixed node grid that is many times faster for big sweeps"
     )
