@@ -89,9 +89,11 @@ class SingularPostures:
         joints: ``(k, n)`` joint positions.
         residual: ``(k,)`` |s| after refinement (s: det J_v or sigma_min(J_v), m^t or m).
         on_set: ``(k,)`` bool: the refinement converged (|s| <= tol times the median
-            |s| of the samples).
+            |s| of the samples; tol 1e-9 for det J_v, 1e-6 for sigma_min, which comes
+            from the square root of an eigenvalue and bottoms out near sqrt(eps)).
         radius: ``(k,)`` |tip| about the system centroid, m.
         tip: ``(k, d)`` tip about the centroid, bus (robot) axes, m.
+        tolerance: the absolute bound on |s| that ``on_set`` used.
     """
 
     joints: jax.Array
@@ -99,6 +101,7 @@ class SingularPostures:
     on_set: jax.Array
     radius: jax.Array
     tip: jax.Array
+    tolerance: jax.Array
 
 
 @jax.tree_util.register_dataclass
@@ -111,7 +114,15 @@ class GuaranteedWorkspace:
         path_independent: min |tip| over the dynamic singular set (Papadopoulos & Dubowsky).
         kinematic: min |tip| over the kinematic (fixed-base) singular set: eq. (8)'s argument.
         outer: the outer reachable radius.
-        empty: bool, no point is both reachable and inside the singularity-free sphere.
+        empty: bool, no point is both reachable and inside the singularity-free sphere
+            (path_independent <= inner, to 1e-9 of the outer radius).
+
+    Note: where |tip| has an interior extremum over the joint box, p^T J*_v = 0 there,
+    so J*_v is singular: a hole whose nearest posture is not at a joint limit is
+    bounded by singular tips, and the sphere is empty (the UR5 on its smallsat). Then
+    the path-independent regions are the radial gaps between the shells that singular
+    tips sweep (Papadopoulos & Dubowsky), visible in ``spatial_shells``; this record
+    gives only the innermost sphere.
     """
 
     inner: jax.Array
@@ -243,14 +254,10 @@ def singularity_measure(robot, joints: jax.Array, jacobian: str = "generalized")
         ``(...)``: det J_v for a square J_v (t = n; signed, so it changes sign across
         the set), else sigma_min(J_v) >= 0 (m/rad).
     """
-    family = family_of(robot)
-    t = family.translational_rows
-    if jacobian == "generalized":
-        J = generalized_jacobian(robot, _joints_to_posture(robot, joints))[..., :t, :]
-    elif jacobian == "fixed_base":
-        J = fixed_base_jacobian(robot, joints)[..., :t, :]
-    else:
+    if jacobian not in ("generalized", "fixed_base"):
         raise ValueError(f"jacobian: 'generalized' or 'fixed_base', got {jacobian!r}")
+    t = family_of(robot).translational_rows
+    J = _translational(robot, joints, jacobian)
     if J.shape[-1] == t and t <= 3:
         return square_determinant(J)
     smallest = jnp.linalg.eigvalsh(J @ jnp.swapaxes(J, -1, -2))[..., 0]
@@ -262,21 +269,62 @@ def _tip_radius_sq(robot, joints):
     return jnp.sum(tip_position(robot, _joints_to_posture(robot, joints)) ** 2, axis=-1)
 
 
+def _translational(robot, joints, jacobian):
+    t = family_of(robot).translational_rows
+    if jacobian == "generalized":
+        return generalized_jacobian(robot, _joints_to_posture(robot, joints))[..., :t, :]
+    return fixed_base_jacobian(robot, joints)[..., :t, :]
+
+
 def _newton_project(robot, joints, jacobian, steps, lower, upper, wraps):
-    """Move each row of ``joints`` onto s = 0 by Newton steps along grad s (clipped to the box)."""
-    value_and_grad = jax.vmap(jax.value_and_grad(lambda q: singularity_measure(robot, q, jacobian)))
+    """Move each row of ``joints`` onto the singular set (clipped to the box).
 
-    def step(_, q):
-        s, g = value_and_grad(q)
-        norm_sq = jnp.sum(g * g, axis=-1, keepdims=True)
-        ok = norm_sq > 0
-        q = q - jnp.where(ok, s[:, None] * g / jnp.where(ok, norm_sq, 1.0), 0.0)
-        return jnp.where(wraps, q, jnp.clip(q, lower, upper))
+    Square J_v: Newton steps on the scalar det J_v along its gradient. Redundant
+    J_v (t < n): rank loss is codimension n - t + 1 > 1 and sigma_min is not smooth
+    enough for scalar Newton to converge fast; instead Gauss-Newton (minimum-norm steps)
+    on the system J_v(q)^T u = 0, |u|^2 = 1 in the unknowns (q, u), u the left null
+    direction (started at the smallest left singular vector): quadratic convergence
+    onto the set.
+    """
+    t = family_of(robot).translational_rows
+    n = joints.shape[-1]
+    if n == t:
+        value_and_grad = jax.vmap(jax.value_and_grad(lambda q: singularity_measure(robot, q, jacobian)))
 
-    return jax.lax.fori_loop(0, steps, step, joints)
+        def step(_, q):
+            s, g = value_and_grad(q)
+            norm_sq = jnp.sum(g * g, axis=-1, keepdims=True)
+            ok = norm_sq > 0
+            q = q - jnp.where(ok, s[:, None] * g / jnp.where(ok, norm_sq, 1.0), 0.0)
+            return jnp.where(wraps, q, jnp.clip(q, lower, upper))
+
+        return jax.lax.fori_loop(0, steps, step, joints)
+
+    def residual(z):
+        q, u = z[:n], z[n:]
+        return jnp.concatenate([_translational(robot, q, jacobian).T @ u, 0.5 * (jnp.sum(u * u) - 1.0)[None]])
+
+    def gauss_newton(z):
+        G = residual(z)
+        A = jax.jacfwd(residual)(z)  # (n + 1, n + t)
+        gram = A @ A.T
+        damping = 1e-14 * jnp.trace(gram) / gram.shape[0]
+        dz = A.T @ jnp.linalg.solve(gram + damping * jnp.eye(gram.shape[0], dtype=gram.dtype), G)
+        z = z - dz
+        q = jnp.where(wraps, z[:n], jnp.clip(z[:n], lower, upper))
+        return jnp.concatenate([q, z[n:]])
+
+    def start(q):
+        J = _translational(robot, q, jacobian)
+        _, vectors = jnp.linalg.eigh(J @ J.T)
+        return jnp.concatenate([q, vectors[:, 0]])
+
+    z = jax.vmap(start)(joints)
+    z = jax.lax.fori_loop(0, steps, lambda _, z: jax.vmap(gauss_newton)(z), z)
+    return z[:, :n]
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "newton_steps", "seed"))
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "newton_steps", "seed", "tol"))
 def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
     n = family_of(robot).joint_count(robot)
     lower, upper = joint_box(robot)
@@ -289,7 +337,10 @@ def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
     q = _newton_project(robot, joints[nearest], jacobian, newton_steps, lower, upper, wraps)
     residual = jnp.abs(singularity_measure(robot, q, jacobian))
     tip = tip_position(robot, _joints_to_posture(robot, q))
-    return SingularPostures(q, residual, residual <= tol * scale, jnp.linalg.norm(tip, axis=-1), tip)
+    if tol is None:
+        tol = 1e-9 if n == family_of(robot).translational_rows else 1e-6
+    tolerance = tol * scale
+    return SingularPostures(q, residual, residual <= tolerance, jnp.linalg.norm(tip, axis=-1), tip, tolerance)
 
 
 def singular_postures(
@@ -298,9 +349,9 @@ def singular_postures(
     *,
     samples: int = 2**14,
     keep: int = 2048,
-    newton_steps: int = 12,
+    newton_steps: int = 16,
     seed: int = 0,
-    tol: float = 1e-9,
+    tol: float | None = None,
 ) -> SingularPostures:
     """The dynamic (``"generalized"``) or kinematic (``"fixed_base"``) singular set, sampled then refined.
 
@@ -333,12 +384,13 @@ def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, d
         moved = q - length * tangent / jnp.where(size > 0, size, 1.0)
         moved = _newton_project(robot, moved, jacobian, newton_steps, lower, upper, wraps)
         better = _tip_radius_sq(robot, moved) < _tip_radius_sq(robot, q)
-        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= jnp.abs(singularity_measure(robot, q, jacobian)) + 1e-12
+        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= postures.tolerance
         return jnp.where((better & on_set)[:, None], moved, q)
 
     q = jax.lax.fori_loop(0, descent_steps, step, q0)
     q = jax.lax.stop_gradient(q)
-    radii = jnp.sqrt(_tip_radius_sq(robot, q))
+    on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= postures.tolerance
+    radii = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, q)), jnp.inf)
     k = jnp.argmin(radii)
     return radii[k], q[k]
 
@@ -367,7 +419,8 @@ def singular_radius(
     shrinking geometrically).
 
     Returns:
-        ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs.
+        ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
+        ``inf`` when no sampled posture converged onto the set (none in the box).
         The radius is differentiable in the design by the envelope theorem only in the
         sense that the posture is held fixed (a constrained minimum also moves with the set).
     """
@@ -391,7 +444,8 @@ def guaranteed_workspace(robot, **options) -> GuaranteedWorkspace:
     reach = reachable_radii(robot)
     dynamic, _ = singular_radius(robot, "generalized", **options)
     kinematic, _ = singular_radius(robot, "fixed_base", **options)
-    return GuaranteedWorkspace(reach.inner, dynamic, kinematic, reach.outer, reach.inner >= dynamic)
+    empty = dynamic <= reach.inner + 1e-9 * reach.outer
+    return GuaranteedWorkspace(reach.inner, dynamic, kinematic, reach.outer, empty)
 
 
 # Directions --------------------------------------------------------------------------
