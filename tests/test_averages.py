@@ -138,3 +138,25 @@ def test_spatial_averages_and_gradient():
     # The public dispatch returns the estimate with its error for spatial robots.
     estimate = averages.average_manipulability(robot, rtol=1e-3)
     assert float(estimate.relative_error) <= 1e-3
+
+
+@pytest.mark.parametrize("metric", ["conditioning", "base_disturbance", "dynamic_manipulability"])
+def test_other_averages_are_differentiable(metric):
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    options = dict(rtol=1e-15, min_samples=2**11, max_samples=2**11, block=256)
+
+    def mean(r):
+        return averages.joint_average(r, metric, **options).value
+
+    value, grad = jax.value_and_grad(mean)(robot)
+    assert np.isfinite(float(value)) and float(value) > 0
+    fd = _finite_difference(mean, robot, "base_mass", 1e-2)
+    np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-5)
+    e = jnp.zeros(3).at[0].set(1.0)
+    fd = (mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e)) - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))) / 2e-6
+    np.testing.assert_allclose(float(grad.mount_xyz[0]), float(fd), rtol=1e-5, atol=1e-9 * abs(float(value)))
+
+
+def test_dynamic_manipulability_needs_a_spatial_robot():
+    with pytest.raises(sa.ConfigError, match="spatial"):
+        averages.average_dynamic_manipulability(sa.umetani1990())
