@@ -3,7 +3,7 @@
 Run: python benchmarks/bench_sweep.py [--designs 10000] [--loop-designs 200] [--rules adaptive,product]
 
 The sweep stacks all designs into one batched pytree and evaluates them in compiled,
-vmapped chunks (spacearm.sweep.run_sweep, files written to a temporary folder). The
+vmapped chunks (spacearm.studies.run_sweep, files written to a temporary folder). The
 baseline is the loop a user would write: for each design, call the single-design
 functions (average_manipulability and normalized_areas, both jitted entry points) and
 read the numbers, timed on a subset and reported per design. Compile time is reported
@@ -30,7 +30,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
 from spacearm.metrics import average_manipulability, normalized_areas  # noqa: E402
-from spacearm.sweep import build_designs, load_sweep, run_sweep  # noqa: E402
+from spacearm.studies import build_designs, load_sweep, run_sweep  # noqa: E402
 
 RULES = {
     "adaptive": {},

@@ -34,7 +34,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
 from spacearm import metrics  # noqa: E402
-from spacearm.sweep import build_designs, load_sweep  # noqa: E402
+from spacearm.studies import build_designs, load_sweep  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))

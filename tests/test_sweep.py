@@ -11,14 +11,17 @@ import pytest
 import yaml
 
 import spacearm as sa
-from spacearm import results
+from spacearm import io as sio
 from spacearm.cli import main
-from spacearm.sweep import build_designs, load_sweep, run_sweep
+from spacearm.figures.sweep import write_figures
+from spacearm.io import manifest as provenance
+from spacearm.models.planar import robot_to_mapping
+from spacearm.studies import build_designs, load_sweep, run_sweep
 
 ROBOT = str(Path("configs/umetani1990.yaml").resolve())
 
 
-ROBOT_MAPPING = sa.robot.robot_to_mapping(sa.umetani1990())
+ROBOT_MAPPING = robot_to_mapping(sa.umetani1990())
 THREE_LINKS = {**ROBOT_MAPPING, "links": ROBOT_MAPPING["links"] + [ROBOT_MAPPING["links"][-1]]}
 
 
@@ -74,8 +77,8 @@ def test_zip_and_ranges():
 
 def test_table_matches_single_design_functions(tmp_path):
     spec = load_sweep(sweep_config())
-    result = run_sweep(spec, tmp_path / "out", progress=False)
-    table = results.read_csv(tmp_path / "out" / "table.csv")
+    result = run_sweep(spec, tmp_path / "out", progress=False, outputs=(write_figures,))
+    table = sio.read_csv(tmp_path / "out" / "table.csv")
     for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
         K = np.asarray(sa.tip_coefficients(robot))
@@ -87,7 +90,7 @@ def test_table_matches_single_design_functions(tmp_path):
     for key in ("config", "config_sha256", "packages", "git", "float64", "device_count", "devices", "timings_s"):
         assert key in manifest
     assert manifest["float64"] is True
-    assert manifest["config_sha256"] == results.config_hash(spec.config)
+    assert manifest["config_sha256"] == sio.config_hash(spec.config)
     with np.load(tmp_path / "out" / "grids.npz") as grids:
         np.testing.assert_allclose(grids["metric/R_max_m"], table["R_max_m"])
     assert (tmp_path / "out" / "metrics.png").exists()
@@ -110,13 +113,13 @@ def test_wbar_options_reach_the_quadrature(tmp_path):
 
 
 def test_workspace_areas_metric(tmp_path):
-    from spacearm import workspace as ws
+    from spacearm import analysis as ws
 
     spec = load_sweep(sweep_config(metrics=["workspace_areas", "S_M", "S_G"]))
     table = run_sweep(spec, tmp_path / "out", progress=False).table
     for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
-        areas = ws.normalized_areas(robot)
+        areas = ws.normalized_workspace_areas(robot)
         for column, key in [("S_fixed_vehicle", "fixed_vehicle"), ("S_attitude_constraint", "attitude_constraint"),
                             ("S_maximum_reachable", "maximum_reachable"), ("S_guaranteed", "guaranteed")]:
             np.testing.assert_allclose(table[column][i], float(areas[key]), rtol=1e-14)
@@ -128,7 +131,7 @@ def test_workspace_areas_metric(tmp_path):
 
 def test_straight_path_area_metric(tmp_path):
     """The sweep column is the area enclosed by the straight-path ends (trapezoid formula here)."""
-    from spacearm import workspace as ws
+    from spacearm import analysis as ws
 
     phi_deg = [0.0, -60.0, 120.0]
     spec = load_sweep(sweep_config(
@@ -160,14 +163,14 @@ def test_manifest_config_is_a_sweep_file_that_reruns(tmp_path):
     manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
     assert manifest["robot_file"] == ROBOT
     again = load_sweep(write(tmp_path, manifest["config"], "again.yaml"))
-    assert results.config_hash(again.config) == manifest["config_sha256"]
+    assert sio.config_hash(again.config) == manifest["config_sha256"]
     assert run_sweep(again, tmp_path / "again", progress=False).table["S_M"].tolist() == result.table["S_M"].tolist()
 
 
 def test_manifest_git_state_is_taken_before_the_run_writes(tmp_path, monkeypatch):
     """Regenerating committed results modifies tracked files; that must not mark the code dirty."""
     states = iter([{"revision": "abc", "dirty": False}, {"revision": "abc", "dirty": True}])
-    monkeypatch.setattr(results, "git_state", lambda *a: next(states))
+    monkeypatch.setattr(provenance, "git_state", lambda *a: next(states))
     run_sweep(load_sweep(sweep_config(metrics=["S_M"])), tmp_path / "out", progress=False)
     assert json.loads((tmp_path / "out" / "manifest.json").read_text())["git"] == {"revision": "abc", "dirty": False}
 
@@ -179,7 +182,7 @@ def test_reordered_axes_never_reuse_chunks(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         run_sweep(spec, tmp_path / "o", progress=False, stop_after_chunks=2)
     swapped = load_sweep(sweep_config(axes=dict(reversed(list(axes.items()))), metrics=["S_G"]))
-    assert results.config_hash(swapped.config) != results.config_hash(spec.config)
+    assert sio.config_hash(swapped.config) != sio.config_hash(spec.config)
     result = run_sweep(swapped, tmp_path / "o", progress=False)
     assert result.manifest["resumed_chunks"] == 0
     fresh = run_sweep(swapped, tmp_path / "fresh", progress=False)
@@ -232,10 +235,12 @@ def test_resume_ignores_chunks_of_another_chunk_size_and_damaged_chunks(tmp_path
 
 def test_rerun_into_the_same_folder_removes_its_stale_figures(tmp_path):
     axes = {"b0": {"field": "base.attach", "values": [0.0, 1.0]}, "m0": {"field": "base.mass", "values": [500.0, 900.0]}}
-    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M", "S_G"])), tmp_path / "o", progress=False)
+    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M", "S_G"])), tmp_path / "o", progress=False,
+              outputs=(write_figures,))
     assert (tmp_path / "o" / "heatmap_S_G.png").exists()
     (tmp_path / "o" / "mine.txt").write_text("a user's file")
-    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M"])), tmp_path / "o", progress=False)
+    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M"])), tmp_path / "o", progress=False,
+              outputs=(write_figures,))
     assert not (tmp_path / "o" / "heatmap_S_G.png").exists()
     assert (tmp_path / "o" / "heatmap_S_M.png").exists() and (tmp_path / "o" / "mine.txt").exists()
 
@@ -350,7 +355,7 @@ def test_cli_sweep_with_set_override(tmp_path, capsys):
     out = tmp_path / "o"
     code = main(["sweep", str(path), "--out", str(out), "--quiet", "--set", "axes.b0_over_B0.values=[0.0, 2.0]"])
     assert code == 0
-    table = results.read_csv(out / "table.csv")
+    table = sio.read_csv(out / "table.csv")
     assert table["b0_over_B0"] == [0.0, 2.0]
     assert main(["validate", str(path)]) == 0
     assert "valid sweep" in capsys.readouterr().out
@@ -376,8 +381,8 @@ def test_sharded_sweep_equals_single_device(tmp_path):
     assert proc.returncode == 0, proc.stderr
     manifest = json.loads((tmp_path / "sharded" / "manifest.json").read_text())
     assert manifest["device_count"] == 4
-    a = results.read_csv(single / "table.csv")
-    b = results.read_csv(tmp_path / "sharded" / "table.csv")
+    a = sio.read_csv(single / "table.csv")
+    b = sio.read_csv(tmp_path / "sharded" / "table.csv")
     for column in a:
         np.testing.assert_allclose(b[column], a[column], rtol=1e-14, err_msg=column)
     assert (tmp_path / "sharded" / "heatmap_R_max_m.png").exists()

@@ -27,6 +27,7 @@ __all__ = [
     "integer",
     "choice",
     "number_list",
+    "check_memory",
 ]
 
 
@@ -109,3 +110,24 @@ def number_list(where: str, value: Any, length: int | None = None) -> list[float
         size = f" of {length}" if length is not None else ""
         raise ConfigError(f"{where}: must be a list{size} numbers, got {value!r}")
     return [number(f"{where}[{i}]", v) for i, v in enumerate(value)]
+
+
+def check_memory(where: str, need_bytes: float, what: str, advice: str) -> None:
+    """Refuse input whose arrays would not fit in memory (they are built at once), before
+    anything that large is allocated: more than half of this machine's RAM is refused.
+
+    Args:
+        where: the field, for the message.
+        need_bytes: the estimated size.
+        what: what needs it (``"1,000,000 designs (a x b)"``).
+        advice: how to make it fit.
+    """
+    try:
+        have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return
+    if need_bytes > have / 2:
+        raise ConfigError(
+            f"{where}: {what} need about {need_bytes / 2**30:,.0f} GiB, "
+            f"more than half of this machine's {have / 2**30:.0f} GiB; {advice}"
+        )

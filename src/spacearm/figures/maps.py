@@ -9,9 +9,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.patches import Ellipse
 
-from .. import results
+from ..analysis import inverse_kinematics, workspace_map
+from ..io import save_figure
+from ..models.planar import umetani1990
+from ..models.planar.closed_forms import (
+    manipulability,
+    manipulability_ellipse,
+    robot_frame_tip_position,
+    tip_coefficients,
+)
 from . import figure
 
 ELLIPSE_SCALE = 0.2  # drawn semi-axis per unit singular value of J*, m / (m/rad)
@@ -19,36 +29,22 @@ CONTOUR_LEVELS_X40 = np.arange(1, 11)  # w*/L^2 x 40 = 1 .. 10
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     return plt
 
 
 def _save(fig, path: Path) -> Path:
-    results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+    save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
     _plt().close(fig)
     return path
 
-def _table1(ratio: float = 1.0):
-    from ..robot import umetani1990
 
+def _table1(ratio: float = 1.0):
     robot = umetani1990()
     return robot.replace(base_attach=np.float64(1.4 * ratio))
 
 
-def _x64():
-    from ..config import enable_x64
-
-    enable_x64(True)
-
-
 def contour_map(ax, robot, *, ground: bool = False, n_cells: int = 241, elbow: str = "down", title: str = ""):
     """Contours of w*/L^2 x 40 (eq. 11) over the reachable disk, robot frame."""
-    from ..metrics import workspace_map
-
     x, y, w = workspace_map(robot, n_cells, elbow=elbow, ground=ground)
     x, y, w = np.asarray(x), np.asarray(y), np.asarray(w) * 40.0
     reach = float(robot.reach)
@@ -67,9 +63,6 @@ def contour_map(ax, robot, *, ground: bool = False, n_cells: int = 241, elbow: s
 
 
 def _ellipse(ax, robot, phi_arm, color="C3", scale=ELLIPSE_SCALE):
-    from matplotlib.patches import Ellipse
-
-    from ..kinematics import manipulability_ellipse, robot_frame_tip_position
 
     phi = np.concatenate([[0.0], phi_arm])
     major, minor, angle = (float(v) for v in manipulability_ellipse(robot, phi))
@@ -100,9 +93,6 @@ def _draw_base(ax, robot, color="0.5"):
 @figure("fig6")
 def fig6(out_dir: Path) -> list[Path]:
     """Fig. 6: manipulability ellipses over the elbow-down workspace (Table 1 robot)."""
-    _x64()
-    from ..metrics import inverse_kinematics
-
     plt = _plt()
     robot = _table1()
     fig, ax = plt.subplots(figsize=(6, 6))
@@ -131,7 +121,6 @@ def fig6(out_dir: Path) -> list[Path]:
 @figure("fig7")
 def fig7(out_dir: Path) -> list[Path]:
     """Fig. 7: contour maps of w*/L^2 x 40, space robot (a) beside the ground robot (b)."""
-    _x64()
     plt = _plt()
     robot = _table1()
     fig, axes = plt.subplots(1, 2, figsize=(11, 5))
@@ -149,10 +138,6 @@ FIG8_TIP = np.array([2.0, 2.0])
 @figure("fig8")
 def fig8(out_dir: Path) -> list[Path]:
     """Fig. 8: the same tip reached elbow-down (posture 1) and elbow-up (posture 2), with ellipses."""
-    _x64()
-    from ..kinematics import manipulability
-    from ..metrics import inverse_kinematics
-
     plt = _plt()
     robot = _table1()
     fig, axes = plt.subplots(1, 2, figsize=(10, 5))
@@ -176,8 +161,6 @@ def fig8(out_dir: Path) -> list[Path]:
 
 def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
     """Fig. 10: workspaces (inertial frame, top) and w*/L^2 x 40 maps (robot frame, bottom)."""
-    from ..kinematics import tip_coefficients
-
     plt = _plt()
     fig, axes = plt.subplots(2, len(robots), figsize=(4.2 * len(robots), 8.4))
     axes = np.atleast_2d(axes).reshape(2, -1)
@@ -216,6 +199,5 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
 @figure("fig10")
 def fig10(out_dir: Path) -> list[Path]:
     """Fig. 10 for b0/B0 = 0, 1, 2 (Table 1 otherwise)."""
-    _x64()
     ratios = (0.0, 1.0, 2.0)
     return [draw_fig10(Path(out_dir) / "fig10.png", [_table1(r) for r in ratios], [f"b0/B0 = {r:g}" for r in ratios])]

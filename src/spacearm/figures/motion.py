@@ -15,10 +15,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 
-from .. import results
+from ..io import save_figure
+from ..models.planar import umetani1990
+from ..models.planar.closed_forms import (
+    fixed_base_manipulability,
+    manipulability,
+    manipulability_ellipse,
+)
+from ..motion import go_and_back, joint_path_history, straight_tip_path, straight_tip_path_history
 from . import figure
+from .robot import base_square, robot_outline
 
 DEG = np.pi / 180.0
 FIG2_LOOP_DEG = np.array([[-60.0, 120.0], [30.0, 120.0], [30.0, 30.0], [-60.0, 30.0], [-60.0, 120.0]])
@@ -28,29 +37,17 @@ FIG9_DISTANCE = 0.2  # m, each way
 
 
 def _save(fig, path: Path) -> Path:
-    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+    return save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+
 
 def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     return plt
 
 
 def _outline(robot, phi):
     """Base square corners and the chain [base centroid, joint 1, ..., tip], inertial, m."""
-    from ..kinematics import centroid_positions
-
-    phi = np.asarray(phi, float)
-    theta = np.cumsum(phi)
-    base = np.asarray(centroid_positions(robot, phi))[0]
-    spans = np.r_[float(robot.base_attach), np.asarray(robot.link_length)]
-    chain = base + np.cumsum(spans[:, None] * np.stack([np.cos(theta), np.sin(theta)], -1), axis=0)
-    half = max(0.5 * float(robot.base_attach), 0.3)
-    c, s = np.cos(phi[0]), np.sin(phi[0])
-    box = base + (np.array([[1, 1], [-1, 1], [-1, -1], [1, -1], [1, 1]]) * half) @ np.array([[c, s], [-s, c]])
+    base, chain = robot_outline(robot, phi)
+    box = base_square(base, np.asarray(phi, float)[0], max(0.5 * float(robot.base_attach), 0.3))
     return box, np.vstack([base, chain])
 
 
@@ -65,8 +62,6 @@ def _draw_robot(ax, robot, phi, color, label=None, alpha=1.0, lw=2.0, robot_fram
 
 def _ellipse(ax, robot, phi, color, scale=0.5):
     """The manipulability ellipse of J* (axes x ``scale``) about the tip, robot frame."""
-    from ..kinematics import manipulability_ellipse
-
     major, minor, angle = (float(x) for x in manipulability_ellipse(robot, phi))
     t = np.linspace(0, 2 * np.pi, 200)
     c, s = np.cos(angle), np.sin(angle)
@@ -84,8 +79,6 @@ def fig2_study(robot=None):
         dict with "loop" (k, 2) rad, and for "forward" / "reverse": "phi_end" (3,) rad,
         "postures" (S, 3), "tips" (S, 2) m.
     """
-    from ..motion import joint_path_history
-    from ..robot import umetani1990
 
     robot = umetani1990() if robot is None else robot
     loop = FIG2_LOOP_DEG * DEG
@@ -163,10 +156,6 @@ def fig2(out_dir: Path) -> list[Path]:
 @figure("fig3a")
 def fig3a(out_dir: Path) -> list[Path]:
     """Fig. 3a: one straight tip path along X_A from (0, -60, 120) deg to its singular end."""
-    from ..kinematics import fixed_base_manipulability, manipulability
-    from ..motion import straight_tip_path, straight_tip_path_history
-    from ..robot import umetani1990
-
     plt = _pyplot()
     robot = umetani1990()
     direction = np.array([1.0, 0.0])
@@ -224,8 +213,6 @@ def fig9_study(robot=None, point=FIG8_POINT, distance=FIG9_DISTANCE, n_samples=8
         dict: "postures" (2, 3) rad [elbow-down, elbow-up]; "history" (2, S, 3) rad;
         "travelled" (2, S) m; "peak" (2,) largest |phi0 - phi0_start|, rad.
     """
-    from ..motion import go_and_back
-    from ..robot import umetani1990
 
     robot = umetani1990() if robot is None else robot
     l1, l2 = (float(x) for x in np.asarray(robot.link_length))

@@ -10,14 +10,18 @@ plans point C for the Table 1 robot from the Fig. 3 posture.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.animation import FuncAnimation, PillowWriter
 
-from .. import results
+from ..analysis import straight_path_workspace
+from ..io import atomic_path, save_figure
+from ..models.planar import umetani1990
+from ..planning import PHASE_LOOP, PHASE_REPOSITION, PHASE_STRAIGHT, plan_reach, reachable_bounds
 from . import figure
+from .robot import base_square, robot_outline
 
 DEG = np.pi / 180.0
 # Fig. 3/5 initial posture and a point C for the Table 1 robot (our choice of point: the
@@ -26,31 +30,9 @@ FIG5_START = np.array([0.0, -60.0, 120.0]) * DEG
 FIG5_POINT_C = np.array([-2.5, -3.0])
 
 
-def robot_outline(robot, phi) -> tuple[np.ndarray, np.ndarray]:
-    """Base centroid and the chain [joint 1, ..., joint n, tip] in the inertial frame, m.
-
-    Args:
-        phi: ``(n+1,)`` posture, rad.
-
-    Returns:
-        ``(2,)`` base centroid and ``(n+1, 2)`` joints then tip.
-    """
-    from ..kinematics import centroid_positions
-
-    phi = np.asarray(phi, float)
-    theta = np.cumsum(phi)
-    base = np.asarray(centroid_positions(robot, phi))[0]
-    spans = np.r_[float(robot.base_attach), np.asarray(robot.link_length)]
-    steps = spans[:, None] * np.stack([np.cos(theta), np.sin(theta)], axis=-1)
-    return base, base + np.cumsum(steps, axis=0)
-
-
 def _base_box(robot, base, phi0):
     """Corners of a square base drawn about its centroid, side b0 (at least 0.6 m)."""
-    half = max(0.5 * float(robot.base_attach), 0.3)
-    corners = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1], [1, 1]]) * half
-    c, s = np.cos(phi0), np.sin(phi0)
-    return base + corners @ np.array([[c, s], [-s, c]])
+    return base_square(base, phi0, max(0.5 * float(robot.base_attach), 0.3))
 
 
 def _draw_robot(ax, robot, phi, color, label, alpha=1.0):
@@ -62,8 +44,6 @@ def _draw_robot(ax, robot, phi, color, label, alpha=1.0):
     ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, alpha=alpha, label=label)
 
 
-def _atomic_save(fig, path: Path) -> Path:
-    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
 
 def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -> Path:
     """Draw a reach plan (PNG, written atomically).
@@ -75,14 +55,6 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
         path: output PNG.
         n_directions: directions of the Straight-Path workspace boundaries drawn.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..planning import PHASE_LOOP, PHASE_REPOSITION, PHASE_STRAIGHT, reachable_bounds
-    from ..workspace import straight_path_workspace
-
     phi_start = np.asarray(phi_start, float)
     inner, outer = reachable_bounds(robot)
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13.0, 7.4), gridspec_kw={"width_ratios": [1.15, 1.0]})
@@ -153,21 +125,13 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
     ax2.grid(alpha=0.25)
     fig.tight_layout()
     try:
-        return _atomic_save(fig, Path(path))
+        return save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
     finally:
         plt.close(fig)
 
 
 def animate_reach(robot, plan, path: Path, *, frames: int = 120, fps: int = 20) -> Path:
     """The plan as a GIF (Pillow writer): the robot and the tip trace in the inertial frame."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.animation import FuncAnimation, PillowWriter
-
-    from ..planning import reachable_bounds
-
     _, outer = reachable_bounds(robot)
     rows = np.unique(np.linspace(0, len(plan.postures) - 1, frames).round().astype(int))
     fig, ax = plt.subplots(figsize=(5.5, 5.5))
@@ -197,26 +161,18 @@ def animate_reach(robot, plan, path: Path, *, frames: int = 120, fps: int = 20) 
 
     animation = FuncAnimation(fig, update, frames=len(rows), blit=False)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".gif", dir=path.parent)
-    os.close(handle)
     try:
-        animation.save(temporary, writer=PillowWriter(fps=fps))
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
+        # Pillow picks the format from the name: the temporary keeps the .gif suffix.
+        with atomic_path(path, keep_suffix=True) as temporary:
+            animation.save(temporary, writer=PillowWriter(fps=fps))
     finally:
         plt.close(fig)
-        if os.path.exists(temporary):
-            os.remove(temporary)
     return path
 
 
 @figure("reach")
 def reach_figure(out_dir: Path) -> list[Path]:
     """Point C of Fig. 5 for the Table 1 robot: reorientation loop, then a straight path."""
-    from ..planning import plan_reach
-    from ..robot import umetani1990
-
     robot = umetani1990()
     plan = plan_reach(robot, FIG5_START, FIG5_POINT_C)
     return [draw_reach(robot, FIG5_START, plan, Path(out_dir) / "reach.png")]

@@ -4,55 +4,41 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 
-from .. import results
-
+from .. import analysis as ws
+from ..io import save_figure
+from ..kinematics import generalized_jacobian, tip_position
+from ..models.planar import umetani1990
+from ..models.planar.closed_forms import tip_coefficients
+from ..motion import straight_tip_path_history
 from . import figure
+from .robot import base_square, robot_outline
 
 FIG3_POSTURE_DEG = (0.0, -60.0, 120.0)
 
 
 def _setup():
-    import jax
-    import matplotlib
-
-    matplotlib.use("Agg")
-    jax.config.update("jax_enable_x64", True)
-    import matplotlib.pyplot as plt
-
+    """pyplot (the command line picks the Agg backend and the precision)."""
     return plt
 
 
 def _save(fig, path: Path) -> Path:
-    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+    return save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+
 
 def _circle(ax, center, radius, **style):
     angle = np.linspace(0.0, 2.0 * np.pi, 361)
     ax.plot(center[0] + radius * np.cos(angle), center[1] + radius * np.sin(angle), **style)
 
 
-def _arm_points(robot, phi):
-    """``(n+2, 2)`` base centroid, joints 1..n and the tip, inertial frame."""
-    import spacearm as sa
-
-    phi = np.asarray(phi, float)
-    theta = np.cumsum(phi)
-    base = np.asarray(sa.centroid_positions(robot, phi))[0]
-    spans = np.concatenate([[float(robot.base_attach)], np.asarray(robot.link_length)])
-    steps = spans[:, None] * np.stack([np.cos(theta), np.sin(theta)], -1)
-    return np.concatenate([base[None], base + np.cumsum(steps, axis=0)])
-
-
 def _draw_robot(ax, robot, phi, color="0.2", alpha=1.0, label=None):
-    points = _arm_points(robot, phi)
-    half = max(float(robot.base_attach), 0.3)
-    c, s = np.cos(phi[0]), np.sin(phi[0])
-    corners = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1], [1, 1]]) * half
-    box = points[0] + corners @ np.array([[c, s], [-s, c]])
+    base, chain = robot_outline(robot, phi)
+    box = base_square(base, phi[0], max(float(robot.base_attach), 0.3))
     ax.plot(box[:, 0], box[:, 1], color=color, lw=1.0, alpha=alpha)
-    ax.plot(points[1:, 0], points[1:, 1], "-o", color=color, lw=2.0, ms=3, alpha=alpha, label=label)
-    ax.plot(*points[0], "+", color=color, alpha=alpha)
+    ax.plot(chain[:, 0], chain[:, 1], "-o", color=color, lw=2.0, ms=3, alpha=alpha, label=label)
+    ax.plot(*base, "+", color=color, alpha=alpha)
 
 
 def _fig3_posture():
@@ -63,17 +49,13 @@ def _fig3_posture():
 def fig3(out_dir: Path) -> list[Path]:
     """Fig. 3: (a) one straight path along X_A, (b) the Straight-Path Workspace, phi = (0, -60, 120) deg."""
     plt = _setup()
-    import spacearm as sa
-    from spacearm import workspace as ws
-    from spacearm.motion import straight_tip_path_history
-
-    robot = sa.umetani1990()
+    robot = umetani1990()
     phi = _fig3_posture()
     postures, tips = straight_tip_path_history(robot, phi, np.array([1.0, 0.0]), n_samples=121)
     postures, tips = np.asarray(postures), np.asarray(tips)
     ends = ws.straight_path_ends(robot, phi, 360)
     boundary = np.asarray(ends.end_tip)
-    start = np.asarray(sa.tip_position(robot, phi))
+    start = np.asarray(tip_position(robot, phi))
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 6))
     ax = axes[0]
@@ -108,10 +90,8 @@ def fig3(out_dir: Path) -> list[Path]:
 
 
 def _fig4_panel(ax, robot, title):
-    import spacearm as sa
-    from spacearm import workspace as ws
 
-    K = np.asarray(sa.tip_coefficients(robot))
+    K = np.asarray(tip_coefficients(robot))
     c1, r1 = np.asarray(ws.fixed_vehicle_center(robot)), float(ws.fixed_vehicle_radius(robot))
     c2, r2 = (np.asarray(x) for x in ws.attitude_constraint(robot))
     r3, r5 = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
@@ -138,9 +118,7 @@ def _fig4_panel(ax, robot, title):
 def fig4(out_dir: Path) -> list[Path]:
     """Fig. 4: Areas 1, 2, 3, 5 for Table 1 (eq. 9 holds) and for b0 = 0.2 m (it fails)."""
     plt = _setup()
-    import spacearm as sa
-
-    robot = sa.umetani1990()
+    robot = umetani1990()
     fig, axes = plt.subplots(1, 2, figsize=(13, 6.5))
     _fig4_panel(axes[0], robot, "(a) Table 1: Area 3 >= Area 1 >= Area 2 >= Area 5")
     _fig4_panel(axes[1], robot.replace(base_attach=np.float64(0.2)), "(b) short attachment: Area 1 leaves Area 3")
@@ -153,13 +131,10 @@ def fig4(out_dir: Path) -> list[Path]:
 def fig5(out_dir: Path) -> list[Path]:
     """Fig. 5: Areas 3, 4, 5 with points A, B, C (posture of Fig. 3)."""
     plt = _setup()
-    import spacearm as sa
-    from spacearm import workspace as ws
-
-    robot = sa.umetani1990()
+    robot = umetani1990()
     phi = _fig3_posture()
     ends = np.asarray(ws.straight_path_workspace(robot, phi, 360))
-    start = np.asarray(sa.tip_position(robot, phi))
+    start = np.asarray(tip_position(robot, phi))
     r3, r5 = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
     r_piw = float(ws.path_independent_radius(robot))
     study = ws.straight_path_study(robot, n_postures=200, n_directions=90, seed=1)
@@ -233,10 +208,7 @@ def fig5(out_dir: Path) -> list[Path]:
 def singularities(out_dir: Path) -> list[Path]:
     """Where det J* vanishes (Table 1) against phi2 = 0 and eq. (8)."""
     plt = _setup()
-    import spacearm as sa
-    from spacearm import workspace as ws
-
-    robot = sa.umetani1990()
+    robot = umetani1990()
     s = ws.dynamic_singularities(robot)
     phi1, phi2 = np.degrees(np.asarray(s.phi1)), np.degrees(np.asarray(s.phi2))
     folded = np.asarray(s.folded)
@@ -244,7 +216,7 @@ def singularities(out_dir: Path) -> list[Path]:
     found = np.isfinite(phi2)
     grid = np.radians(np.linspace(-180, 180, 361))
     Q1, Q2 = np.meshgrid(grid, grid, indexing="ij")
-    J = np.asarray(sa.generalized_jacobian(robot, np.stack([0 * Q1, Q1, Q2], -1)))
+    J = np.asarray(generalized_jacobian(robot, np.stack([0 * Q1, Q1, Q2], -1)))
     det = (J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]) / float(robot.reach) ** 2
 
     fig, axes = plt.subplots(2, 2, figsize=(13, 11.5), layout="constrained")

@@ -157,8 +157,8 @@ def _tip_columns(coeffs: DesignCoefficients, c, s):
     return xs, ys
 
 
-def _momentum_rows(coeffs: DesignCoefficients, c, s):
-    """Reverse sums H_j = sum_{l>=j} h_l: H_0 = I_S and H_1..H_n = I_M (eq. 5)."""
+def _momentum_terms(coeffs: DesignCoefficients, c, s):
+    """h_l = I_l + sum_k W_kl cos(theta_k - theta_l): the angular momentum per absolute link rate."""
     W, inertia = coeffs.inertia_coupling, coeffs.inertia
     count = len(c)
     h = []
@@ -169,6 +169,13 @@ def _momentum_rows(coeffs: DesignCoefficients, c, s):
                 # cos(theta_k - theta_l); W is symmetric, so each pair is used twice.
                 total = total + W[..., k, l] * (c[k] * c[l] + s[k] * s[l])
         h.append(total)
+    return h
+
+
+def _momentum_rows(coeffs: DesignCoefficients, c, s):
+    """Reverse sums H_j = sum_{l>=j} h_l: H_0 = I_S and H_1..H_n = I_M (eq. 5)."""
+    h = _momentum_terms(coeffs, c, s)
+    count = len(c)
     rows, acc = [None] * count, 0.0
     for j in reversed(range(count)):
         acc = acc + h[j]

@@ -1,0 +1,251 @@
+"""Build-time pages for the documentation site (run by the mkdocs-gen-files plugin).
+
+Generates, on every ``mkdocs build`` / ``mkdocs serve``:
+
+* ``reference/cli.md``: the help of ``spacearm`` and of every subcommand, rendered from
+  ``spacearm.cli.build_parser()``, so the page never goes stale;
+* ``reference/api/*.md`` and its ``SUMMARY.md`` (read by mkdocs-literate-nav): one
+  mkdocstrings ``::: module`` page per entry of :data:`API_MODULES`;
+* ``reference/api/spacearm.md``: the top-level package with a table of every public
+  name and the module that defines it (``spacearm/__init__.py`` resolves some names
+  lazily through ``_LAZY``, which griffe's static analysis cannot follow);
+* ``reference/layout.md``: the package layout table, from the same list;
+* ``reference/table2-report.md``: ``results/table2/table.md`` as written by the sweep;
+* ``assets/results/<folder>/<name>.png``: every figure under ``results/*/``, copied at
+  build time so the PNGs are not duplicated in git.
+
+API_MODULES is the ONE place where module paths live: when modules move, update it
+(the build warns, and ``mkdocs build --strict`` fails, on a listed module that does not
+exist or a public module that is not listed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import pkgutil
+import sys
+from pathlib import Path
+
+import mkdocs_gen_files
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "src"))  # document this checkout, installed or not
+
+log = logging.getLogger("mkdocs.plugins.gen_pages")
+
+# ---------------------------------------------------------------------------------------
+# Module paths: the only list of them in the docs. (module, section, what it holds)
+# ---------------------------------------------------------------------------------------
+API_MODULES: list[tuple[str, str, str]] = [
+    ("spacearm", "Package", "the public API: curated re-exports (some resolved lazily, see the table)"),
+    ("spacearm.models", "Models", "the robot families and `load_robot` (a file with `arm:` is spatial)"),
+    ("spacearm.models.family", "Models", "the seam: the per-posture primitives every family implements"),
+    ("spacearm.models.planar", "Models", "the planar family of the paper"),
+    ("spacearm.models.planar.robot", "Models", "the `PlanarRobot` pytree and its validation"),
+    ("spacearm.models.planar.schema", "Models", "the planar robot file, the Table 1 preset"),
+    ("spacearm.models.planar.closed_forms", "Models", "design coefficients (virtual manipulator), eq. 1, 2, 5, 6, 10 in closed form"),
+    ("spacearm.models.planar.family", "Models", "the planar primitives and the closed forms registered as fast paths"),
+    ("spacearm.models.spatial", "Models", "the spatial family: URDF arms on a free-floating bus"),
+    ("spacearm.models.spatial.urdf", "Models", "the URDF reader (standard-library XML; fixed and locked joints merged)"),
+    ("spacearm.models.spatial.robot", "Models", "the `SpatialRobot` pytree and its validation"),
+    ("spacearm.models.spatial.schema", "Models", "the spatial robot file (`arm:` key)"),
+    ("spacearm.models.spatial.primitives", "Models", "the spatial primitives: one pass over the chain per posture"),
+    ("spacearm.models.spatial.family", "Models", "the spatial family and its fast paths"),
+    ("spacearm.models.spatial.metrics", "Models", "spatial-only kernels: rotational, full and dynamic manipulability, H_m, H*, C(q)"),
+    ("spacearm.kinematics", "Kinematics", "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives"),
+    ("spacearm.motion", "Motion", "the base attitude along joint paths and straight tip paths"),
+    ("spacearm.motion.joint_paths", "Motion", "eq. 5 along joint polylines (Gauss-Legendre line integral)"),
+    ("spacearm.motion.straight_paths", "Motion", "straight tip paths (adaptive DOP853 to the singular end), go-and-back"),
+    ("spacearm.motion.dop853", "Motion", "the DOP853 tableau, one step, the error norm"),
+    ("spacearm.motion.batching", "Motion", "designs and paths flattened to one batch axis"),
+    ("spacearm.analysis", "Analysis", "workspaces, singular sets, areas, averaged metrics, maps"),
+    ("spacearm.analysis.workspaces", "Analysis", "the five workspaces in closed form, S_M and S_G, section 3.2 relations"),
+    ("spacearm.analysis.singularities", "Analysis", "dynamic singularities (det J* = 0) and the path-independent radius"),
+    ("spacearm.analysis.straight_workspace", "Analysis", "the Straight-Path workspace (Area 4) by integration"),
+    ("spacearm.analysis.manipulability_average", "Analysis", "w-bar (eq. 12): the adaptive quadrature"),
+    ("spacearm.analysis.manipulability_maps", "Analysis", "posture grids, manipulability maps over joints and the tip plane"),
+    ("spacearm.planning", "Planning", "reorientation loops and reaching a point"),
+    ("spacearm.planning.reorientation", "Planning", "cyclic joint loops that turn the base (optax through eq. 5)"),
+    ("spacearm.planning.reach", "Planning", "reaching point C: reorient, then a straight path"),
+    ("spacearm.design", "Design", "gradient Pareto search over design numbers"),
+    ("spacearm.design.problem", "Design", "design problems: variables, objectives, settings, the problem file"),
+    ("spacearm.design.objectives", "Design", "the objective functions"),
+    ("spacearm.design.fronts", "Design", "non-dominated sets and hypervolume"),
+    ("spacearm.design.search", "Design", "the gradient Pareto search"),
+    ("spacearm.design.baselines", "Design", "grid and NSGA-II baselines"),
+    ("spacearm.design.run", "Design", "a whole optimization job: searches, baselines, tables, manifest"),
+    ("spacearm.studies", "Studies", "sweeps over designs from YAML"),
+    ("spacearm.studies.spec", "Studies", "the sweep file and its overrides"),
+    ("spacearm.studies.designs", "Studies", "design fields, axes and the batch of designs a sweep builds"),
+    ("spacearm.studies.metrics", "Studies", "the metric registry of sweeps"),
+    ("spacearm.studies.runner", "Studies", "the chunked, sharded, resumable sweep runner"),
+    ("spacearm.studies.table2", "Studies", "the Table 2 report: paper beside ours, readings of w-bar"),
+    ("spacearm.io", "Results on disk", "results on disk"),
+    ("spacearm.io.files", "Results on disk", "atomic writes, CSV tables, `.npz` grids"),
+    ("spacearm.io.manifest", "Results on disk", "the manifest that lets anyone rerun a result"),
+    ("spacearm.io.grids", "Results on disk", "`open_results`: a sweep's grids as a labelled xarray Dataset"),
+    ("spacearm.figures", "Figures", "the figure registry"),
+    ("spacearm.figures.robot", "Figures", "the one drawing of a planar robot"),
+    ("spacearm.figures.maps", "Figures", "Fig. 6, 7, 8 and 10: ellipses and manipulability maps"),
+    ("spacearm.figures.motion", "Figures", "Fig. 2, 3a, 9: cyclic loops, straight paths, go-and-back"),
+    ("spacearm.figures.workspace", "Figures", "Fig. 3, 4, 5 and the dynamic singularities"),
+    ("spacearm.figures.planning", "Figures", "reaching point C: plan drawing and animation"),
+    ("spacearm.figures.sweep", "Figures", "a sweep's heat maps and metric plots"),
+    ("spacearm.figures.design", "Figures", "Pareto fronts, convergence, the best designs"),
+    ("spacearm.cli", "Command line", "the `spacearm` command: one module per subcommand"),
+    ("spacearm.cli.validate", "Command line", "`spacearm validate`"),
+    ("spacearm.cli.info", "Command line", "`spacearm info`"),
+    ("spacearm.cli.sweep", "Command line", "`spacearm sweep`"),
+    ("spacearm.cli.figures", "Command line", "`spacearm figures`"),
+    ("spacearm.cli.reach", "Command line", "`spacearm reach`"),
+    ("spacearm.cli.optimize", "Command line", "`spacearm optimize`"),
+]
+
+# Old module paths kept as re-exports for one release: not documented.
+DEPRECATED_MODULES = {
+    "spacearm.robot", "spacearm.metrics", "spacearm.workspace", "spacearm.sweep",
+    "spacearm.results", "spacearm.reports", "spacearm.validate", "spacearm.config",
+}
+
+CLI_WIDTH = "88"  # columns of the rendered --help text
+
+
+def _page(module: str) -> str:
+    return f"reference/api/{module}.md"
+
+
+def check_module_list() -> None:
+    """Warn on listed modules that are missing and public modules that are not listed."""
+    import spacearm
+
+    listed = {name for name, _, _ in API_MODULES}
+    found = {"spacearm"}
+    for info in pkgutil.walk_packages(spacearm.__path__, "spacearm."):
+        if not any(part.startswith("_") for part in info.name.split(".")) and info.name not in DEPRECATED_MODULES:
+            found.add(info.name)
+    for name in sorted(listed - found):
+        log.warning("docs/scripts/gen_pages.py: API_MODULES lists %s, which does not exist", name)
+    for name in sorted(found - listed):
+        log.warning("docs/scripts/gen_pages.py: public module %s is not in API_MODULES", name)
+
+
+def public_names_table() -> str:
+    """Markdown table: every public name of ``spacearm`` and the module defining it."""
+    import spacearm
+
+    documented = {name for name, _, _ in API_MODULES}
+    lazy = getattr(spacearm, "_LAZY", {})
+    rows = []
+    for name in sorted(dir(spacearm), key=str.lower):
+        if name.startswith("_"):
+            continue
+        value = getattr(spacearm, name)
+        if isinstance(value, type(spacearm)):  # a submodule, not an exported name
+            continue
+        module = getattr(value, "__module__", None) or f"spacearm.{lazy.get(name, '?')}"
+        how = "lazy" if name in lazy else "eager"
+        target = f"[`{name}`][{module}.{name}]" if module in documented else f"`{name}`"
+        where = f"[`{module}`]({module}.md)" if module in documented else f"`{module}`"
+        rows.append(f"| {target} | {where} | {how} |")
+    return "\n".join(["| name | defined in | import |", "|---|---|---|", *rows])
+
+
+def write_api_pages() -> None:
+    sections: dict[str, list[str]] = {}
+    for module, section, what in API_MODULES:
+        sections.setdefault(section, []).append(module)
+        with mkdocs_gen_files.open(_page(module), "w") as page:
+            if module == "spacearm":
+                page.write("::: spacearm\n    options:\n      members: false\n\n")
+                page.write(
+                    "## Public names\n\n"
+                    "`import spacearm as sa` gives these names. Those marked *lazy* are "
+                    "imported from their module on first use (`_LAZY` in "
+                    "`spacearm/__init__.py`), which keeps `import spacearm` light; "
+                    "each is documented on the page of the module that defines it.\n\n"
+                )
+                page.write(public_names_table() + "\n")
+            else:
+                page.write(f"::: {module}\n")
+    lines = []
+    for section, modules in sections.items():
+        lines.append(f"* {section}")
+        for module in modules:
+            lines.append(f"    * [{module}]({module}.md)")
+    with mkdocs_gen_files.open("reference/api/SUMMARY.md", "w") as summary:
+        summary.write("\n".join(lines) + "\n")
+
+
+def write_layout_page() -> None:
+    rows = [f"| [`{m}`](api/{m}.md) | {what} |" for m, _, what in API_MODULES]
+    with mkdocs_gen_files.open("reference/layout.md", "w") as page:
+        page.write(
+            "# Package layout\n\n"
+            "Generated from `API_MODULES` in `docs/scripts/gen_pages.py`. Layers import "
+            "downward only (checked in CI by `.importlinter`): cli > figures > studies, "
+            "design > planning > analysis > motion > kinematics > models > io > _core. "
+            "`_core` (errors, numeric settings, the YAML/schema layer, batching) is private. "
+            "Benchmarks live in `benchmarks/` and print ratios "
+            "against baselines measured in the same run.\n\n"
+            "| module | what |\n|---|---|\n" + "\n".join(rows) + "\n"
+        )
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+def write_cli_page() -> None:
+    from spacearm.cli import build_parser
+
+    previous = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = CLI_WIDTH
+    try:
+        parser = build_parser()
+        parts = [
+            "# Command line reference\n\n"
+            "Rendered at build time from `spacearm.cli.build_parser()`: this is exactly "
+            "what `spacearm --help` and `spacearm COMMAND --help` print.\n\n"
+            "## spacearm\n\n```text\n" + parser.format_help() + "```\n"
+        ]
+        for name, sub in _subparsers(parser).items():
+            parts.append(f"## spacearm {name}\n\n```text\n{sub.format_help()}```\n")
+    finally:
+        if previous is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = previous
+    with mkdocs_gen_files.open("reference/cli.md", "w") as page:
+        page.write("\n".join(parts))
+
+
+def copy_result_figures() -> None:
+    for png in sorted((ROOT / "results").glob("*/*.png")):
+        target = f"assets/results/{png.parent.name}/{png.name}"
+        with mkdocs_gen_files.open(target, "wb") as out:
+            out.write(png.read_bytes())
+
+
+def write_table2_report() -> None:
+    source = ROOT / "results" / "table2" / "table.md"
+    text = source.read_text()
+    title, _, rest = text.partition("\n")
+    note = (
+        "\n\n!!! note \"Generated\"\n    This page is `results/table2/table.md` as "
+        "`spacearm sweep sweeps/table2.yaml` wrote it, copied at build time.\n"
+    )
+    with mkdocs_gen_files.open("reference/table2-report.md", "w") as page:
+        page.write(title + note + rest)
+
+
+check_module_list()
+write_api_pages()
+write_layout_page()
+write_cli_page()
+copy_result_figures()
+write_table2_report()

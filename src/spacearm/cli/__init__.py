@@ -1,0 +1,87 @@
+"""The ``spacearm`` command line: one console script, one module per command.
+
+Every command is a module here with ``register(subparsers)`` (its arguments and help,
+importing nothing heavy) and ``run(args)`` (which imports the library layers it needs),
+named in :data:`COMMANDS`. Building the parser imports only these light modules, so
+``spacearm --help`` loads neither optax nor the design or studies layers; a command's
+library layers are imported when it runs.
+
+Every command runs in float64 unless ``--float32``. Invalid input ends with exit
+status 2 and a one-line message naming the field and the reason, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from .._core.errors import ConfigError
+from .._core.numeric import enable_compilation_cache, enable_x64, use_every_cpu_core
+
+__all__ = ["main", "console_main", "build_parser", "COMMANDS", "EXIT_INVALID"]
+
+EXIT_INVALID = 2
+
+# Every command: (name, module with register(subparsers) and run(args)), in help order.
+COMMANDS: tuple[tuple[str, str], ...] = (
+    ("validate", "spacearm.cli.validate"),
+    ("info", "spacearm.cli.info"),
+    ("sweep", "spacearm.cli.sweep"),
+    ("figures", "spacearm.cli.figures"),
+    ("reach", "spacearm.cli.reach"),
+    ("optimize", "spacearm.cli.optimize"),
+)
+
+_FLOAT32_HELP = "compute in float32 (faster, less exact); default float64"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every command (imports only the light command modules)."""
+    parser = argparse.ArgumentParser(
+        prog="spacearm",
+        description=(
+            "Workspace and manipulability of manipulators on free-floating spacecraft "
+            "(Umetani & Yoshida 1990, generalized to n links)."
+        ),
+    )
+    parser.add_argument("--float32", action="store_true", help=_FLOAT32_HELP)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for _name, module in COMMANDS:
+        importlib.import_module(module).register(sub)
+    for command in sub.choices.values():  # also accepted after the command
+        command.add_argument("--float32", action="store_true", default=argparse.SUPPRESS, help=_FLOAT32_HELP)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; return its exit status (2 for invalid input, 130 when interrupted)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    enable_x64(not args.float32)
+    enable_compilation_cache()
+    _draw_into_files()
+    command = importlib.import_module(dict(COMMANDS)[args.command])
+    try:
+        return int(command.run(args) or 0)
+    except ConfigError as error:
+        print(f"spacearm {args.command}: error: {error}", file=sys.stderr)
+        return EXIT_INVALID
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+def _draw_into_files() -> None:
+    """Figures are written to files: matplotlib's Agg backend, chosen before pyplot loads
+    (the figures layer leaves the backend to its caller, as it leaves the precision)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
+def console_main() -> int:
+    """The ``spacearm`` console script: :func:`main` with one JAX device per CPU core."""
+    use_every_cpu_core()
+    return main()

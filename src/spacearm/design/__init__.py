@@ -1,0 +1,87 @@
+"""Design optimization: the Pareto front of average manipulability vs guaranteed workspace.
+
+Umetani & Yoshida (1990, section 5, Table 2) end on a trade-off: a longer attachment
+distance b0 raises the average manipulability w-bar (eq. 12) and shrinks the Guaranteed
+Workspace (eq. 8), so "careful trade-off is necessary". This package makes the
+trade-off computable.
+
+* A :class:`DesignProblem` declares design variables with bounds (YAML), holds the
+  fixed quantities (total reach L, total mass, base radius of gyration) through its
+  parametrization :meth:`DesignProblem.robot`, and maps a variable vector to a
+  :class:`~spacearm.models.planar.PlanarRobot` whose leaves are all traced, so every objective
+  is differentiable with respect to every variable.
+* Objectives (all maximized): ``wbar`` (eq. 12, from
+  :func:`spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
+  pi L^2, see :func:`guaranteed_area`) and ``S_M`` (maximum reachable space).
+* :func:`pareto_search` optimizes many smoothed Chebyshev scalarizations at once: one
+  optax optimizer (projected Adam on the unit box) vmapped over directions x starts,
+  jitted in chunks of steps. Every evaluated design is archived; the front is the
+  non-dominated subset of the archive (:func:`nondominated`) and its quality is the
+  exact 2-D hypervolume (:func:`hypervolume_2d`).
+* Baselines measured with the same objective code: a dense grid
+  (:func:`grid_search`) and NSGA-II from pymoo (:func:`nsga2_search`).
+* :func:`run_problem` runs the problem and its baselines and writes ``pareto.csv``,
+  ``summary.json`` and the manifest; ``spacearm optimize FILE [--out DIR]`` adds three
+  figures (:mod:`spacearm.figures.design`).
+
+Modules: ``problem`` (variables, parametrization, YAML), ``objectives``, ``fronts``
+(non-dominated sets, hypervolume), ``search`` (the gradient search), ``baselines``
+(grid, NSGA-II), ``run`` (the whole run and its files).
+
+Counting evaluations: one *evaluation* is one design's objective vector. The
+gradient search evaluates value and gradient together; each counts as one
+evaluation in ``evaluations`` and the run also reports the measured cost of a
+value-and-gradient relative to a value (``value_and_grad_cost_ratio``) and the
+resulting ``equivalent_value_evaluations``, so the counts compare honestly with the
+value-only baselines.
+"""
+
+from .baselines import grid_search as grid_search, nsga2_search as nsga2_search
+from .fronts import (
+    hypervolume_2d as hypervolume_2d,
+    hypervolume_history as hypervolume_history,
+    nondominated as nondominated,
+    nondominated_mask as nondominated_mask,
+)
+from .objectives import (
+    OBJECTIVES as OBJECTIVES,
+    guaranteed_area as guaranteed_area,
+    maximum_reachable_area as maximum_reachable_area,
+)
+from .problem import (
+    DesignProblem as DesignProblem,
+    SearchSettings as SearchSettings,
+    Variable as Variable,
+    load_problem as load_problem,
+    problem_from_mapping as problem_from_mapping,
+    variable_names_for as variable_names_for,
+)
+from .run import TARGET_FRACTION as TARGET_FRACTION, run_problem as run_problem
+from .search import (
+    SearchResult as SearchResult,
+    pareto_search as pareto_search,
+    value_and_grad_cost_ratio as value_and_grad_cost_ratio,
+)
+
+__all__ = [
+    "Variable",
+    "DesignProblem",
+    "SearchSettings",
+    "SearchResult",
+    "load_problem",
+    "problem_from_mapping",
+    "variable_names_for",
+    "OBJECTIVES",
+    "guaranteed_area",
+    "maximum_reachable_area",
+    "nondominated",
+    "nondominated_mask",
+    "hypervolume_2d",
+    "hypervolume_history",
+    "pareto_search",
+    "value_and_grad_cost_ratio",
+    "grid_search",
+    "nsga2_search",
+    "run_problem",
+    "TARGET_FRACTION",
+]

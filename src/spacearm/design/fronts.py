@@ -1,0 +1,95 @@
+"""Pareto fronts and their quality: non-dominated subsets and the exact 2-D hypervolume.
+
+All objectives are maximized.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = ["nondominated_mask", "nondominated", "hypervolume_2d", "hypervolume_history"]
+
+
+def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
+    """``(N,)`` bool: True for points no other point dominates (all objectives maximized).
+
+    Duplicates keep their first occurrence only. Two objectives: O(N log N) sweep;
+    more: pairwise comparison.
+
+    Args:
+        objectives: ``(N, m)`` objective values.
+    """
+    f = np.asarray(objectives, dtype=np.float64)
+    count = f.shape[0]
+    mask = np.zeros(count, dtype=bool)
+    if count == 0:
+        return mask
+    finite = np.all(np.isfinite(f), axis=1)
+    if f.shape[1] == 2:
+        # Sort by f1 descending, then f2 descending; a point survives when its f2 beats
+        # every f2 before it (an equal f2 with a larger-or-equal f1 dominates it).
+        order = np.lexsort((-f[:, 1], -f[:, 0]))
+        order = order[finite[order]]
+        f2 = f[order, 1]
+        best_before = np.concatenate([[-np.inf], np.maximum.accumulate(f2)[:-1]])
+        mask[order[f2 > best_before]] = True
+        return mask
+    for i in np.flatnonzero(finite):
+        others = f[finite]
+        dominated = np.any(np.all(others >= f[i], axis=1) & np.any(others > f[i], axis=1))
+        mask[i] = not dominated
+    # Drop exact duplicates after the first.
+    _, first = np.unique(f[mask], axis=0, return_index=True)
+    keep = np.flatnonzero(mask)[np.sort(first)]
+    mask[:] = False
+    mask[keep] = True
+    return mask
+
+
+def nondominated(objectives: np.ndarray) -> np.ndarray:
+    """Indices of the non-dominated points, sorted by the first objective ascending."""
+    f = np.asarray(objectives)
+    index = np.flatnonzero(nondominated_mask(f))
+    return index[np.argsort(f[index, 0], kind="stable")]
+
+
+def hypervolume_2d(objectives: np.ndarray, reference: Sequence[float] = (0.0, 0.0)) -> float:
+    """Exact hypervolume of a 2-D point set (both objectives maximized).
+
+    The area of the union of the boxes [r1, f1] x [r2, f2] over the points that beat
+    the reference point in both objectives: a sweep in f1 descending adds one strip
+    per front point, (f1 - r1)(f2 - best f2 so far).
+
+    Args:
+        objectives: ``(N, 2)`` points (any order, dominated ones allowed).
+        reference: ``(2,)`` the reference point.
+    """
+    f = np.asarray(objectives, dtype=np.float64).reshape(-1, 2)
+    r1, r2 = float(reference[0]), float(reference[1])
+    f = f[np.all(np.isfinite(f), axis=1) & (f[:, 0] > r1) & (f[:, 1] > r2)]
+    if f.size == 0:
+        return 0.0
+    front = f[nondominated_mask(f)]
+    front = front[np.argsort(-front[:, 0])]  # f1 descending, so f2 ascending
+    below = np.concatenate([[r2], front[:-1, 1]])
+    return float(np.sum((front[:, 0] - r1) * (front[:, 1] - below)))
+
+
+def hypervolume_history(batches: Sequence[np.ndarray], reference: Sequence[float]) -> np.ndarray:
+    """Hypervolume of the growing archive after each batch of evaluated points.
+
+    Args:
+        batches: a sequence of ``(B_k, 2)`` objective arrays, in evaluation order.
+
+    Returns:
+        ``(len(batches),)`` hypervolume of the union of the first k+1 batches.
+    """
+    front = np.zeros((0, 2))
+    values = []
+    for batch in batches:
+        merged = np.concatenate([front, np.asarray(batch, dtype=np.float64).reshape(-1, 2)])
+        front = merged[nondominated_mask(merged)]
+        values.append(hypervolume_2d(front, reference))
+    return np.array(values)

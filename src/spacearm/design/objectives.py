@@ -1,0 +1,68 @@
+"""The design objectives, all maximized: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from ..analysis import average_manipulability
+from ..models.planar import PlanarRobot
+from ..models.planar.closed_forms import tip_coefficients
+
+__all__ = ["OBJECTIVES", "guaranteed_area", "maximum_reachable_area", "objective"]
+
+OBJECTIVES = ("wbar", "S_G", "S_M")
+
+
+def guaranteed_area(robot: PlanarRobot, *, clamp: bool = True) -> jax.Array:
+    """Normalized area of the Guaranteed Workspace, S_G = r_G^2 / L^2 (eq. 8, Table 2).
+
+    The paper's radius is r_G = |K0 - (K1 + ... + Kn)| (eq. 8). Its absolute value has
+    a kink where K0 = K1 + ... + Kn, and past it the formula grows again although the
+    disc is then not a workspace at all: with K0 > K1 + ... + Kn the tip stays at
+    least K0 - (K1 + ... + Kn) away from the system centroid (triangle inequality on
+    eq. 1), so nothing inside that circle is reachable. The honest area is therefore
+    max(K1 + ... + Kn - K0, 0)^2 / L^2 (``clamp=True``): equal to the paper's formula
+    wherever the disc exists, zero where it does not, and continuously differentiable
+    everywhere (the square of a ramp has a zero slope at the crossing, so no kink is
+    left for the optimizer). ``clamp=False`` gives the paper's (K0 - sum K)^2 / L^2.
+
+    Args:
+        robot: a design or a batch of designs.
+
+    Returns:
+        ``(...)`` dimensionless area normalized by pi L^2.
+    """
+    K = tip_coefficients(robot)
+    margin = jnp.sum(K[..., 1:], axis=-1) - K[..., 0]
+    if clamp:
+        margin = jnp.maximum(margin, 0.0)
+    return margin**2 / robot.reach**2
+
+
+def maximum_reachable_area(robot: PlanarRobot) -> jax.Array:
+    """``(...)`` S_M = (K0 + K1 + ... + Kn)^2 / L^2, the Maximum Reachable Space over pi L^2 (Table 2)."""
+    K = tip_coefficients(robot)
+    return jnp.sum(K, axis=-1) ** 2 / robot.reach**2
+
+
+def objective(name: str, *, wbar_options: Mapping[str, Any] | None = None,
+              clamp_guaranteed: bool = True) -> Callable[[PlanarRobot], jax.Array]:
+    """The objective ``name`` as ``f(robot) -> scalar`` (options checked by the problem's loader).
+
+    Args:
+        name: one of :data:`OBJECTIVES`.
+        wbar_options: keyword arguments of :func:`spacearm.analysis.average_manipulability`.
+        clamp_guaranteed: see :func:`guaranteed_area`.
+    """
+    if name == "wbar":
+        options = dict(wbar_options or {})
+        return lambda robot: average_manipulability(robot, **options)
+    if name == "S_G":
+        return lambda robot: guaranteed_area(robot, clamp=clamp_guaranteed)
+    if name == "S_M":
+        return maximum_reachable_area
+    raise ValueError(f"unknown objective {name!r}; known: {', '.join(OBJECTIVES)}")

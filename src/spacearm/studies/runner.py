@@ -1,0 +1,238 @@
+"""Running a sweep: every design in compiled, vmapped chunks sharded over the JAX devices,
+finished chunks kept on disk so an interrupted sweep resumes, then the table, the grids,
+the report and the manifest (through :mod:`spacearm.io`). No figures here.
+
+All designs are stacked into one :class:`~spacearm.models.planar.PlanarRobot` with a
+leading axis and evaluated by one compiled function in chunks of bounded size.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+import os
+import re
+import shutil
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+import jax
+import numpy as np
+from jax.experimental import multihost_utils
+from tqdm.auto import tqdm
+
+from .._core.errors import ConfigError
+from .._version import __version__
+from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
+from ..io import manifest as provenance
+from ..models.planar import PlanarRobot
+from .designs import build_designs, design_columns
+from .metrics import design_function, metric_columns
+from .spec import SweepSpec
+from .table2 import REPORTS
+
+__all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP"]
+
+# Designs vmapped together inside a chunk (see run_sweep): small enough for the cache.
+DESIGNS_PER_STEP = 32
+
+# A writer run after the table, grids and report: (spec, out_dir, table: column -> values
+# per design) -> the paths it wrote (listed in the manifest).
+SweepOutput = Callable[[SweepSpec, Path, Mapping[str, np.ndarray]], "list[Path]"]
+
+
+def _mesh():
+    devices = np.array(jax.devices())
+    return jax.sharding.Mesh(devices, ("designs",))
+
+
+def _chunks(total: int, size: int) -> list[tuple[int, int]]:
+    return [(start, min(start + size, total)) for start in range(0, total, size)]
+
+
+def _take(robot: PlanarRobot, start: int, stop: int, size: int, devices: int) -> PlanarRobot:
+    """Rows start:stop, padded to ``size`` by repeating the last row (static shapes),
+    as ``(devices, size // devices, ...)``: one row of designs per device."""
+    index = np.minimum(np.arange(start, start + size), stop - 1).reshape(devices, -1)
+    return jax.tree_util.tree_map(lambda x: np.asarray(x)[index], robot)
+
+
+def _shard(tree, sharding):
+    """Place a host batch on the device mesh; every process supplies the shards it owns,
+    so the same code runs on one device, many devices, or many hosts (jax.distributed)."""
+    def place(x):
+        x = np.asarray(x)
+        return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
+
+    return jax.tree_util.tree_map(place, tree)
+
+
+def _gather(array) -> np.ndarray:
+    """A global result as a host array (all-gathered across processes when multi-host)."""
+    if getattr(array, "is_fully_addressable", True):
+        return np.asarray(array)
+    return np.asarray(multihost_utils.process_allgather(array, tiled=True))
+
+
+@dataclasses.dataclass
+class SweepResult:
+    out_dir: Path
+    table: dict[str, np.ndarray]
+    manifest: dict
+    files: list[Path]
+
+
+def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, progress: bool = True,
+              command: Sequence[str] | None = None, stop_after_chunks: int | None = None,
+              outputs: Sequence[SweepOutput] = ()) -> SweepResult:
+    """Evaluate every design of a sweep and write ``table.csv``, ``grids.npz``, the report
+    (``report:`` in the file, e.g. ``table.md``) and ``manifest.json`` into ``out_dir``
+    (default: the sweep's ``output``).
+
+    Finished chunks are saved under ``out_dir/.partial-<hash>/``; a re-run of the same
+    resolved sweep loads them and computes only the rest. ``stop_after_chunks`` simulates
+    an interruption (for tests).
+
+    Args:
+        outputs: further writers, each ``fn(spec, out_dir, table) -> [paths]``, run after
+            the report and before the manifest, which lists their files (``spacearm sweep``
+            passes :func:`spacearm.figures.sweep.write_figures`). This layer draws nothing.
+    """
+    wall_start = time.perf_counter()
+    out_dir = Path(out_dir if out_dir is not None else spec.output)
+    _check_output_dir(out_dir)
+    code_state = provenance.git_state()  # before this run changes any tracked result file
+    robot, points = build_designs(spec)
+    total = spec.n_designs
+    devices = jax.device_count()
+    chunk = max(devices, int(math.ceil(min(spec.chunk_size, total) / devices)) * devices)
+    # Saved chunks are reused only by a run that would compute them bit for bit alike:
+    # same resolved config, effective chunk size, precision and package versions.
+    resume_key = {"config": spec.config, "axis_order": [a.name for a in spec.axes], "chunk": chunk, "float64": bool(jax.config.jax_enable_x64),
+                  "spacearm": __version__, "jax": jax.__version__}
+    partial = out_dir / f".partial-{config_hash(resume_key)[:16]}"
+
+    mesh = _mesh()
+    sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("designs"))
+    # Each device walks its share of a chunk in vmapped steps of a few designs: the
+    # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
+    # slower per design on CPU), while chunk_size alone bounds the memory.
+    per_device = chunk // devices
+    step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(DESIGNS_PER_STEP, per_device)))
+    evaluate = jax.jit(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)))
+    columns = metric_columns(spec.metrics)
+
+    compile_s = 0.0
+    compiled = None
+    pieces: dict[int, dict[str, np.ndarray]] = {}
+    spans = _chunks(total, chunk)
+    for number, (start, stop) in enumerate(spans):
+        saved = partial / f"chunk_{number:06d}.npz"
+        if saved.exists():
+            try:
+                with np.load(saved) as data:
+                    piece = {c: data[c] for c in columns}
+            except Exception:  # damaged (e.g. the disk filled up): compute it again
+                saved.unlink()
+                continue
+            if all(v.shape == (stop - start,) for v in piece.values()):
+                pieces[number] = piece
+    todo = [n for n in range(len(spans)) if n not in pieces]
+    run_start = time.perf_counter()
+    bar = tqdm(total=total, desc=f"sweep {spec.name}", unit="design", disable=not progress, file=sys.stderr,
+               initial=sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces))
+    try:
+        for done, number in enumerate(todo):
+            if stop_after_chunks is not None and done >= stop_after_chunks:
+                raise KeyboardInterrupt
+            start, stop = spans[number]
+            batch = _shard(_take(robot, start, stop, chunk, devices), sharding)
+            if compiled is None:
+                t0 = time.perf_counter()
+                compiled = evaluate.lower(batch).compile()
+                compile_s = time.perf_counter() - t0
+            values = compiled(batch)
+            piece = {c: _gather(values[c])[: stop - start] for c in columns}
+            if jax.process_index() == 0:
+                write_npz(partial / f"chunk_{number:06d}.npz", **piece)
+            pieces[number] = piece
+            bar.update(stop - start)
+    except KeyboardInterrupt:
+        bar.close()
+        kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
+        print(f"{kept:,} of {total:,} designs kept in {partial}; run the same command again to resume",
+              file=sys.stderr)
+        raise
+    finally:
+        bar.close()
+    run_s = time.perf_counter() - run_start - compile_s
+
+    metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
+    table: dict[str, np.ndarray] = {"design": np.arange(total)}
+    table.update(points)
+    table.update(design_columns(robot, spec.axes))
+    table.update(metric_values)
+
+    if jax.process_index() != 0:  # multi-host: the first process writes the results
+        return SweepResult(out_dir, table, {}, [])
+    files = [write_csv(out_dir / "table.csv", table)]
+    grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
+    grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
+    grid_arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
+    files.append(write_npz(out_dir / "grids.npz", **grid_arrays))
+    if spec.report:
+        rows = [{k: float(v[i]) for k, v in table.items()} for i in range(total)]
+        files.extend(REPORTS[spec.report](out_dir, rows, spec))
+    for output in outputs:
+        files.extend(output(spec, out_dir, table))
+    timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
+    data = build_manifest(
+        spec.config, command=command, timings=timings, git=code_state,
+        extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk, "resumed_chunks": len(spans) - len(todo),
+               "files": sorted(str(p.relative_to(out_dir)) for p in files)},
+    )
+    previous = _previous_files(out_dir)
+    files.append(write_json(out_dir / "manifest.json", data))
+    shutil.rmtree(partial, ignore_errors=True)
+    for name in previous - {str(p.relative_to(out_dir)) for p in files}:
+        try:
+            (out_dir / name).unlink(missing_ok=True)  # an earlier sweep's figure this run did not draw
+        except OSError:
+            pass
+    others = sorted(p.name for p in out_dir.glob(".partial-*") if p.is_dir())
+    if others:
+        print(f"note: {out_dir} also holds {', '.join(others)} (chunks of another sweep run into this folder; "
+              "delete them if no run needs them)", file=sys.stderr)
+    return SweepResult(out_dir, table, data, files)
+
+
+# The names a sweep writes (see run_sweep, the reports and spacearm.figures.sweep): only these
+# are ever removed.
+_OWN_FILES = re.compile(r"(table\.csv|grids\.npz|metrics\.png|table\.md|fig10\.png|heatmap_[A-Za-z0-9_.]+\.png)")
+
+
+def _previous_files(out_dir: Path) -> set[str]:
+    """Files an earlier sweep wrote into ``out_dir``, read from its manifest when that is a
+    spacearm sweep manifest; limited to the names a sweep writes."""
+    try:
+        manifest = json.loads((out_dir / "manifest.json").read_text())
+        listed = manifest["files"] if "spacearm" in manifest["packages"] and "config_sha256" in manifest else []
+    except (OSError, ValueError, KeyError, TypeError):
+        return set()
+    return {name for name in listed if isinstance(name, str) and _OWN_FILES.fullmatch(name)}
+
+
+def _check_output_dir(out_dir: Path) -> None:
+    """ConfigError unless ``out_dir`` is, or can become, a writable folder (nothing is created)."""
+    target = out_dir.absolute()
+    existing = target
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise ConfigError(f"--out {out_dir}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out {out_dir}: cannot write into {existing} (permission denied)")

@@ -1,0 +1,69 @@
+"""The command line's shape: one module per command, a light --help, the deprecated paths."""
+
+import subprocess
+import sys
+
+import pytest
+
+from spacearm.cli import COMMANDS, build_parser, main
+
+
+def test_help_loads_no_heavy_layer():
+    """`spacearm --help` and building the parser import neither optax nor the design, studies
+    or figures layers (nor matplotlib); each command loads those when it runs."""
+    code = (
+        "import sys\n"
+        "from spacearm.cli import build_parser\n"
+        "build_parser()\n"
+        "heavy = [m for m in sys.modules if m.split('.')[0] in ('optax', 'matplotlib', 'pymoo') "
+        "or m.startswith(('spacearm.design', 'spacearm.studies', 'spacearm.figures', 'spacearm.analysis', "
+        "'spacearm.planning'))]\n"
+        "print(heavy)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[]"
+    help_text = subprocess.run([sys.executable, "-m", "spacearm.cli", "--help"], capture_output=True, text=True).stdout
+    for name, _ in COMMANDS:
+        assert f"    {name} " in help_text
+
+
+@pytest.mark.parametrize("name", [name for name, _ in COMMANDS])
+def test_every_command_prints_its_help(name, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main([name, "--help"])
+    assert stop.value.code == 0
+    out = capsys.readouterr().out
+    assert f"usage: spacearm {name}" in out and "--float32" in out
+
+
+def test_sweep_help_lists_fields_and_metrics(capsys):
+    with pytest.raises(SystemExit):
+        main(["sweep", "--help"])
+    out = capsys.readouterr().out
+    assert "design fields for axes: base.mass" in out and "workspace_areas" in out
+
+
+def test_each_command_module_has_register_and_run():
+    import importlib
+
+    parser = build_parser()
+    assert parser.prog == "spacearm"
+    for _, module in COMMANDS:
+        loaded = importlib.import_module(module)
+        assert callable(loaded.register) and callable(loaded.run)
+
+
+def test_deprecated_paths_still_import():
+    import spacearm.config
+    import spacearm.reports
+    import spacearm.results
+    import spacearm.sweep
+    import spacearm.validate
+    from spacearm import io, studies
+
+    assert spacearm.sweep.run_sweep is studies.run_sweep
+    assert spacearm.results.manifest is io.build_manifest
+    assert callable(spacearm.validate.validate_file)
+    assert spacearm.reports.REPORTS is studies.REPORTS
+    assert callable(spacearm.config.enable_x64)
