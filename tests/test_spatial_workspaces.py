@@ -71,3 +71,20 @@ def test_icosphere_directions():
     cos = d @ d.T - 2 * np.eye(len(d))
     nearest = np.arccos(np.clip(cos.max(axis=1), -1, 1))
     assert nearest.max() / nearest.min() < 1.3  # nearly uniform
+
+
+def test_straight_path_workspace_ends_on_lines_and_outside_the_path_independent_sphere():
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    area4 = sw.spatial_straight_path_workspace(robot, np.array([0.3, 0.5, 1.2]), subdivisions=1)
+    d = np.asarray(area4.directions)
+    travel = np.asarray(area4.ends) - np.asarray(area4.start)
+    along = np.sum(travel * d, axis=-1)
+    np.testing.assert_allclose(along, np.asarray(area4.lengths), rtol=1e-9, atol=1e-12)
+    assert np.max(np.linalg.norm(travel - along[:, None] * d, axis=-1)) < 1e-9
+    singular = np.asarray(area4.reasons) == 0
+    assert singular.sum() > 0
+    # Paths that stop at a dynamic singularity stop on a singular tip, never inside the
+    # singularity-free sphere found by the independent search over the singular set.
+    radius, _ = sw.singular_radius(robot, "generalized")
+    ends = np.linalg.norm(np.asarray(area4.ends)[singular], axis=-1)
+    assert ends.min() >= float(radius) - 1e-6

@@ -46,6 +46,7 @@ import numpy as np
 from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_determinant, tip_position
 from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
+from ..motion.spatial_paths import spatial_straight_tip_path
 from . import workspaces
 from .joint_box import box_postures, check_joint_box, digital_shifts, joint_box, periodic_joints, sobol_direction_numbers, sobol_points
 
@@ -61,6 +62,8 @@ __all__ = [
     "singular_radius",
     "guaranteed_workspace",
     "icosphere_directions",
+    "StraightPathWorkspace",
+    "spatial_straight_path_workspace",
 ]
 
 
@@ -481,3 +484,55 @@ def icosphere_directions(subdivisions: int = 4) -> np.ndarray:
             new_faces += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
         faces = new_faces
     return np.stack(points)
+
+
+# Straight-Path Workspace in 3-D ------------------------------------------------------------
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class StraightPathWorkspace:
+    """Area 4 in 3-D from one initial posture: where straight tip paths end, per direction.
+
+    Attributes:
+        directions: ``(k, 3)`` unit directions of the paths, inertial axes.
+        start: ``(3,)`` tip at the initial posture, about the system centroid, m.
+        ends: ``(k, 3)`` tip where each path ended (the boundary of Area 4), m.
+        lengths: ``(k,)`` distance travelled along each direction, m.
+        reasons: ``(k,)`` int32 why each path ended (0 singular, 1 max_length, 2 joint
+            limit, 3 step budget; :class:`~spacearm.motion.spatial_paths.SpatialStraightPath`).
+    """
+
+    directions: jax.Array
+    start: jax.Array
+    ends: jax.Array
+    lengths: jax.Array
+    reasons: jax.Array
+
+
+def spatial_straight_path_workspace(
+    robot, q_start: jax.Array, *, subdivisions: int = 4, base_rotation: jax.Array | None = None, **path_options
+) -> StraightPathWorkspace:
+    """The 3-D Straight-Path Workspace from one posture (sec. 3.1 (3-b) in 3-D).
+
+    From ``q_start`` the tip moves along each of the 10 4^k + 2 icosphere directions
+    (k = ``subdivisions``; 2,562 for k = 4) until J*_v loses rank, a joint limit or
+    ``max_length`` (:func:`~spacearm.motion.spatial_paths.spatial_straight_tip_path`,
+    the bus attitude integrated with the joints); the end points bound the
+    star-shaped set reachable by straight lines from the start.
+
+    Args:
+        robot: one spatial design.
+        q_start: ``(n,)`` initial joints.
+        base_rotation: ``(3, 3)`` bus attitude at the start (default identity).
+        path_options: passed to the path integrator (``max_length``, ``max_step``, ``tol`` ...).
+    """
+    directions = jnp.asarray(icosphere_directions(subdivisions), jnp.result_type(float))
+    q_start = jnp.asarray(q_start, directions.dtype)
+    k = directions.shape[0]
+    rotation = None if base_rotation is None else jnp.broadcast_to(jnp.asarray(base_rotation, directions.dtype), (k, 3, 3))
+    paths = spatial_straight_tip_path(
+        robot, jnp.broadcast_to(q_start, (k, q_start.shape[-1])), directions, base_rotation=rotation, **path_options
+    )
+    start = tip_position(robot, q_start, base_rotation=None if base_rotation is None else jnp.asarray(base_rotation))
+    return StraightPathWorkspace(directions, start, paths.end_tip, paths.length, paths.reason)
