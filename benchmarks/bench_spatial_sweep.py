@@ -31,7 +31,6 @@ import time
 
 def _sweep(designs: int, robot_name: str, chunk: int, rtol: float) -> dict:
     import jax
-    import jax.numpy as jnp
     import numpy as np
     from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
