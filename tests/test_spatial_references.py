@@ -9,6 +9,7 @@ the system centroid, H_m and H* compare directly. Agreement to 1e-10 (observed ~
 
 import os
 
+import jax
 import numpy as np
 import pytest
 
@@ -47,14 +48,23 @@ def _random_case(seed, n=6, kinds=None):
     return robot, combined, names, tip, rng
 
 
-def _mine(robot, q):
+@jax.jit
+def _everything(robot, q):
+    # One program per arm structure (nested jits inline): keeps the compile count low.
     return {
-        "jstar": np.asarray(sa.generalized_jacobian(robot, q)),
-        "tip": np.asarray(sa.tip_position(robot, q)),
-        "fixed": np.asarray(sa.fixed_base_jacobian(robot, q)),
-        "mass_matrix": np.asarray(spatial.mass_matrix(robot, q)),
-        "arm_inertia": np.asarray(spatial.arm_inertia(robot, q)),
+        "jstar": sa.generalized_jacobian(robot, q),
+        "tip": sa.tip_position(robot, q),
+        "fixed": sa.fixed_base_jacobian(robot, q),
+        "mass_matrix": spatial.mass_matrix(robot, q),
+        "arm_inertia": spatial.arm_inertia(robot, q),
+        "base_rate": sa.base_rate_matrix(robot, q),
     }
+
+
+def _mine(robot, qs):
+    """All kernels for a batch of postures ``(k, n)``: a list of k dicts of numpy arrays."""
+    out = {key: np.asarray(value) for key, value in _everything(robot, np.asarray(qs)).items()}
+    return [{key: value[i] for key, value in out.items()} for i in range(len(qs))]
 
 
 def _compare(reference, mine, label):
@@ -77,12 +87,12 @@ def test_random_chains_agree_with_pinocchio(seed, kinds):
     pytest.importorskip("pinocchio")
     n = len(kinds) if kinds else 6
     robot, combined, names, tip, rng = _random_case(seed, n, kinds)
-    for q in rng.uniform(-2.0, 2.0, (3, n)):
+    qs = rng.uniform(-2.0, 2.0, (3, n))
+    for q, mine in zip(qs, _mine(robot, qs)):
         reference = pinocchio_reference(combined, names, tip, q)
-        mine = _mine(robot, q)
         _compare(reference, mine, f"seed {seed}")
         # C(q): Pinocchio's free-flyer twist is the bus origin's [v; w] (bus pose = identity).
-        C = np.asarray(sa.base_rate_matrix(robot, q))
+        C = mine["base_rate"]
         rate = reference["free_flyer_rate"]
         w = rate[3:]
         v_centroid = rate[:3] + np.cross(w.T, np.asarray(BUS["base_com"])).T
@@ -94,8 +104,9 @@ def test_random_chains_agree_with_idyntree_mixed(seed, kinds):
     pytest.importorskip("idyntree")
     n = len(kinds) if kinds else 6
     robot, combined, names, tip, rng = _random_case(seed, n, kinds)
-    for q in rng.uniform(-2.0, 2.0, (3, n)):
-        _compare(idyntree_reference(combined, names, tip, q), _mine(robot, q), f"seed {seed}")
+    qs = rng.uniform(-2.0, 2.0, (3, n))
+    for q, mine in zip(qs, _mine(robot, qs)):
+        _compare(idyntree_reference(combined, names, tip, q), mine, f"seed {seed}")
 
 
 @pytest.mark.parametrize("seed, kinds", SEEDS_AND_KINDS[:2])
@@ -104,8 +115,9 @@ def test_random_chains_agree_with_mujoco(seed, kinds):
     n = len(kinds) if kinds else 6
     robot, combined, names, tip, rng = _random_case(seed, n, kinds)
     model = mujoco_model(combined)
-    for q in rng.uniform(-2.0, 2.0, (3, n)):
-        _compare(mujoco_reference(model, names, tip, q), _mine(robot, q), f"seed {seed}")
+    qs = rng.uniform(-2.0, 2.0, (3, n))
+    for q, mine in zip(qs, _mine(robot, qs)):
+        _compare(mujoco_reference(model, names, tip, q), mine, f"seed {seed}")
 
 
 # Real arms ------------------------------------------------------------------------------
@@ -157,9 +169,9 @@ def _real_case(name):
 def test_real_arms_agree_with_pinocchio(name):
     pytest.importorskip("pinocchio")
     robot, combined, tip = _real_case(name)
-    rng = np.random.default_rng(len(name))
-    for q in rng.uniform(-2.5, 2.5, (3, robot.n_joints)):
-        _compare(pinocchio_reference(combined, robot.joint_names, tip, q), _mine(robot, q), name)
+    qs = np.random.default_rng(len(name)).uniform(-2.5, 2.5, (3, robot.n_joints))
+    for q, mine in zip(qs, _mine(robot, qs)):
+        _compare(pinocchio_reference(combined, robot.joint_names, tip, q), mine, name)
 
 
 @pytest.mark.parametrize("name", ["ur5", "panda"])
@@ -168,9 +180,8 @@ def test_real_arms_agree_with_idyntree_and_mujoco(name):
     pytest.importorskip("mujoco")
     robot, combined, tip = _real_case(name)
     model = mujoco_model(combined)
-    rng = np.random.default_rng(5)
-    for q in rng.uniform(-2.5, 2.5, (2, robot.n_joints)):
-        mine = _mine(robot, q)
+    qs = np.random.default_rng(5).uniform(-2.5, 2.5, (3, robot.n_joints))
+    for q, mine in zip(qs, _mine(robot, qs)):
         _compare(idyntree_reference(combined, robot.joint_names, tip, q), mine, f"{name} iDynTree")
         _compare(mujoco_reference(model, robot.joint_names, tip, q), mine, f"{name} MuJoCo")
 
@@ -203,9 +214,9 @@ def test_example_robot_files_agree_with_pinocchio(config):
         mount_xyz=spec["mount"]["xyz"],
         mount_rpy=spec["mount"]["rpy"],
     )
-    rng = np.random.default_rng(11)
-    for q in rng.uniform(-2.5, 2.5, (3, robot.n_joints)):
-        _compare(pinocchio_reference(combined, robot.joint_names, arm["tip"], q), _mine(robot, q), config)
+    qs = np.random.default_rng(11).uniform(-2.5, 2.5, (3, robot.n_joints))
+    for q, mine in zip(qs, _mine(robot, qs)):
+        _compare(pinocchio_reference(combined, robot.joint_names, arm["tip"], q), mine, config)
 
 
 def test_spatial_md_recipe_for_the_ur5_smallsat():
@@ -224,8 +235,8 @@ def test_spatial_md_recipe_for_the_ur5_smallsat():
     )
     data = model.createData()
     tip = model.getFrameId("tool0")
-    rng = np.random.default_rng(3)
-    for joint_q in rng.uniform(-3, 3, (3, 6)):
+    qs = np.random.default_rng(3).uniform(-3, 3, (3, 6))
+    for joint_q, mine in zip(qs, _mine(robot, qs)):
         q = pin.neutral(model)
         q[:3] = X_mount.translation
         q[3:7] = pin.Quaternion(X_mount.rotation).coeffs()
@@ -234,7 +245,7 @@ def test_spatial_md_recipe_for_the_ur5_smallsat():
         M = np.triu(M) + np.triu(M, 1).T
         J = pin.computeFrameJacobian(model, data, q, tip, pin.LOCAL_WORLD_ALIGNED)
         jstar = J[:, 6:] - J[:, :6] @ np.linalg.solve(M[:6, :6], M[:6, 6:])
-        np.testing.assert_allclose(sa.generalized_jacobian(robot, joint_q), jstar, atol=TOLERANCE)
+        np.testing.assert_allclose(mine["jstar"], jstar, atol=TOLERANCE)
 
 
 def test_one_pass_primitives_are_consistent():

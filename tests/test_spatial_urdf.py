@@ -212,3 +212,26 @@ def test_construction_validates_the_pytree():
         robot.replace(joint_axis=np.array([[0, 0, 1.0], [0, 1, 0], [0, 0, 0]]))
     with pytest.raises(sa.ConfigError, match=r"base.mass: must be positive"):
         robot.replace(base_mass=np.float64(0.0))
+
+
+def test_cli_validate_checks_spatial_files(tmp_path, capsys):
+    from spacearm.cli import main
+
+    assert main(["validate", os.path.join(CONFIGS, "ur5-smallsat.yaml")]) == 0
+    assert "valid robot (ur5-smallsat, 6 links" in capsys.readouterr().out
+    bad = _urdf(mass=-1.0)
+    assert main(["validate", _file(tmp_path, urdf_text=bad)]) == 2
+    err = capsys.readouterr().err
+    assert "arm.urdf: link 'l1': inertial mass: must not be negative" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_batched_validation_is_vectorized_and_names_the_design():
+    robot = sa.load_robot(os.path.join(CONFIGS, "arm3dof-100kg.yaml"))
+    fields = spatial.robot._LEAF_FIELDS
+    batch = {f: np.stack([np.asarray(getattr(robot, f))] * 50) for f in fields}
+    spatial.SpatialRobot(**batch, joint_kinds=robot.joint_kinds)  # valid: the one vectorized pass
+    batch["link_inertia"] = batch["link_inertia"].copy()
+    batch["link_inertia"][17, 2] = -np.eye(3)
+    with pytest.raises(sa.ConfigError, match=r"design \(17,\): joints\[2\]: link_inertia: must be positive semidefinite"):
+        spatial.SpatialRobot(**batch, joint_kinds=robot.joint_kinds)

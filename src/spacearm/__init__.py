@@ -27,6 +27,18 @@ from .kinematics import (
 )
 from .models import family_of as family_of, load_robot as load_robot
 from .models.planar import PlanarRobot as PlanarRobot, stack_robots as stack_robots, umetani1990 as umetani1990
+from .models.spatial import (
+    SpatialRobot as SpatialRobot,
+    arm_inertia as arm_inertia,
+    base_twist_map as base_twist_map,
+    dynamic_manipulability as dynamic_manipulability,
+    fixed_base_ellipsoid as fixed_base_ellipsoid,
+    full_manipulability as full_manipulability,
+    mass_matrix as mass_matrix,
+    rotational_ellipsoid as rotational_ellipsoid,
+    rotational_manipulability as rotational_manipulability,
+    stack_spatial_robots as stack_spatial_robots,
+)
 from .models.planar.closed_forms import (
     angular_momentum as angular_momentum,
     arm_jacobian as arm_jacobian,

@@ -20,6 +20,7 @@ import jax
 import jax.numpy as jnp
 
 from ._core.batching import map_leading
+from ._core.linalg import adjugate, gram_determinant, gram_root_determinant, square_determinant
 from .models.family import RobotFamily, family_of
 
 __all__ = [
@@ -55,54 +56,6 @@ def _base_matrix_one(family: RobotFamily, robot, posture):
     return -jnp.linalg.solve(I_S, I_M)
 
 
-def gram_determinant(J: jax.Array) -> jax.Array:
-    """det(J J^T) of ``(..., t, n)`` matrices (t <= n).
-
-    For t = 2 it is the sum of squared 2 x 2 minors (Cauchy-Binet), which avoids the
-    cancellation of det(J J^T) near singular postures.
-    """
-    t = J.shape[-2]
-    if t == 1:
-        return jnp.sum(J[..., 0, :] ** 2, axis=-1)
-    if t == 2:
-        x, y = J[..., 0, :], J[..., 1, :]
-        minors = x[..., :, None] * y[..., None, :] - x[..., None, :] * y[..., :, None]
-        return 0.5 * jnp.sum(minors * minors, axis=(-2, -1))
-    return jnp.linalg.det(J @ jnp.swapaxes(J, -1, -2))
-
-
-def gram_root_determinant(J: jax.Array) -> jax.Array:
-    """sqrt(det(J J^T)) of ``(..., t, n)`` matrices: 0 at rank loss, with finite gradients there."""
-    if J.shape[-2] == 2 and J.shape[-1] == 2:
-        return jnp.abs(J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0])
-    squares = gram_determinant(J)
-    positive = squares > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, squares, 1.0)), 0.0)
-
-
-def _adjugate(A: jax.Array) -> jax.Array:
-    """adj(A) of a 1x1, 2x2 or 3x3 matrix by cofactors: finite and smooth where det A = 0."""
-    t = A.shape[-1]
-    if t == 1:
-        return jnp.ones_like(A)
-    if t == 2:
-        return jnp.array([[A[1, 1], -A[0, 1]], [-A[1, 0], A[0, 0]]])
-    if t == 3:
-        rows = [jnp.cross(A[:, (i + 1) % 3], A[:, (i + 2) % 3]) for i in range(3)]
-        return jnp.stack(rows)  # row i of adj(A) = column (i+1) x column (i+2)
-    raise ValueError(f"straight paths need 1 to 3 task rows, got {t}")
-
-
-def square_determinant(J: jax.Array) -> jax.Array:
-    """det J of ``(..., t, t)`` matrices, t <= 3, written out (no LU pivoting: smooth everywhere)."""
-    t = J.shape[-1]
-    if t == 1:
-        return J[..., 0, 0]
-    if t == 2:
-        return J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
-    return jnp.sum(J[..., :, 0] * jnp.cross(J[..., :, 1], J[..., :, 2]), axis=-1)
-
-
 def straight_path_rates(J: jax.Array, direction: jax.Array, sign0: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Regularized joint rates moving the tip along ``direction`` (one posture).
 
@@ -122,10 +75,10 @@ def straight_path_rates(J: jax.Array, direction: jax.Array, sign0: jax.Array) ->
     """
     t, n = J.shape
     if t == n:
-        v = sign0 * (_adjugate(J) @ direction)
+        v = sign0 * (adjugate(J) @ direction)
         rate = sign0 * square_determinant(J)
     else:
-        v = J.T @ (_adjugate(J @ J.T) @ direction)
+        v = J.T @ (adjugate(J @ J.T) @ direction)
         rate = gram_determinant(J)
     norm_sq = jnp.sum(v * v)
     positive = norm_sq > 0

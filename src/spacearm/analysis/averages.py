@@ -3,18 +3,15 @@
 Each average is the mean of a per-posture metric under the uniform measure on the joint
 box (:mod:`.joint_box`: limits where given, one turn for a continuous joint):
 
-==================================  ==============================================  =======
-function                            metric                                          unit
-==================================  ==============================================  =======
-:func:`average_manipulability`      translational w* = sqrt det(J*_v J*_v^T)         m^3
-                                    (eq. 10 in 3-D; planar: the paper's eq. 12)
-:func:`global_conditioning_index`   1 / kappa(J*_v) = sigma_min / sigma_max          --
-                                    (Gosselin & Angeles 1991, over the joint box)
-:func:`average_base_disturbance`    ||C_w||_F, Frobenius norm of the angular rows    rad/rad
-                                    of C = -I_S^-1 I_M (Dubowsky & Torres 1991)
-:func:`average_dynamic_manipulability`  w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T)     m^3/(kg m^2)^3
-                                    (Yoshikawa 1985 on J*; spatial only)              per s^-2 ...
-==================================  ==============================================  =======
+- :func:`average_manipulability`: translational w* = sqrt det(J*_v J*_v^T), m^3
+  (eq. 10 in 3-D; planar robots keep the paper's eq. 12, normalized by L^2);
+- :func:`global_conditioning_index`: 1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]
+  (Gosselin & Angeles 1991, over the joint box instead of the workspace);
+- :func:`average_base_disturbance`: ||C_w||_F, the Frobenius norm of the angular rows of
+  C = -I_S^-1 I_M, rad per rad (Dubowsky & Torres 1991's disturbance, as a scalar);
+- :func:`average_dynamic_manipulability`: w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T),
+  (m / (kg m^2))^3 for revolute joints: tip acceleration per joint torque (Yoshikawa
+  1985 applied to J*, with H* the arm inertia at zero momentum; spatial robots only).
 
 Why Frobenius for the disturbance: ||C_w||_F^2 = sum of the squared singular values =
 n times the mean of ||C_w u||^2 over unit joint-rate directions u, so it is the RMS
@@ -36,10 +33,21 @@ each design stops at its own sample count). The mean is differentiable in the de
 blocks the forward pass used, so the gradient is that of the returned estimate); the
 error estimate and the sample count carry no gradient.
 
-Accuracy, measured (tests/test_averages.py): the planar joint-uniform w-bar agrees
-with the Gauss-Legendre rule of ``average_manipulability(robot, measure="joint")``
-within the reported error; the error decays about as N^-1 (the integrands have kinks
-where det J* changes sign).
+Accuracy, measured (tests/test_averages.py; RMS over 4 seeds against a reference):
+
+========================  ===========  ===========  ===========  ===========
+mean w*, relative error   N = 2^12     2^14         2^16         2^18
+========================  ===========  ===========  ===========  ===========
+Table 1 (planar, exact)   --           4.0e-5       3.9e-6       5.5e-7
+3-DOF arm, 100 kg bus     1.2e-4       1.3e-4       1.9e-5       4.4e-6
+UR5 on a 500 kg smallsat  5.6e-4       2.8e-4       1.2e-4       4.4e-5
+========================  ===========  ===========  ===========  ===========
+
+(planar: the Gauss-Legendre rule of ``average_manipulability(robot, measure="joint")``;
+spatial: 2^21 postures). The error estimate follows the actual error within a factor
+of about 1.5. The default rtol = 1e-4 stops at 16k-32k postures (planar, 3-DOF) and
+131k (UR5). The integrands have kinks where J*_v loses rank, so the rate is between
+N^-1/2 and N^-1, not QMC's N^-1 log^d N for smooth integrands.
 """
 
 from __future__ import annotations

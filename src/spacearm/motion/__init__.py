@@ -1,9 +1,19 @@
 """Motion of the free-floating arm: the base attitude along joint paths and straight tip paths."""
 
+from .attitude import (
+    geodesic_distance as geodesic_distance,
+    integrate_spatial_joint_path as integrate_spatial_joint_path,
+    spatial_joint_path_history as spatial_joint_path_history,
+)
 from .joint_paths import (
     integrate_joint_path as integrate_joint_path,
     joint_path_base_increments as joint_path_base_increments,
     joint_path_history as joint_path_history,
+)
+from .spatial_paths import (
+    SpatialStraightPath as SpatialStraightPath,
+    spatial_go_and_back as spatial_go_and_back,
+    spatial_straight_tip_path as spatial_straight_tip_path,
 )
 from .straight_paths import (
     REASON_JOINT_LIMIT as REASON_JOINT_LIMIT,
@@ -18,6 +28,12 @@ from .straight_paths import (
 
 __all__ = [
     "integrate_joint_path",
+    "integrate_spatial_joint_path",
+    "spatial_joint_path_history",
+    "geodesic_distance",
+    "SpatialStraightPath",
+    "spatial_straight_tip_path",
+    "spatial_go_and_back",
     "joint_path_history",
     "joint_path_base_increments",
     "StraightPath",

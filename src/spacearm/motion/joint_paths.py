@@ -23,6 +23,8 @@ import numpy as np
 from .._core.errors import ConfigError
 from ..models.planar.closed_forms import momentum_inertias, tip_position
 from ..models.planar.robot import PlanarRobot
+from ..models.spatial.robot import SpatialRobot
+from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = ["integrate_joint_path", "joint_path_history", "joint_path_base_increments"]
@@ -87,14 +89,24 @@ def _prepare_joint_path(robot, phi_start, joint_waypoints):
 
 
 def integrate_joint_path(
-    robot: PlanarRobot,
+    robot: PlanarRobot | SpatialRobot,
     phi_start: jax.Array,
     joint_waypoints: jax.Array,
     *,
     nodes: int = 24,
     pieces: int = 8,
-) -> jax.Array:
+    base_rotation: jax.Array | None = None,
+    steps: int | None = None,
+    order=DEFAULT_ORDER,
+):
     """Posture at the end of a joint-space polyline, the base attitude following eq. (5).
+
+    Spatial robots: ``R_end, q_end = integrate_joint_path(robot, q_start,
+    joint_waypoints, base_rotation=R0)`` integrates the bus attitude on SO(3)
+    (:func:`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` 6th-order
+    Magnus steps per segment, by default from the segment lengths; ``order`` the
+    scheme); ``nodes`` and ``pieces`` are
+    planar only. The rest of this docstring is the planar case.
 
     The base rotation is the line integral of -(I_M . dq)/I_S along the straight
     joint-space segments (Umetani & Yoshida 1990, eq. 5, zero momentum), evaluated with
@@ -112,6 +124,12 @@ def integrate_joint_path(
     Returns:
         ``(..., n+1)`` posture at the last waypoint, base attitude included, rad.
     """
+    if isinstance(robot, SpatialRobot):
+        return integrate_spatial_joint_path(
+            robot, phi_start, joint_waypoints, base_rotation, steps=steps, order=order
+        )
+    if base_rotation is not None:
+        raise TypeError("base_rotation applies to spatial robots; a planar posture carries its base angle phi0")
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
         robot, [(phi_start, 1), (joint_waypoints, 2)]

@@ -18,8 +18,15 @@ from .reorientation import (
     plan_reorientation_details as plan_reorientation_details,
     rotation_curl as rotation_curl,
 )
+from .spatial_reorientation import (
+    SpatialLoopSettings as SpatialLoopSettings,
+    SpatialReorientation as SpatialReorientation,
+    plan_spatial_reorientation as plan_spatial_reorientation,
+    plan_spatial_reorientation_details as plan_spatial_reorientation_details,
+)
 
 __all__ = [
+    "SpatialLoopSettings", "SpatialReorientation", "plan_spatial_reorientation", "plan_spatial_reorientation_details",
     "LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl",
     "ReachPlan", "plan_reach", "reachable_bounds", "MODE_STRAIGHT", "MODE_REORIENT", "MODE_REPOSITION",
     "PHASE_REPOSITION", "PHASE_LOOP", "PHASE_STRAIGHT",

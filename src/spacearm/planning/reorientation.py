@@ -39,7 +39,9 @@ import optax
 from .._core.errors import ConfigError
 from ..models.planar.closed_forms import momentum_inertias
 from ..models.planar.robot import PlanarRobot
+from ..models.spatial.robot import SpatialRobot
 from ..motion import integrate_joint_path
+from .spatial_reorientation import plan_spatial_reorientation
 
 __all__ = ["LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl", "check_posture"]
 
@@ -368,8 +370,13 @@ def plan_reorientation_details(
     )
 
 
-def plan_reorientation(robot: PlanarRobot, phi_start, delta_phi0: float, **options) -> np.ndarray:
+def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0, **options) -> np.ndarray:
     """Joint waypoints of a closed maneuver that turns the base by ``delta_phi0``.
+
+    Spatial robots: ``plan_reorientation(robot, q_start, target_rotation)`` returns a
+    closed joint path after which the bus attitude is ``R0 @ target_rotation`` to
+    1e-9 rad (:func:`spacearm.planning.spatial_reorientation.plan_spatial_reorientation`;
+    options are its settings). The rest of this docstring is the planar case.
 
     A closed joint-space loop through q0 = phi_start[1:], repeated N times where one
     loop within the joint limits and ``max_excursion`` cannot turn the base far enough,
@@ -387,6 +394,8 @@ def plan_reorientation(robot: PlanarRobot, phi_start, delta_phi0: float, **optio
         ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the
         first and last rows equal phi_start[1:].
     """
+    if isinstance(robot, SpatialRobot):
+        return plan_spatial_reorientation(robot, phi_start, delta_phi0, **options)
     return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
 
 

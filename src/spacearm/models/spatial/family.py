@@ -15,62 +15,37 @@ Jacobian and manipulability.
 
 from __future__ import annotations
 
-import itertools
-
 import jax
 import jax.numpy as jnp
 
 from ..family import RobotFamily
-from . import primitives
+from ..._core.linalg import gram_root_determinant
+from .primitives import (
+    arm_inertia,
+    base_twist_map,
+    fixed_base_jacobian,
+    generalized_jacobian,
+    jacobians,
+    mass_matrix,
+    momentum_map,
+    tip,
+)
 from .robot import SpatialRobot
 
-__all__ = ["SPATIAL", "SpatialFamily", "root_gram_determinant"]
-
-
-def root_gram_determinant(J: jax.Array) -> jax.Array:
-    """sqrt(det(J J^T)) of ``(..., t, n)`` matrices, t <= n, by Cauchy-Binet for small n.
-
-    det(J J^T) is the sum of the squared t x t minors; summing squares avoids the
-    cancellation of the Gram determinant near rank loss. Exactly 0 at rank loss, with
-    finite gradients there. For t > n the result is 0 (rank at most n).
-    """
-    t, n = J.shape[-2], J.shape[-1]
-    if t > n:
-        return jnp.zeros(J.shape[:-2], J.dtype)
-    subsets = list(itertools.combinations(range(n), t))
-    if t <= 3 and len(subsets) <= 84:  # n <= 9 for t = 3
-        squares = sum(jnp.square(_det_small(J, s)) for s in subsets)
-    else:
-        squares = jnp.linalg.det(J @ jnp.swapaxes(J, -1, -2))
-    positive = squares > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, squares, 1.0)), 0.0)
-
-
-def _det_small(J, columns):
-    t = len(columns)
-    a = lambda r, c: J[..., r, columns[c]]
-    if t == 1:
-        return a(0, 0)
-    if t == 2:
-        return a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0)
-    return (
-        a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
-        - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
-        + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0))
-    )
+__all__ = ["SPATIAL", "SpatialFamily"]
 
 
 def _manipulability(robot, posture):
-    return root_gram_determinant(primitives.generalized_jacobian(robot, posture)[..., :3, :])
+    return gram_root_determinant(generalized_jacobian(robot, posture)[..., :3, :])
 
 
 def _base_rate(robot, posture, joint_rates):
-    C = primitives.base_twist_map(robot, posture)
+    C = base_twist_map(robot, posture)
     return jnp.einsum("...ij,...j->...i", C, joint_rates)
 
 
 def _fixed_base_manipulability(robot, joints):
-    return root_gram_determinant(primitives.fixed_base_jacobian(robot, joints)[..., :3, :])
+    return gram_root_determinant(fixed_base_jacobian(robot, joints)[..., :3, :])
 
 
 class SpatialFamily(RobotFamily):
@@ -86,11 +61,11 @@ class SpatialFamily(RobotFamily):
     posture_offset = 0
     rotates_with_base = True
     fast_paths = {
-        "tip_position": primitives.tip,
-        "generalized_jacobian": primitives.generalized_jacobian,
+        "tip_position": tip,
+        "generalized_jacobian": generalized_jacobian,
         "manipulability": _manipulability,
         "base_rate": _base_rate,
-        "fixed_base_jacobian": primitives.fixed_base_jacobian,
+        "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
     }
 
@@ -98,24 +73,24 @@ class SpatialFamily(RobotFamily):
         return robot.n_joints
 
     def tip(self, robot: SpatialRobot, posture: jax.Array) -> jax.Array:
-        return primitives.tip(robot, posture)
+        return tip(robot, posture)
 
     def jacobians(self, robot: SpatialRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return primitives.jacobians(robot, posture)
+        return jacobians(robot, posture)
 
     def momentum_map(self, robot: SpatialRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return primitives.momentum_map(robot, posture)
+        return momentum_map(robot, posture)
 
     def fixed_base_jacobian(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
-        return primitives.fixed_base_jacobian(robot, joints)
+        return fixed_base_jacobian(robot, joints)
 
     def mass_matrix(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H_m, the arm inertia with the bus held fixed."""
-        return primitives.mass_matrix(robot, joints)
+        return mass_matrix(robot, joints)
 
     def arm_inertia(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H*, the arm inertia at zero momentum."""
-        return primitives.arm_inertia(robot, joints)
+        return arm_inertia(robot, joints)
 
 
 SPATIAL = SpatialFamily()

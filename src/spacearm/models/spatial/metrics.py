@@ -12,8 +12,14 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from . import primitives
-from .family import root_gram_determinant
+from ..._core.linalg import gram_root_determinant
+from .primitives import (
+    arm_inertia as _arm_inertia,
+    base_twist_map as _base_twist_map,
+    fixed_base_jacobian as _fixed_base_jacobian,
+    generalized_jacobian as _generalized_jacobian,
+    mass_matrix as _mass_matrix,
+)
 from .robot import SpatialRobot
 
 __all__ = [
@@ -44,7 +50,7 @@ def _rotate_rows(J, base_rotation):
 @jax.jit
 def rotational_manipulability(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(...)`` w*_w = sqrt det(J*_w J*_w^T), (rad/s per rad/s)^3: how freely the tip turns."""
-    return root_gram_determinant(_map(primitives.generalized_jacobian, robot, q)[..., 3:, :])
+    return gram_root_determinant(_map(_generalized_jacobian, robot, q)[..., 3:, :])
 
 
 @jax.jit
@@ -54,7 +60,7 @@ def full_manipulability(robot: SpatialRobot, q: jax.Array, characteristic_length
     The characteristic length L (m) puts translation and rotation on one scale; for
     n >= 6 this is sqrt det(J_L J_L^T), for n < 6 sqrt det(J_L^T J_L).
     """
-    J = _map(primitives.generalized_jacobian, robot, q)
+    J = _map(_generalized_jacobian, robot, q)
     length = jnp.asarray(characteristic_length)[..., None, None]
     scaled = jnp.concatenate([J[..., :3, :] / length, J[..., 3:, :]], axis=-2)
     if scaled.shape[-1] >= 6:
@@ -69,23 +75,23 @@ def full_manipulability(robot: SpatialRobot, q: jax.Array, characteristic_length
 @jax.jit
 def mass_matrix(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(..., n, n)`` H_m: the arm's joint-space inertia with the bus held fixed."""
-    return _map(primitives.mass_matrix, robot, q)
+    return _map(_mass_matrix, robot, q)
 
 
 @jax.jit
 def arm_inertia(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(..., n, n)`` H* = H_m - H_bm^T H_b^-1 H_bm: the arm inertia at zero momentum."""
-    return _map(primitives.arm_inertia, robot, q)
+    return _map(_arm_inertia, robot, q)
 
 
 @jax.jit
 def dynamic_manipulability(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(...)`` w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) (Yoshikawa 1985 applied to J*)."""
-    J = _map(primitives.generalized_jacobian, robot, q)[..., :3, :]
+    J = _map(_generalized_jacobian, robot, q)[..., :3, :]
     H = arm_inertia(robot, q)
     # J (H^T H)^-1 J^T = (J H^-1)(J H^-1)^T, with H symmetric positive definite.
     K = jnp.swapaxes(jnp.linalg.solve(H, jnp.swapaxes(J, -1, -2)), -1, -2)
-    return root_gram_determinant(K)
+    return gram_root_determinant(K)
 
 
 @jax.jit
@@ -95,7 +101,7 @@ def base_twist_map(robot: SpatialRobot, q: jax.Array, base_rotation: jax.Array |
     Bus axes, or inertial axes with ``base_rotation``. C_w (rows 3:6) is the
     disturbance map of Dubowsky & Torres (1991); its kernel is the reaction null space.
     """
-    return _rotate_rows(_map(primitives.base_twist_map, robot, q), base_rotation)
+    return _rotate_rows(_map(_base_twist_map, robot, q), base_rotation)
 
 
 def _axes(J):
@@ -106,12 +112,12 @@ def _axes(J):
 @jax.jit
 def rotational_ellipsoid(robot: SpatialRobot, q: jax.Array, base_rotation: jax.Array | None = None):
     """Semi-axes ``(..., 3)`` (largest first) and directions ``(..., 3, 3)`` of {J*_w qdot : |qdot| <= 1}."""
-    J = _rotate_rows(_map(primitives.generalized_jacobian, robot, q), base_rotation)
+    J = _rotate_rows(_map(_generalized_jacobian, robot, q), base_rotation)
     return _axes(J[..., 3:, :])
 
 
 @jax.jit
 def fixed_base_ellipsoid(robot: SpatialRobot, q: jax.Array):
     """Semi-axes ``(..., 3)`` and directions ``(..., 3, 3)`` (bus axes) of the fixed-base {J_v qdot : |qdot| <= 1}."""
-    J = _map(primitives.fixed_base_jacobian, robot, q)
+    J = _map(_fixed_base_jacobian, robot, q)
     return _axes(J[..., :3, :])

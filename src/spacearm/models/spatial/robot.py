@@ -153,6 +153,18 @@ class SpatialRobot:
         return len(self.joint_kinds)
 
     @property
+    def n_links(self) -> int:
+        """Number of moving bodies, n (one per arm joint; the same as :attr:`n_joints`)."""
+        return len(self.joint_kinds)
+
+    @property
+    def reach(self):
+        """``(...)`` L: joint 1 to the tip along the chain (sum of joint-to-joint offsets and the
+        tip offset), m; prismatic joints at zero extension. An upper bound on the distance."""
+        offsets = np.linalg.norm(np.asarray(self.joint_translation)[..., 1:, :], axis=-1).sum(-1)
+        return offsets + np.linalg.norm(np.asarray(self.tip_translation), axis=-1)
+
+    @property
     def batch_shape(self) -> tuple[int, ...]:
         """Leading design-batch shape (``()`` for a single design)."""
         return tuple(np.shape(self.base_mass))
@@ -203,8 +215,56 @@ def _joint_label(robot: SpatialRobot, i: int) -> str:
     return f"joints[{i}] '{names[i]}'" if i < len(names) else f"joints[{i}]"
 
 
+def _looks_valid(robot: SpatialRobot, values: dict) -> bool:
+    """Every check of :func:`_check_fields`, vectorized over designs and bodies (NaN fails each);
+    only a batch that fails pays for the per-design pass that names the culprit."""
+    n = robot.n_joints
+    batch = values["base_mass"].shape
+    if any(values[f].shape != batch + shape(n) for f, shape in _LEAF_SHAPES.items()):
+        return False
+    finite = all(np.isfinite(v).all() for f, v in values.items() if f not in ("joint_lower", "joint_upper"))
+    if not finite or np.isnan(values["joint_lower"]).any() or np.isnan(values["joint_upper"]).any():
+        return False
+    if (values["base_mass"] <= 0).any() or (values["root_mass"] < 0).any() or (values["link_mass"] < 0).any():
+        return False
+    if (values["joint_lower"] > values["joint_upper"]).any():
+        return False
+    if (np.linalg.norm(values["joint_axis"], axis=-1) == 0).any():
+        return False
+    tol = 1e-9
+    for field in ("base_inertia", "root_inertia", "link_inertia"):
+        tensor = values[field]
+        scale = np.maximum(np.abs(tensor).max(axis=(-2, -1)), 1e-300)
+        if (np.abs(tensor - np.swapaxes(tensor, -1, -2)).max(axis=(-2, -1)) > tol * scale).any():
+            return False
+        moments = np.linalg.eigvalsh(tensor)
+        low = moments[..., 0] <= tol * scale if field == "base_inertia" else moments[..., 0] < -tol * scale
+        if low.any():
+            return False
+        if field == "base_inertia" and (moments[..., 2] > moments[..., 0] + moments[..., 1] + tol * scale).any():
+            return False
+    rotations = np.concatenate(
+        [values["joint_rotation"].reshape(-1, 3, 3), values["tip_rotation"].reshape(-1, 3, 3)], axis=0
+    )
+    if (np.abs(rotations @ np.swapaxes(rotations, -1, -2) - np.eye(3)).max(axis=(-2, -1)) > tol).any():
+        return False
+    if (np.linalg.det(rotations) < 0).any():
+        return False
+    total = values["base_mass"] + values["root_mass"] + values["link_mass"].sum(-1)
+    return bool((total > 0).all())
+
+
 def _validate(robot: SpatialRobot) -> None:
     """Raise ConfigError naming the body or joint and the field for an invalid design."""
+    if robot.n_joints < 1:
+        raise ConfigError("joint_kinds: the arm needs at least one movable joint")
+    values = {f: np.asarray(getattr(robot, f), dtype=float) for f in _LEAF_FIELDS}
+    if not _looks_valid(robot, values):
+        _check_fields(robot)
+
+
+def _check_fields(robot: SpatialRobot) -> None:
+    """The per-design, per-field checks behind :func:`_validate` (they name the culprit)."""
     n = robot.n_joints
     if n < 1:
         raise ConfigError("joint_kinds: the arm needs at least one movable joint")
@@ -225,20 +285,25 @@ def _validate(robot: SpatialRobot) -> None:
     if np.any(values["root_mass"] < 0):
         raise ConfigError(f"root_mass: must not be negative, got {_show(values['root_mass'])}")
     for index in np.ndindex(*batch):
-        check_inertia("base.inertia", values["base_inertia"][index], positive=True, triangle=True)
-        check_inertia("root_inertia", values["root_inertia"][index], positive=False, triangle=False)
-        _check_rotation("mount", rpy_matrix(values["mount_rpy"][index]))
-        _check_rotation("tip_rotation", values["tip_rotation"][index])
-        for i in range(n):
-            label = _joint_label(robot, i)
-            if values["link_mass"][index][i] < 0:
-                raise ConfigError(f"{label}: link_mass must not be negative, got {values['link_mass'][index][i]}")
-            check_inertia(f"{label}: link_inertia", values["link_inertia"][index][i], positive=False, triangle=False)
-            if np.linalg.norm(values["joint_axis"][index][i]) == 0:
-                raise ConfigError(f"{label}: joint_axis must not be zero")
-            _check_rotation(f"{label}: joint_rotation", values["joint_rotation"][index][i])
-            if values["joint_lower"][index][i] > values["joint_upper"][index][i]:
-                raise ConfigError(f"{label}: joint_lower is above joint_upper")
+        try:
+            check_inertia("base.inertia", values["base_inertia"][index], positive=True, triangle=True)
+            check_inertia("root_inertia", values["root_inertia"][index], positive=False, triangle=False)
+            _check_rotation("mount", rpy_matrix(values["mount_rpy"][index]))
+            _check_rotation("tip_rotation", values["tip_rotation"][index])
+            for i in range(n):
+                label = _joint_label(robot, i)
+                if values["link_mass"][index][i] < 0:
+                    raise ConfigError(f"{label}: link_mass must not be negative, got {values['link_mass'][index][i]}")
+                check_inertia(f"{label}: link_inertia", values["link_inertia"][index][i], positive=False, triangle=False)
+                if np.linalg.norm(values["joint_axis"][index][i]) == 0:
+                    raise ConfigError(f"{label}: joint_axis must not be zero")
+                _check_rotation(f"{label}: joint_rotation", values["joint_rotation"][index][i])
+                if values["joint_lower"][index][i] > values["joint_upper"][index][i]:
+                    raise ConfigError(f"{label}: joint_lower is above joint_upper")
+        except ConfigError as error:
+            if not batch:
+                raise
+            raise ConfigError(f"design {index}: {error}") from None
     total = values["base_mass"] + values["root_mass"] + values["link_mass"].sum(-1)
     if np.any(total <= 0):
         raise ConfigError("the total mass must be positive")

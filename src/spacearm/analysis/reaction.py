@@ -1,0 +1,221 @@
+"""Reaction-free motion of redundant spatial arms and the bus-disturbance map.
+
+The bus angular velocity at zero momentum is omega_B = C_w(q) q_dot (bus axes; C_w the
+angular rows of C(q) = -I_S^-1 I_M). Joint rates in ker C_w turn the bus not at all:
+the reaction null space (Nenchev, Umetani & Yoshida, IEEE TRA 8(1), 1992; flown on
+ETS-VII, Yoshida, Hashizume & Abiko, ICRA 2001), of dimension n - 3 for an arm with
+n > 3 joints where C_w has full rank.
+
+- :func:`reaction_null_space`: an orthonormal basis of ker C_w(q);
+- :func:`disturbance`, :func:`disturbance_map`: ||C_w(q) u|| for unit joint rates u,
+  its extreme values over u (the singular values of C_w) and the least-disturbing
+  direction (the right singular vector of the smallest one; Dubowsky & Torres, ICRA
+  1991), over any batch of postures (e.g. a joint grid);
+- :func:`reaction_free_tip_path`: a straight tip translation with zero bus rotation:
+  q' solves [C_w; J*_v] q' = [0; R0^T d] (minimum norm for n > 6; least squares, with
+  the tip residual reported, where the null space cannot produce the direction, n < 6).
+  The bus attitude then stays R0, so the bus-frame direction is constant; the path is
+  integrated in the tip distance with fixed DOP853 steps, and the reached bus rotation
+  is measured independently by running the sampled joint path through the SO(3)
+  integrator (:func:`spacearm.motion.integrate_joint_path`).
+
+Everything is batched over leading axes and written for one posture under ``vmap``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._core.errors import ConfigError
+from ..models.spatial import primitives
+from ..models.spatial.robot import SpatialRobot
+from ..motion import dop853
+
+__all__ = [
+    "reaction_null_space",
+    "disturbance",
+    "disturbance_map",
+    "DisturbanceMap",
+    "ReactionFreePath",
+    "reaction_free_rates",
+    "reaction_free_tip_path",
+]
+
+
+def _bus_rate_map(robot: SpatialRobot, q: jax.Array) -> jax.Array:
+    return primitives.base_twist_map(robot, q)[..., 3:, :]
+
+
+@jax.jit
+def reaction_null_space(robot: SpatialRobot, q: jax.Array) -> jax.Array:
+    """``(..., n, n - 3)`` orthonormal basis of ker C_w(q) (joint rates that do not turn the bus).
+
+    Args:
+        q: ``(..., n)`` joints, n > 3.
+    """
+    n = robot.n_joints
+    if n <= 3:
+        raise ConfigError(f"the reaction null space needs more than 3 joints, the arm has {n}")
+    C = _bus_rate_map(robot, q)
+    _, _, vt = jnp.linalg.svd(C, full_matrices=True)
+    return jnp.swapaxes(vt[..., 3:, :], -1, -2)
+
+
+@jax.jit
+def disturbance(robot: SpatialRobot, q: jax.Array, joint_rates: jax.Array) -> jax.Array:
+    """``(...)`` ||C_w(q) u|| / ||u||: bus angular speed per unit joint speed, rad/rad.
+
+    Args:
+        q: ``(..., n)`` joints; joint_rates: ``(..., n)`` directions u (any nonzero scale).
+    """
+    u = jnp.asarray(joint_rates)
+    w = jnp.einsum("...ij,...j->...i", _bus_rate_map(robot, q), u)
+    return jnp.linalg.norm(w, axis=-1) / jnp.linalg.norm(u, axis=-1)
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class DisturbanceMap:
+    """The bus disturbance per unit joint rate at a batch of postures.
+
+    Attributes:
+        largest: ``(...)`` max over unit u of ||C_w u||, rad/rad.
+        smallest: ``(...)`` min over unit u (0 for n > 3 where C_w has full rank).
+        singular_values: ``(..., min(3, n))`` of C_w, largest first.
+        least_disturbing: ``(..., n)`` unit joint direction of the smallest disturbance
+            (for n > 3 a direction of the reaction null space).
+        most_disturbing: ``(..., n)`` unit joint direction of the largest disturbance.
+    """
+
+    largest: jax.Array
+    smallest: jax.Array
+    singular_values: jax.Array
+    least_disturbing: jax.Array
+    most_disturbing: jax.Array
+
+
+@jax.jit
+def disturbance_map(robot: SpatialRobot, q: jax.Array) -> DisturbanceMap:
+    """Extremes of ||C_w(q) u|| over unit joint rates u (Dubowsky & Torres 1991), ``q (..., n)``.
+
+    Over a joint grid (e.g. :func:`numpy.meshgrid` of two joints, the others fixed) this is
+    the disturbance map; the least-disturbing direction is the right singular vector of
+    the smallest singular value of C_w.
+    """
+    n = robot.n_joints
+    C = _bus_rate_map(robot, q)
+    _, s, vt = jnp.linalg.svd(C, full_matrices=True)
+    smallest = s[..., -1] if n <= 3 else jnp.zeros_like(s[..., -1])
+    return DisturbanceMap(
+        largest=s[..., 0], smallest=smallest, singular_values=s,
+        least_disturbing=vt[..., -1, :], most_disturbing=vt[..., 0, :],
+    )
+
+
+def reaction_free_rates(robot: SpatialRobot, q: jax.Array, tip_direction_bus: jax.Array):
+    """Joint rates moving the tip at unit speed along a bus-frame direction without turning the bus.
+
+    Solves [C_w; J*_v] q' = [0; d] (one posture) in the least-squares, minimum-norm sense.
+
+    Returns:
+        ``(q' (n,), tip residual ||J*_v q' - d|| (), bus rate ||C_w q'|| ())``.
+    """
+    C = primitives.base_twist_map(robot, q)[3:]
+    J = primitives.generalized_jacobian(robot, q)[:3]
+    A = jnp.concatenate([C, J], axis=0)
+    b = jnp.concatenate([jnp.zeros(3, q.dtype), tip_direction_bus])
+    rates = jnp.linalg.pinv(A, rtol=1e-12) @ b
+    return rates, jnp.linalg.norm(J @ rates - tip_direction_bus), jnp.linalg.norm(C @ rates)
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class ReactionFreePath:
+    """A reaction-free straight tip translation, sampled.
+
+    Attributes:
+        joints: ``(..., steps + 1, n)`` joints along the path (tip distance 0..length).
+        tip: ``(..., steps + 1, 3)`` tip about the system centroid, inertial axes, m.
+        tip_residual: ``(...)`` largest ||J*_v q' - d|| along the path (0 where the
+            null space produces the direction; > 0 where it cannot, n < 6).
+        bus_rate: ``(...)`` largest ||C_w q'|| along the path, rad/m (rounding level).
+        smallest_singular_value: ``(...)`` smallest singular value of [C_w; J*_v] met
+            along the path (near 0: a singularity of reaction-free motion).
+    """
+
+    joints: jax.Array
+    tip: jax.Array
+    tip_residual: jax.Array
+    bus_rate: jax.Array
+    smallest_singular_value: jax.Array
+
+
+@functools.partial(jax.jit, static_argnames=("steps",))
+def _reaction_free_flat(robot, q0, R0, direction, length, steps):
+    def one(q0, R0, d, length):
+        d_bus = R0.T @ (d / jnp.linalg.norm(d))
+
+        def field(q):
+            return reaction_free_rates(robot, q, d_bus)[0]
+
+        h = length / steps
+
+        def step(q, _):
+            q_new = dop853.rk_step(field, q, h)
+            return q_new, q_new
+
+        _, qs = jax.lax.scan(step, q0, None, length=steps)
+        joints = jnp.concatenate([q0[None], qs], axis=0)
+        _, residual, bus = jax.vmap(lambda q: reaction_free_rates(robot, q, d_bus))(joints)
+        C = primitives.base_twist_map(robot, joints)[:, 3:]
+        J = primitives.generalized_jacobian(robot, joints)[:, :3]
+        sv = jnp.linalg.svd(jnp.concatenate([C, J], axis=1), compute_uv=False)[:, -1]
+        tip = jnp.einsum("ij,sj->si", R0, primitives.tip(robot, joints))
+        return ReactionFreePath(joints, tip, jnp.max(residual), jnp.max(bus), jnp.min(sv))
+
+    return jax.vmap(one)(q0, R0, direction, length)
+
+
+def reaction_free_tip_path(
+    robot: SpatialRobot,
+    q_start: jax.Array,
+    direction: jax.Array,
+    length: jax.Array | float,
+    *,
+    base_rotation: jax.Array | None = None,
+    steps: int = 200,
+) -> ReactionFreePath:
+    """Translate the tip along an inertial direction with joint rates in the reaction null space.
+
+    Args:
+        robot: one spatial design with n >= 4 joints.
+        q_start: ``(..., n)`` joints at the start.
+        direction: ``(..., 3)`` inertial direction of the tip motion.
+        length: ``(...)`` tip distance, m.
+        base_rotation: ``(..., 3, 3)`` bus attitude (constant along the path), default identity.
+        steps: fixed DOP853 steps in the tip distance (static).
+
+    Returns:
+        :class:`ReactionFreePath` with the broadcast batch shape.
+    """
+    n = robot.n_joints
+    if n < 4:
+        raise ConfigError(f"reaction-free tip motion needs at least 4 joints (a reaction null space), the arm has {n}")
+    if robot.batch_shape:
+        raise ConfigError("reaction_free_tip_path: one design at a time")
+    dtype = jnp.result_type(float)
+    q_start = jnp.asarray(q_start, dtype)
+    direction = jnp.asarray(direction, dtype)
+    R0 = jnp.eye(3, dtype=dtype) if base_rotation is None else jnp.asarray(base_rotation, dtype)
+    length = jnp.asarray(length, dtype)
+    if q_start.shape[-1:] != (n,) or direction.shape[-1:] != (3,):
+        raise ConfigError(f"q_start (..., {n}) and direction (..., 3) expected, got {q_start.shape}, {direction.shape}")
+    batch = np.broadcast_shapes(q_start.shape[:-1], direction.shape[:-1], R0.shape[:-2], length.shape)
+    flat = lambda x, core: jnp.broadcast_to(x, batch + core).reshape((-1,) + core)  # noqa: E731
+    out = _reaction_free_flat(robot, flat(q_start, (n,)), flat(R0, (3, 3)), flat(direction, (3,)), flat(length, ()), int(steps))
+    return jax.tree_util.tree_map(lambda x: x.reshape(batch + x.shape[1:]), out)

@@ -1,0 +1,170 @@
+"""Spatial arms on their bus in 3-D: a joint loop, the attitude history, a straight tip path.
+
+Registered figures (``spacearm figures``), all for the UR5 on its 500 kg smallsat
+(configs/ur5-smallsat.yaml):
+
+- ``spatial-loop``: the arm and its bus drawn along a closed joint loop, inertial axes,
+  about the system centroid; the tip trace; the bus turned by the loop.
+- ``spatial-attitude``: the bus rotation vector log(R0^T R) and its angle along the loop.
+- ``spatial-straight``: a straight tip path to its dynamic singularity (or 0.6 m), the
+  arm at the start and the end, the bus attitude along the path.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import jax.numpy as jnp
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..io import save_figure
+from ..models import load_robot
+from ..models.spatial import primitives
+from ..motion.attitude import log, spatial_joint_path_history
+from ..motion.spatial_paths import spatial_straight_tip_path
+from . import figure
+
+CONFIG = Path(__file__).resolve().parents[3] / "configs" / "ur5-smallsat.yaml"
+LOOP_START = np.array([0.3, -1.2, 1.6, -0.9, 1.2, 0.2])
+
+
+def _robot():
+    if not CONFIG.exists():
+        raise FileNotFoundError(f"{CONFIG}: the spatial figures use the repository's configs/ur5-smallsat.yaml")
+    return load_robot(os.fspath(CONFIG))
+
+
+def arm_points(robot, q, rotation) -> tuple[np.ndarray, np.ndarray]:
+    """Joint origins then tip ``(n + 1, 3)``, and the bus centroid ``(3,)``, inertial axes
+    about the system centroid, m, for one posture ``q (n,)`` and bus attitude ``rotation``."""
+    state = primitives._chain_pass(robot, jnp.asarray(q, float))
+    centroid = np.array([float(x) for x in state.centroid])
+    chain = np.array([[float(x) for x in o] for o in state.origins] + [[float(x) for x in state.tip]])
+    bus = np.asarray(robot.base_com, float)
+    R = np.asarray(rotation, float)
+    return (chain - centroid) @ R.T, R @ (bus - centroid)
+
+
+def _bus_box(ax, centre, rotation, half, color, alpha):
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
+    points = centre + corners @ np.asarray(rotation).T
+    edges = [(0, 1), (0, 2), (0, 4), (1, 3), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 6), (5, 7), (6, 7)]
+    for a, b in edges:
+        ax.plot(*points[[a, b]].T, color=color, lw=0.8, alpha=alpha)
+
+
+def _draw(ax, robot, q, R, color, alpha=1.0, label=None):
+    chain, bus = arm_points(robot, q, R)
+    _bus_box(ax, bus, R, 0.35, color, 0.6 * alpha)
+    ax.plot(*np.vstack([bus, chain]).T, "-o", color=color, lw=1.6, ms=2.5, alpha=alpha, label=label)
+
+
+def _equal(ax, points):
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, half = (lo + hi) / 2, max(float(np.max(hi - lo)) / 2, 0.1)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_xlabel("x, m")
+    ax.set_ylabel("y, m")
+    ax.set_zlabel("z, m")
+
+
+def demo_loop(segments: int = 16) -> np.ndarray:
+    """``(segments + 1, n)`` a closed loop through :data:`LOOP_START` (shoulder and elbow circle, wrist nod)."""
+    s = np.linspace(0.0, 1.0, segments + 1)
+    loop = np.repeat(LOOP_START[None], segments + 1, axis=0)
+    loop[:, 1] += 0.6 * (np.cos(2 * np.pi * s) - 1.0)
+    loop[:, 2] += 0.6 * np.sin(2 * np.pi * s)
+    loop[:, 0] += 0.4 * np.sin(2 * np.pi * s)
+    loop[-1] = LOOP_START
+    return loop
+
+
+def loop_history(robot, samples_per_segment: int = 8):
+    loop = demo_loop()
+    R, q = spatial_joint_path_history(robot, loop[0], loop, samples_per_segment=samples_per_segment, steps=1)
+    return np.asarray(R), np.asarray(q)
+
+
+@figure("spatial-loop")
+def fig_spatial_loop(out_dir: Path) -> list[Path]:
+    """The UR5 and its bus along a closed joint loop (inertial axes, about the system centroid)."""
+    robot = _robot()
+    R, q = loop_history(robot)
+    fig = plt.figure(figsize=(7.5, 6.5))
+    ax = fig.add_subplot(projection="3d")
+    picks = np.linspace(0, len(q) - 1, 7).astype(int)
+    cmap = plt.get_cmap("viridis")
+    everything = []
+    for i, k in enumerate(picks):
+        color = cmap(i / (len(picks) - 1))
+        _draw(ax, robot, q[k], R[k], color, alpha=0.9 if k in (0, len(q) - 1) else 0.45,
+              label="start" if k == 0 else ("end (joints back, bus turned)" if k == len(q) - 1 else None))
+        everything.append(arm_points(robot, q[k], R[k])[0])
+    tips = np.array([arm_points(robot, qk, Rk)[0][-1] for qk, Rk in zip(q, R)])
+    ax.plot(*tips.T, color="C3", lw=1.0, label="tip")
+    angle = float(np.linalg.norm(np.asarray(log(jnp.asarray(R[0].T @ R[-1])))))
+    ax.set_title(f"UR5 on a 500 kg bus: closed joint loop turns the bus by {np.degrees(angle):.2f} deg")
+    _equal(ax, np.vstack(everything + [tips]))
+    ax.legend(loc="upper left", fontsize=8)
+    path = save_figure(fig, Path(out_dir) / "spatial_loop.png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return [path]
+
+
+@figure("spatial-attitude")
+def fig_spatial_attitude(out_dir: Path) -> list[Path]:
+    """The bus rotation vector log(R0^T R) along the loop of ``spatial-loop``."""
+    robot = _robot()
+    R, q = loop_history(robot)
+    vectors = np.asarray(log(jnp.asarray(np.swapaxes(R[:1], -1, -2) @ R)))
+    s = np.linspace(0.0, 1.0, len(R))
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
+    for i, name in enumerate("xyz"):
+        top.plot(s, np.degrees(vectors[:, i]), label=f"bus {name}")
+    top.plot(s, np.degrees(np.linalg.norm(vectors, axis=1)), "k--", lw=1, label="angle")
+    top.set_ylabel("log(R0^T R), deg (bus axes)")
+    top.legend(fontsize=8, ncol=4)
+    for j in range(q.shape[1]):
+        bottom.plot(s, q[:, j], label=robot.joint_names[j] if robot.joint_names else f"q{j + 1}")
+    bottom.set_xlabel("loop parameter")
+    bottom.set_ylabel("joint, rad")
+    bottom.legend(fontsize=7, ncol=3)
+    fig.suptitle("Bus attitude along a closed joint loop (6th-order Magnus on SO(3))")
+    path = save_figure(fig, Path(out_dir) / "spatial_attitude.png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return [path]
+
+
+@figure("spatial-straight")
+def fig_spatial_straight(out_dir: Path) -> list[Path]:
+    """A straight tip path of the UR5 to its end (dynamic singularity or 0.6 m), sampled by tip distance."""
+    robot = _robot()
+    q0, direction = LOOP_START, np.array([0.3, -0.5, 0.8])
+    end = spatial_straight_tip_path(robot, q0, direction, 0.6)
+    lengths = np.linspace(0.0, float(end.length), 25)
+    samples = spatial_straight_tip_path(robot, np.broadcast_to(q0, (25, 6)), np.broadcast_to(direction, (25, 3)), lengths)
+    q, R = np.asarray(samples.end_joints), np.asarray(samples.end_rotation)
+    tips = np.asarray(samples.end_tip)
+    fig = plt.figure(figsize=(11, 5))
+    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    _draw(ax, robot, q[0], R[0], "C0", label="start")
+    _draw(ax, robot, q[-1], R[-1], "C3", label="end")
+    ax.plot(*tips.T, "k-", lw=1.5, label="tip path")
+    _equal(ax, np.vstack([arm_points(robot, q[0], R[0])[0], arm_points(robot, q[-1], R[-1])[0], tips]))
+    reason = {0: "J*_v loses rank", 1: "0.6 m reached", 2: "joint limit", 3: "step budget"}[int(end.reason)]
+    ax.set_title(f"straight tip path, {float(end.length):.3f} m ({reason})", fontsize=10)
+    ax.legend(fontsize=8)
+    right = fig.add_subplot(1, 2, 2)
+    vectors = np.asarray(log(jnp.asarray(np.swapaxes(R[:1], -1, -2) @ R)))
+    for i, name in enumerate("xyz"):
+        right.plot(lengths, np.degrees(vectors[:, i]), label=f"bus {name}")
+    right.set_xlabel("tip distance along the line, m")
+    right.set_ylabel("bus rotation log(R0^T R), deg")
+    right.legend(fontsize=8)
+    path = save_figure(fig, Path(out_dir) / "spatial_straight.png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return [path]
