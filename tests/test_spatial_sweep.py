@@ -93,6 +93,9 @@ def test_fields_are_differentiable(ur5):
     ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "w_avg", "block": 100}], "power of two"),
     ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "posture", "q_deg": [0, 0]}], "needs 6 joint"),
     ({"a": {"field": "base.mass", "values": [-1.0]}}, ["posture"], "sweep point 0"),
+    ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "reach_radii", "starts": 0}], "starts"),
+    ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "path_independent_radius", "sample": 64}],
+     "did you mean 'samples'"),
 ])
 def test_bad_spatial_sweeps_are_refused(tmp_path, axes, metrics, message):
     path = tmp_path / "bad.yaml"

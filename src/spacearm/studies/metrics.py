@@ -23,6 +23,7 @@ from ..analysis import (
 )
 from ..analysis.averages import joint_average
 from ..analysis.joint_box import check_joint_box
+from ..analysis.spatial_workspaces import reachable_radii, singular_radius
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
@@ -205,6 +206,29 @@ def _joint_average(kind: str, column: str):
     return evaluate
 
 
+_REACH_OPTIONS = {"starts": 1, "steps": 1, "seed": 0}
+_SINGULAR_OPTIONS = {"samples": 1, "keep": 1, "candidates": 1, "descent_steps": 1, "newton_steps": 0, "seed": 0}
+
+
+def _integer_options(allowed: dict):
+    def check(where: str, options: dict) -> None:
+        check_keys(f"{where}: ", options, allowed)
+        for key, value in options.items():
+            integer(f"{where}.{key}", value, least=allowed[key])
+
+    return check
+
+
+def _reach(robot, options):
+    radii = reachable_radii(robot, **options)
+    return {"R_max_m": radii.outer, "R_inner_m": radii.inner}
+
+
+def _path_independent(robot, options):
+    radius, _ = singular_radius(robot, "generalized", **options)
+    return {"R_path_independent_m": radius}
+
+
 _AVERAGES = {
     # metric name: (joint_average metric, column, description)
     "w_avg": ("manipulability", "w_avg_m3", "mean translational w* over the joint box (m^3), with its standard error"),
@@ -232,6 +256,17 @@ METRICS: dict[str, Metric] = {
                       description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
                                   "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)"),
 }
+METRICS["reach_radii"] = Metric(
+    _reach, lambda o: ["R_max_m", "R_inner_m"], check=_integer_options(_REACH_OPTIONS),
+    check_robot=_check_average_robot, families=("spatial",), designs_per_step=8,
+    description="Maximum Reachable shell about the system centroid (outer and inner radius, m) by multi-start "
+                "search over the joint box; options starts, steps, seed")
+METRICS["path_independent_radius"] = Metric(
+    _path_independent, lambda o: ["R_path_independent_m"], check=_integer_options(_SINGULAR_OPTIONS),
+    check_robot=_check_average_robot, families=("spatial",), designs_per_step=8,
+    description="path-independent workspace radius (Papadopoulos & Dubowsky), m: the closest dynamic-singular tip "
+                "position to the centroid (inf: none found); options samples, keep, candidates, descent_steps, "
+                "newton_steps, seed")
 for _name, (_kind, _column, _text) in _AVERAGES.items():
     METRICS[_name] = Metric(_joint_average(_kind, _column), (lambda c: lambda o: [c, f"{c}_error"])(_column),
                             check=_check_average, check_robot=_check_average_robot, families=("spatial",),
