@@ -15,7 +15,7 @@ The ``spacearm`` command line exposes one device per core, so on a 2-core machin
 ``XLA_FLAGS=--xla_force_host_platform_device_count=1`` (sweeps/ets7-mount.yaml and
 sweeps/ur5-mass-ratio.yaml were run so).
 """
-import sys, time, jax, jax.numpy as jnp, numpy as np
+import sys, jax, jax.numpy as jnp, numpy as np
 jax.config.update("jax_enable_x64", True)
 import os
 if os.environ.get("NOASYNC"): jax.config.update("jax_cpu_enable_async_dispatch", False)
