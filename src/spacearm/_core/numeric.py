@@ -38,6 +38,20 @@ def enable_compilation_cache(path: str | None = None) -> str | None:
     return path
 
 
+def join_processes(coordinator: str, num_processes: int, process_id: int) -> None:
+    """Join ``num_processes`` processes into one JAX job (``jax.distributed``), CPU
+    collectives over gloo, so ``jax.devices()`` spans every process and a sharded
+    ``jit`` runs across them. Call before anything starts JAX's backend.
+
+    Args:
+        coordinator: ``HOST:PORT`` of process 0 (every process gives the same address).
+        num_processes: how many processes join.
+        process_id: this process's rank, 0 .. num_processes - 1.
+    """
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    jax.distributed.initialize(coordinator_address=coordinator, num_processes=num_processes, process_id=process_id)
+
+
 def use_every_cpu_core() -> int:
     """Expose each CPU core as a JAX device, so sweeps shard their designs over all cores.
 

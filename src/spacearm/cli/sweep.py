@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -11,15 +12,21 @@ from ._help import LazyEpilogHelp
 
 
 def _epilog() -> str:
-    from ..studies.designs import FIELD_HELP
-    from ..studies.metrics import METRICS, WBAR_OPTIONS
+    from ..studies.designs import FIELD_HELP, SPATIAL_FIELD_HELP
+    from ..studies.metrics import AVERAGE_OPTIONS, METRICS, WBAR_OPTIONS
 
     return (
         "examples:\n"
         "  spacearm sweep sweeps/table2.yaml\n"
         "  spacearm sweep sweeps/masses.yaml --set chunk_size=64 --out /tmp/quick\n"
+        "  SPACEARM_COORDINATOR=127.0.0.1:8476 SPACEARM_NUM_PROCESSES=2 SPACEARM_PROCESS_ID=0 spacearm sweep FILE &\n"
+        "  SPACEARM_COORDINATOR=127.0.0.1:8476 SPACEARM_NUM_PROCESSES=2 SPACEARM_PROCESS_ID=1 spacearm sweep FILE\n"
+        "    (two processes, one sweep: jax.distributed over gloo; process 0 writes the results)\n"
         f"design fields for axes: {FIELD_HELP}\n"
-        f"metrics: {', '.join(sorted(METRICS))}\n"
+        f"  of a spatial robot (a robot file with arm:): {SPATIAL_FIELD_HELP}\n"
+        f"metrics (planar): {', '.join(sorted(n for n, m in METRICS.items() if 'planar' in m.families))}\n"
+        f"metrics (spatial): {', '.join(sorted(n for n, m in METRICS.items() if 'spatial' in m.families))}; "
+        f"the joint-box averages take {', '.join(AVERAGE_OPTIONS)}\n"
         f"wbar options ({{name: wbar, ...}}): {', '.join(WBAR_OPTIONS)}; rule: product trades the\n"
         "  default's ~1e-13 for ~1e-4 and a fixed node grid that is many times faster for big sweeps"
     )
@@ -43,9 +50,38 @@ def register(subparsers) -> None:
     parser.add_argument("--set", metavar="KEY=VALUE", action="append",
                         help="override a key of the sweep file (dotted path, YAML value); repeatable")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    group = parser.add_argument_group(
+        "many processes (jax.distributed; each defaults to its SPACEARM_* environment variable)")
+    group.add_argument("--coordinator", metavar="HOST:PORT", default=os.environ.get("SPACEARM_COORDINATOR") or None,
+                       help="process 0's address; every process gives the same (SPACEARM_COORDINATOR)")
+    group.add_argument("--num-processes", metavar="N", type=int, default=os.environ.get("SPACEARM_NUM_PROCESSES") or None,
+                       help="how many processes run the sweep together (SPACEARM_NUM_PROCESSES)")
+    group.add_argument("--process-id", metavar="I", type=int, default=os.environ.get("SPACEARM_PROCESS_ID") or None,
+                       help="this process's rank, 0..N-1; process 0 writes the results (SPACEARM_PROCESS_ID)")
+
+
+def _join(args: argparse.Namespace) -> None:
+    """Join the other processes of a distributed sweep, when asked (before JAX starts)."""
+    given = [args.coordinator is not None, args.num_processes is not None, args.process_id is not None]
+    if not any(given):
+        return
+    if not all(given):
+        raise ConfigError("a distributed sweep needs all three of --coordinator (SPACEARM_COORDINATOR), "
+                          "--num-processes (SPACEARM_NUM_PROCESSES) and --process-id (SPACEARM_PROCESS_ID)")
+    if args.num_processes < 1 or not 0 <= args.process_id < args.num_processes:
+        raise ConfigError(f"--process-id {args.process_id}: must be in 0..{args.num_processes - 1} "
+                          f"(--num-processes {args.num_processes})")
+    host, _, port = args.coordinator.rpartition(":")
+    if not host or not port.isdigit():
+        raise ConfigError(f"--coordinator {args.coordinator}: must be HOST:PORT, e.g. 127.0.0.1:8476")
+    from .._core.numeric import join_processes
+
+    join_processes(args.coordinator, args.num_processes, args.process_id)
 
 
 def run(args: argparse.Namespace) -> int:
+    _join(args)  # first: jax.distributed must start before JAX's backend
+
     from ..figures.sweep import write_figures
     from ..studies import load_sweep, run_sweep
 
@@ -57,6 +93,9 @@ def run(args: argparse.Namespace) -> int:
         result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv, outputs=(write_figures,))
     except OSError as error:  # e.g. a read-only file system under --out
         raise ConfigError(f"--out {out_dir}: cannot write the results ({error.strerror or error})") from None
+    if not result.manifest:  # a distributed sweep's other processes: process 0 wrote the results
+        print(f"process {args.process_id} of {args.num_processes}: done; process 0 wrote {out_dir}/")
+        return 0
     timings = result.manifest["timings_s"]
     print(f"wrote {out_dir}/ ({len(result.files)} files; compile {timings['compile']:.1f} s, "
           f"run {timings['run']:.1f} s, wall {timings['wall']:.1f} s)")

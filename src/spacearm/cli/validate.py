@@ -17,7 +17,7 @@ from .._core.schema import read_yaml
 
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     """Validate a robot, sweep or design-problem file; return (kind, one-line summary) or raise ConfigError."""
-    from ..design.problem import load_problem
+    from ..design.spatial_problem import load_design_problem
     from ..models import is_robot_mapping, robot_from_file_mapping
     from ..studies.spec import load_sweep
 
@@ -26,11 +26,11 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     if is_robot_mapping(config):
         robot = robot_from_file_mapping(config, source=path, base_dir=os.path.dirname(os.path.abspath(path)))
         return "robot", f"{robot.name}, {robot.n_links} links, L = {float(robot.reach):g} m"
+    if isinstance(config, Mapping) and ("variables" in config or "objectives" in config):
+        problem = load_design_problem(path)
+        return "design problem", f"{problem.name}: variables {', '.join(problem.variable_names)}"
     if isinstance(config, Mapping) and ("axes" in config or "robot" in config):
         return "sweep", load_sweep(path).summary()
-    if isinstance(config, Mapping) and ("variables" in config or "objectives" in config):
-        problem = load_problem(path)
-        return "design problem", f"{problem.name}: variables {', '.join(problem.variable_names)}"
     raise ConfigError(
         f"{path}: neither a robot file (needs 'base' and 'links'), a sweep file (needs 'robot' and 'axes') "
         "nor a design problem (needs 'variables' and 'objectives')"

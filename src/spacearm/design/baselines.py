@@ -11,7 +11,7 @@ import numpy as np
 
 from .._core.batching import pad_leading
 from .._core.errors import ConfigError
-from .fronts import hypervolume_2d, hypervolume_history
+from .fronts import hypervolume, hypervolume_history
 from .problem import DesignProblem
 from .search import SearchResult
 
@@ -42,7 +42,7 @@ def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chu
         values.append(np.asarray(compiled(jnp.asarray(padded)))[: block.shape[0]])
     run_seconds = time.perf_counter() - start
     objectives = np.concatenate(values)
-    hv = hypervolume_2d(objectives, problem.reference_point) if objectives.shape[1] == 2 else float("nan")
+    hv = hypervolume(objectives, problem.reference_point)
     return SearchResult(
         method="grid",
         designs=mesh,
@@ -115,7 +115,7 @@ def nsga2_search(
     run_seconds = time.perf_counter() - clock["start"]
     designs = np.concatenate([entry[0] for entry in log])
     objectives = np.concatenate([entry[1] for entry in log])
-    hv = hypervolume_history([entry[1] for entry in log], problem.reference_point) if m == 2 else None
+    hv = hypervolume_history([entry[1] for entry in log], problem.reference_point)
     checkpoints, count = [], 0
     for k, entry in enumerate(log):
         count += entry[1].shape[0]

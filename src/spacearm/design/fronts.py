@@ -1,4 +1,5 @@
-"""Pareto fronts and their quality: non-dominated subsets and the exact 2-D hypervolume.
+"""Pareto fronts and their quality: non-dominated subsets and the exact hypervolume
+(our 2-D sweep; moocore for three or more objectives).
 
 All objectives are maximized.
 """
@@ -9,7 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["nondominated_mask", "nondominated", "hypervolume_2d", "hypervolume_history"]
+__all__ = ["nondominated_mask", "nondominated", "hypervolume", "hypervolume_2d", "hypervolume_history"]
 
 
 def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
@@ -77,19 +78,45 @@ def hypervolume_2d(objectives: np.ndarray, reference: Sequence[float] = (0.0, 0.
     return float(np.sum((front[:, 0] - r1) * (front[:, 1] - below)))
 
 
+def hypervolume(objectives: np.ndarray, reference: Sequence[float]) -> float:
+    """Exact hypervolume of a point set (all objectives maximized) above ``reference``.
+
+    Two objectives: :func:`hypervolume_2d`. Three or more: moocore's exact algorithms
+    (``moocore.hypervolume``, a maintained C library; pip install moocore, in the
+    ``optimize`` extra).
+
+    Args:
+        objectives: ``(N, m)`` points (any order, dominated ones allowed).
+        reference: ``(m,)`` the reference point.
+    """
+    reference = np.asarray(reference, dtype=np.float64)
+    f = np.asarray(objectives, dtype=np.float64).reshape(-1, reference.size)
+    if reference.size == 2:
+        return hypervolume_2d(f, reference)
+    f = f[np.all(np.isfinite(f), axis=1) & np.all(f > reference, axis=1)]
+    if f.shape[0] == 0:
+        return 0.0
+    try:
+        import moocore  # noqa: PLC0415 - optional extra, needed for m >= 3 only
+    except ImportError as error:  # pragma: no cover - optional extra
+        raise ImportError("hypervolume of 3 or more objectives needs moocore (pip install 'spacearm[optimize]')") from error
+    return float(moocore.hypervolume(f[nondominated_mask(f)], ref=reference, maximise=True))
+
+
 def hypervolume_history(batches: Sequence[np.ndarray], reference: Sequence[float]) -> np.ndarray:
     """Hypervolume of the growing archive after each batch of evaluated points.
 
     Args:
-        batches: a sequence of ``(B_k, 2)`` objective arrays, in evaluation order.
+        batches: a sequence of ``(B_k, m)`` objective arrays, in evaluation order.
 
     Returns:
         ``(len(batches),)`` hypervolume of the union of the first k+1 batches.
     """
-    front = np.zeros((0, 2))
+    m = len(reference)
+    front = np.zeros((0, m))
     values = []
     for batch in batches:
-        merged = np.concatenate([front, np.asarray(batch, dtype=np.float64).reshape(-1, 2)])
+        merged = np.concatenate([front, np.asarray(batch, dtype=np.float64).reshape(-1, m)])
         front = merged[nondominated_mask(merged)]
-        values.append(hypervolume_2d(front, reference))
+        values.append(hypervolume(front, reference))
     return np.array(values)

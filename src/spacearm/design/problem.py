@@ -31,6 +31,8 @@ __all__ = [
     "problem_from_mapping",
     "load_problem",
     "variable_names_for",
+    "parse_search",
+    "parse_baselines",
     "WBAR_OPTIONS",
 ]
 
@@ -175,6 +177,12 @@ class DesignProblem:
             object.__setattr__(robot, key, value)
         return robot
 
+    def fixed_summary(self) -> dict:
+        """The fixed quantities, for the run's summary."""
+        return dict(base_mass=self.base_mass, base_inertia=self.base_inertia, arm_mass=self.arm_mass,
+                    reach=self.reach, links=self.n_links,
+                    **{k: v for k, v in self.defaults.items() if k not in self.variable_names})
+
     def objective_function(self) -> Callable[[jax.Array], jax.Array]:
         """``f(x)``: ``(d,)`` variables -> ``(m,)`` objectives (maximized); pure, differentiable."""
         functions = [objective(name, wbar_options=self.wbar_options, clamp_guaranteed=self.clamp_guaranteed)
@@ -292,7 +300,33 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
         )
     guaranteed = choice(f"{source}: guaranteed", config.get("guaranteed", "clamped"), ("clamped", "paper"))
 
-    search_map = config.get("search", {}) or {}
+    search = parse_search(source, config.get("search", {}))
+    grid_points, grid_chunk, nsga2 = parse_baselines(source, config.get("baselines", {}), len(variables),
+                                                     len(OBJECTIVES))
+    return DesignProblem(
+        name=name,
+        n_links=links,
+        base_mass=physical["base_mass"],
+        base_inertia=physical["base_inertia"],
+        arm_mass=physical["arm_mass"],
+        reach=physical["reach"],
+        defaults=defaults,
+        variables=tuple(variables),
+        objectives=objectives,
+        reference_point=reference,
+        wbar_options=dict(wbar),
+        clamp_guaranteed=guaranteed == "clamped",
+        search=search,
+        grid_points=grid_points,
+        grid_chunk=grid_chunk,
+        nsga2=nsga2,
+        description=description,
+    )
+
+
+def parse_search(source: str, search_map: Any) -> SearchSettings:
+    """The ``search:`` section of a problem file as :class:`SearchSettings` (checked)."""
+    search_map = search_map or {}
     if not isinstance(search_map, Mapping):
         raise ConfigError(f"{source}: search: must be a mapping")
     check_keys(f"{source}: search: ", search_map, _SEARCH_KEYS)
@@ -313,7 +347,12 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
                 raise ConfigError(f"{where}: must be positive, got {value}")
         search = dataclasses.replace(search, **{key: value})
 
-    baselines = config.get("baselines", {}) or {}
+    return search
+
+
+def parse_baselines(source: str, baselines: Any, n_variables: int, n_objectives: int):
+    """The ``baselines:`` section: ``(grid_points or None, grid_chunk, nsga2 options or None)``."""
+    baselines = baselines or {}
     if not isinstance(baselines, Mapping):
         raise ConfigError(f"{source}: baselines: must be a mapping with optional keys grid, nsga2")
     check_keys(f"{source}: baselines: ", baselines, {"grid", "nsga2"})
@@ -326,12 +365,12 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
         check_keys(f"{source}: baselines.grid: ", grid, {"points", "chunk"})
         points = grid["points"]
         if isinstance(points, int) and not isinstance(points, bool):
-            points = [points] * len(variables)
-        if (not isinstance(points, (list, tuple)) or len(points) != len(variables)
+            points = [points] * n_variables
+        if (not isinstance(points, (list, tuple)) or len(points) != n_variables
                 or not all(isinstance(p, int) and not isinstance(p, bool) and p >= 2 for p in points)):
             raise ConfigError(f"{source}: baselines.grid.points: one integer >= 2 per variable is required")
         grid_points = tuple(points)
-        _check_grid_size(f"{source}: baselines.grid.points", grid_points, len(OBJECTIVES))
+        _check_grid_size(f"{source}: baselines.grid.points", grid_points, n_objectives)
         grid_chunk = integer(f"{source}: baselines.grid.chunk", grid.get("chunk", 2048), least=1)
     nsga2 = None
     if baselines.get("nsga2") is not None:
@@ -349,25 +388,7 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
             nsga2["time_limit"] = number(f"{where}.time_limit", raw["time_limit"])
             if nsga2["time_limit"] <= 0:
                 raise ConfigError(f"{where}.time_limit: must be positive (seconds), got {nsga2['time_limit']}")
-    return DesignProblem(
-        name=name,
-        n_links=links,
-        base_mass=physical["base_mass"],
-        base_inertia=physical["base_inertia"],
-        arm_mass=physical["arm_mass"],
-        reach=physical["reach"],
-        defaults=defaults,
-        variables=tuple(variables),
-        objectives=objectives,
-        reference_point=reference,
-        wbar_options=dict(wbar),
-        clamp_guaranteed=guaranteed == "clamped",
-        search=search,
-        grid_points=grid_points,
-        grid_chunk=grid_chunk,
-        nsga2=nsga2,
-        description=description,
-    )
+    return grid_points, grid_chunk, nsga2
 
 
 def _check_ranges(source: str, defaults: Mapping[str, float], variables: Sequence[Variable], n: int) -> None:

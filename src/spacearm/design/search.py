@@ -22,7 +22,7 @@ import optax
 
 from .._core.batching import pad_leading
 from .._core.errors import ConfigError
-from .fronts import hypervolume_2d, nondominated, nondominated_mask
+from .fronts import hypervolume, nondominated, nondominated_mask
 from .problem import DesignProblem, SearchSettings
 
 __all__ = ["SearchResult", "pareto_search", "value_and_grad_cost_ratio"]
@@ -292,7 +292,7 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     keep = nondominated_mask(f_samples)
     front_f, front_x = f_samples[keep], x_samples[keep]
     checkpoints.append(dict(evaluations=evaluations, seconds=time.perf_counter() - start,
-                            hypervolume=hypervolume_2d(front_f, reference) if two else float("nan")))
+                            hypervolume=hypervolume(front_f, reference)))
 
     # Objective scales never fall below the spread (10th-90th percentile) of the initial
     # samples: while the archive front covers only a flat stretch (a range near zero in
@@ -368,7 +368,7 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
             keep = nondominated_mask(merged_f)
             front_f, front_x = merged_f[keep], merged_x[keep]
         checkpoints.append(dict(evaluations=evaluations, seconds=time.perf_counter() - start,
-                                hypervolume=hypervolume_2d(front_f, reference) if two else float("nan")))
+                                hypervolume=hypervolume(front_f, reference)))
     run_seconds = time.perf_counter() - start
     return SearchResult(
         method="gradient",

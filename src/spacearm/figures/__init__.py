@@ -12,7 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 # Modules under spacearm.figures that define figures (imported on demand).
-FIGURE_MODULES: list[str] = ["planning", "motion", "workspace", "maps", "spatial"]
+FIGURE_MODULES: list[str] = ["planning", "motion", "workspace", "maps", "spatial", "spatial_analysis"]
 
 FigureFunction = Callable[[Path], list[Path]]
 _REGISTRY: dict[str, FigureFunction] = {}

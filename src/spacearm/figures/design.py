@@ -30,11 +30,11 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
                  out_dir: Path) -> list[Path]:
     """The front in objective space, the front designs in variable space, convergence.
 
-    Drawn for two objectives (``front.png``, ``designs.png``, ``convergence.png``); nothing
-    for more. Fits `spacearm.design.run.ProblemOutput`.
+    Drawn for two objectives (``front.png``, ``designs.png``, ``convergence.png``); for
+    more, ``convergence.png`` only. Fits `spacearm.design.run.ProblemOutput`.
     """
     if len(problem.objectives) != 2:
-        return []
+        return [_convergence(problem, results, summary, out_dir)]
     written = []
     names = problem.objectives
     # 1. Objective space.
@@ -113,7 +113,12 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     written.append(save_figure(fig, out_dir / "designs.png", dpi=130))
     plt.close(fig)
 
-    # 3. Convergence.
+    written.append(_convergence(problem, results, summary, out_dir))
+    return written
+
+
+def _convergence(problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path) -> Path:
+    """Archive hypervolume against evaluations and run time, per method."""
     fig, (ax_e, ax_t) = plt.subplots(1, 2, figsize=(12.0, 4.8))
     best = max(r.checkpoints[-1]["hypervolume"] for r in results.values())
     for method in ("nsga2", "gradient"):
@@ -144,6 +149,6 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     ax_t.set_xlabel("run time [s] (compile excluded)")
     fig.suptitle(f"{problem.name}: convergence")
     fig.tight_layout()
-    written.append(save_figure(fig, out_dir / "convergence.png", dpi=130))
+    path = save_figure(fig, out_dir / "convergence.png", dpi=130)
     plt.close(fig)
-    return written
+    return path

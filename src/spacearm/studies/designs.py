@@ -1,9 +1,14 @@
 """Design construction for a sweep: the design fields an axis may set, how each is
-applied, and every sweep point as one batched :class:`~spacearm.models.planar.PlanarRobot`.
+applied, and every sweep point as one batched robot (planar or spatial).
 
-Fields: ``base.mass``, ``base.inertia``, ``base.attach``, ``links[i].FIELD`` or
+Planar fields: ``base.mass``, ``base.inertia``, ``base.attach``, ``links[i].FIELD`` or
 ``links[*].FIELD`` (mass, inertia, a, b, length), and the derived ``arm.mass``,
 ``arm.mass_ratio`` and ``arm.length_split`` (see :data:`FIELD_HELP`).
+
+Spatial fields (``mount.xyz[i]``, ``mount.rpy[i]``, ``base.com[i]``, ``arm.length``,
+``links.<name>.mass``, ...) live with the spatial family,
+:mod:`spacearm.models.spatial.fields` (:data:`SPATIAL_FIELD_HELP`), shared with the
+design problems; this module dispatches on the base robot's type.
 """
 
 from __future__ import annotations
@@ -13,15 +18,19 @@ import re
 from collections.abc import Sequence
 from typing import Any, Protocol
 
+import jax
 import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.schema import did_you_mean
 from ..models.planar import PlanarRobot
+from ..models.spatial import SpatialRobot
+from ..models.spatial import fields as spatial_fields
 
 __all__ = [
     "Axis",
     "FIELD_HELP",
+    "SPATIAL_FIELD_HELP",
     "SIMPLE_FIELDS",
     "DERIVED_FIELDS",
     "check_field",
@@ -41,12 +50,13 @@ class Axis:
     field: str
     values: np.ndarray
     relative: bool = False
+    family: str = "planar"  # the base robot's family: field names mean different things in each
 
 
 class SweepSpec(Protocol):
     """What design construction reads of a sweep (:class:`spacearm.studies.spec.SweepSpec`)."""
 
-    robot: PlanarRobot
+    robot: PlanarRobot | SpatialRobot
     axes: tuple[Axis, ...]
     combine: str
     source: str
@@ -66,6 +76,7 @@ DERIVED_FIELDS = {
     "arm.mass_ratio": "1",
     "arm.length_split": "1",
 }
+SPATIAL_FIELD_HELP = spatial_fields.FIELD_HELP
 FIELD_HELP = (
     "base.mass | base.inertia | base.attach | links[i].FIELD or links[*].FIELD with FIELD in "
     "mass, inertia, a, b, length (a and b scaled together, inertia with the square) | "
@@ -74,8 +85,13 @@ FIELD_HELP = (
 )
 
 
-def check_field(where: str, field: Any, n_links: int) -> str:
-    """The field name of an axis, or :class:`ConfigError` naming ``where`` (with a did-you-mean)."""
+def check_field(where: str, field: Any, robot: PlanarRobot | SpatialRobot | int) -> str:
+    """The field name of an axis, or :class:`ConfigError` naming ``where`` (with a did-you-mean).
+
+    ``robot``: the sweep's base robot (a planar robot's link count is accepted too)."""
+    if isinstance(robot, SpatialRobot):
+        return spatial_fields.check_field(where, field, robot)
+    n_links = robot if isinstance(robot, int) else robot.n_links
     if not isinstance(field, str):
         raise ConfigError(f"{where}.field: must be a string, one of: {FIELD_HELP}")
     if field in SIMPLE_FIELDS or field in DERIVED_FIELDS:
@@ -175,10 +191,21 @@ def _writes(field: str, n_links: int) -> set[str]:
     return {f"{leaf}[{i}]" for leaf in leaves for i in chosen}
 
 
-def check_axes_compatible(where: str, axes: Sequence[Axis], n_links: int) -> None:
+def check_axes_compatible(where: str, axes: Sequence[Axis], robot: PlanarRobot | SpatialRobot | int) -> None:
     """Refuse two axes that set the same design number: the result would depend on the
     order of application. A length axis and an arm-mass axis both scale the link
     inertias, by commuting factors, so such pairs are allowed."""
+    if isinstance(robot, SpatialRobot):
+        for i, first in enumerate(axes):
+            for second in axes[i + 1:]:
+                shared = (spatial_fields.field_writes(first.field, robot)
+                          & spatial_fields.field_writes(second.field, robot))
+                if shared:
+                    raise ConfigError(
+                        f"{where}: axes.{first.name} ({first.field}) and axes.{second.name} ({second.field}) both set "
+                        f"{sorted(shared)[0]}; give each design number one axis")
+        return
+    n_links = robot if isinstance(robot, int) else robot.n_links
     for i, first in enumerate(axes):
         for second in axes[i + 1:]:
             shared = _writes(first.field, n_links) & _writes(second.field, n_links)
@@ -219,6 +246,8 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot, dict[str, np.ndarray]]:
     """
     points = axis_points(spec)
     count = spec.n_designs
+    if isinstance(spec.robot, SpatialRobot):
+        return _build_spatial(spec, points, count), points
     leaves = _leaves(spec.robot, count)
     for axis in sorted(spec.axes, key=lambda a: _stage(a.field)):
         _apply(leaves, axis.field, points[axis.name], axis.relative)
@@ -235,8 +264,28 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot, dict[str, np.ndarray]]:
     return robot, points
 
 
-def design_columns(robot: PlanarRobot, axes: Sequence[Axis]) -> dict[str, np.ndarray]:
+def _build_spatial(spec: SweepSpec, points: dict[str, np.ndarray], count: int) -> SpatialRobot:
+    """Every sweep point as one batched SpatialRobot (fields applied in numpy, then validated)."""
+    robot = jax.tree_util.tree_map(lambda x: np.repeat(np.asarray(x, dtype=np.float64)[None], count, axis=0),
+                                   spec.robot)
+    for axis in sorted(spec.axes, key=lambda a: spatial_fields.field_stage(a.field)):
+        robot = spatial_fields.set_field(robot, axis.field, points[axis.name], axis.relative)
+    try:
+        return robot.replace()  # validated (every design)
+    except ConfigError:
+        for i in range(count):  # error path only: find and name the first bad point
+            try:
+                jax.tree_util.tree_map(lambda x: x[i], robot).replace()
+            except ConfigError as error:
+                at = ", ".join(f"{name}={points[name][i]:g}" for name in points)
+                raise ConfigError(f"{spec.source}: sweep point {i} ({at}) gives an invalid robot: {error}") from None
+        raise
+
+
+def design_columns(robot: PlanarRobot | SpatialRobot, axes: Sequence[Axis]) -> dict[str, np.ndarray]:
     """The varied design numbers per point, SI units in the column names."""
+    if isinstance(robot, SpatialRobot):
+        return spatial_fields.field_columns(robot, [axis.field for axis in axes])
     columns: dict[str, np.ndarray] = {}
     for axis in axes:
         if axis.field in SIMPLE_FIELDS:
@@ -259,6 +308,9 @@ def axis_unit(axis: Axis) -> str:
     ("1" for a ratio)."""
     if axis.relative:
         return "relative"
+    if axis.family == "spatial":
+        return spatial_fields.field_unit(axis.field).replace("1", "factor" if axis.field in
+                                                             spatial_fields.FACTOR_FIELDS else "1")
     if axis.field in SIMPLE_FIELDS:
         return SIMPLE_FIELDS[axis.field][1].replace("_m2", " m^2")
     if axis.field in DERIVED_FIELDS:

@@ -21,6 +21,10 @@ from ..analysis import (
     normalized_workspace_areas,
     straight_path_workspace,
 )
+from ..analysis.averages import joint_average
+from ..analysis.joint_box import check_joint_box
+from ..analysis.spatial_workspaces import reachable_radii, singular_radius
+from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
 
@@ -45,6 +49,12 @@ class Metric:
     description: str = ""
     # Checks that need the base robot (e.g. its number of links).
     check_robot: Callable[[str, dict, PlanarRobot], None] = lambda where, options, robot: None
+    # The robot families the metric is defined for ("planar", "spatial").
+    families: tuple[str, ...] = ("planar",)
+    # At most this many designs vmapped together per device step (None: the runner's
+    # default). Adaptive loops (the joint-box averages) run a vmapped step until its
+    # slowest design is done, so they want small steps.
+    designs_per_step: int | None = None
 
 
 def _no_options(where: str, options: dict) -> None:
@@ -128,6 +138,107 @@ def _straight_area(robot, options):
     return {"S_straight": area / (jnp.pi * robot.reach**2)}
 
 
+def _check_posture(where: str, options: dict) -> None:
+    check_keys(f"{where}: ", options, {"q_deg"})
+    q = options.get("q_deg")
+    if q is not None and (not isinstance(q, (list, tuple)) or not all(is_number(v) for v in q)):
+        raise ConfigError(f"{where}.q_deg: must be a list of joint positions in degrees, one per joint")
+
+
+def _check_posture_robot(where: str, options: dict, robot) -> None:
+    q = options.get("q_deg")
+    if q is not None and len(q) != robot.n_joints:
+        raise ConfigError(f"{where}.q_deg: needs {robot.n_joints} joint positions (one per joint), got {len(q)}")
+
+
+def _posture(robot, options):
+    """w*, 1/kappa(J*_v) and ||C_w||_F at one posture (joint positions in degrees,
+    default 30 deg for every joint; a prismatic joint's entry is taken in m)."""
+    n = len(robot.joint_kinds)
+    q_deg = jnp.asarray(options.get("q_deg", [30.0] * n), dtype=robot.base_mass.dtype)
+    prismatic = jnp.asarray([kind == "prismatic" for kind in robot.joint_kinds])
+    q = jnp.where(prismatic, q_deg, jnp.radians(q_deg))
+    singular = jnp.linalg.svd(generalized_jacobian(robot, q)[:3], compute_uv=False)
+    largest = singular[0]
+    return {
+        "w_star_m3": manipulability(robot, q),
+        "inverse_condition": jnp.where(largest > 0, singular[-1] / jnp.where(largest > 0, largest, 1.0), 0.0),
+        "C_w_fro": jnp.linalg.norm(base_rate_matrix(robot, q)[3:]),
+    }
+
+
+# Options of analysis.averages.joint_average a sweep file may set (designs_per_chunk is
+# the sweep's own business). The sweep default rtol is 1e-3, the library's 1e-4.
+AVERAGE_OPTIONS = ("rtol", "randomizations", "block", "min_samples", "max_samples", "seed")
+SWEEP_RTOL = 1e-3
+
+
+def _check_average(where: str, options: dict) -> None:
+    check_keys(f"{where}: ", options, AVERAGE_OPTIONS)
+    rtol = options.get("rtol", SWEEP_RTOL)
+    if not is_number(rtol) or not rtol > 0:
+        raise ConfigError(f"{where}.rtol: must be a positive number (the relative standard error), got {rtol!r}")
+    integer(f"{where}.randomizations", options.get("randomizations", 8), least=2)
+    block = integer(f"{where}.block", options.get("block", 1024), least=1)
+    if block & (block - 1):
+        raise ConfigError(f"{where}.block: must be a power of two, got {block}")
+    least = integer(f"{where}.min_samples", options.get("min_samples", 2**14), least=1)
+    most = integer(f"{where}.max_samples", options.get("max_samples", 2**24), least=1)
+    if most < least:
+        raise ConfigError(f"{where}.max_samples: must be at least min_samples ({least}), got {most}")
+    integer(f"{where}.seed", options.get("seed", 0), least=0)
+
+
+def _check_average_robot(where: str, options: dict, robot) -> None:
+    try:
+        check_joint_box(robot)
+    except ConfigError as error:
+        raise ConfigError(f"{where}: {error}") from None
+
+
+def _joint_average(kind: str, column: str):
+    """A joint-box average as sweep columns: the value and its standard error (same unit)."""
+
+    def evaluate(robot, options):
+        average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **options}, designs_per_chunk=1)
+        return {column: average.value, f"{column}_error": average.error}
+
+    return evaluate
+
+
+_REACH_OPTIONS = {"starts": 1, "steps": 1, "seed": 0}
+_SINGULAR_OPTIONS = {"samples": 1, "keep": 1, "candidates": 1, "descent_steps": 1, "newton_steps": 0, "seed": 0}
+
+
+def _integer_options(allowed: dict):
+    def check(where: str, options: dict) -> None:
+        check_keys(f"{where}: ", options, allowed)
+        for key, value in options.items():
+            integer(f"{where}.{key}", value, least=allowed[key])
+
+    return check
+
+
+def _reach(robot, options):
+    radii = reachable_radii(robot, **options)
+    return {"R_max_m": radii.outer, "R_inner_m": radii.inner}
+
+
+def _path_independent(robot, options):
+    radius, _ = singular_radius(robot, "generalized", **options)
+    return {"R_path_independent_m": radius}
+
+
+_AVERAGES = {
+    # metric name: (joint_average metric, column, description)
+    "w_avg": ("manipulability", "w_avg_m3", "mean translational w* over the joint box (m^3), with its standard error"),
+    "gci": ("conditioning", "gci", "global conditioning index: mean 1/kappa(J*_v) over the joint box"),
+    "base_disturbance": ("base_disturbance", "C_w_avg",
+                         "mean ||C_w||_F over the joint box (bus rad/s per joint rad/s)"),
+    "dynamic_manipulability": ("dynamic_manipulability", "w_d_avg", "mean dynamic manipulability w_d over the joint box"),
+}
+
+
 METRICS: dict[str, Metric] = {
     "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, check_robot=_check_wbar_robot, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
     "S_M": Metric(_areas, lambda o: ["S_M"], description="Maximum Reachable area / (pi L^2)"),
@@ -140,7 +251,27 @@ METRICS: dict[str, Metric] = {
     "straight_path_area": Metric(_straight_area, lambda o: ["S_straight"], check=_check_straight,
                                  check_robot=_check_straight_robot,
                                  description="Straight-Path workspace area from phi_start_deg / (pi L^2)"),
+    "posture": Metric(_posture, lambda o: ["w_star_m3", "inverse_condition", "C_w_fro"], check=_check_posture,
+                      check_robot=_check_posture_robot, families=("spatial",),
+                      description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
+                                  "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)"),
 }
+METRICS["reach_radii"] = Metric(
+    _reach, lambda o: ["R_max_m", "R_inner_m"], check=_integer_options(_REACH_OPTIONS),
+    check_robot=_check_average_robot, families=("spatial",), designs_per_step=8,
+    description="Maximum Reachable shell about the system centroid (outer and inner radius, m) by multi-start "
+                "search over the joint box; options starts, steps, seed")
+METRICS["path_independent_radius"] = Metric(
+    _path_independent, lambda o: ["R_path_independent_m"], check=_integer_options(_SINGULAR_OPTIONS),
+    check_robot=_check_average_robot, families=("spatial",), designs_per_step=8,
+    description="path-independent workspace radius (Papadopoulos & Dubowsky), m: the closest dynamic-singular tip "
+                "position to the centroid (inf: none found); options samples, keep, candidates, descent_steps, "
+                "newton_steps, seed")
+for _name, (_kind, _column, _text) in _AVERAGES.items():
+    METRICS[_name] = Metric(_joint_average(_kind, _column), (lambda c: lambda o: [c, f"{c}_error"])(_column),
+                            check=_check_average, check_robot=_check_average_robot, families=("spatial",),
+                            designs_per_step=8,
+                            description=_text + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})")
 
 
 def metric_columns(metrics: Sequence[MetricSpec]) -> list[str]:

@@ -2,8 +2,12 @@
 finished chunks kept on disk so an interrupted sweep resumes, then the table, the grids,
 the report and the manifest (through :mod:`spacearm.io`). No figures here.
 
-All designs are stacked into one :class:`~spacearm.models.planar.PlanarRobot` with a
-leading axis and evaluated by one compiled function in chunks of bounded size.
+All designs are stacked into one robot pytree (planar or spatial) with a leading axis
+and evaluated by one compiled function in chunks of bounded size. Under
+``jax.distributed`` (``spacearm sweep --coordinator ...``) the device mesh spans every
+process: each chunk is sharded over all of their devices, the results are gathered,
+and process 0 alone writes the chunks, the table and the manifest; the others return
+an empty :class:`SweepResult`.
 """
 
 from __future__ import annotations
@@ -29,9 +33,8 @@ from .._core.errors import ConfigError
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
 from ..io import manifest as provenance
-from ..models.planar import PlanarRobot
 from .designs import build_designs, design_columns
-from .metrics import design_function, metric_columns
+from .metrics import METRICS, design_function, metric_columns
 from .spec import SweepSpec
 from .table2 import REPORTS
 
@@ -50,11 +53,20 @@ def _mesh():
     return jax.sharding.Mesh(devices, ("designs",))
 
 
+def _shard_map(function, *, mesh, in_specs, out_specs):
+    """``jax.shard_map`` (jax >= 0.6) or its earlier home, without replication checks."""
+    if hasattr(jax, "shard_map"):
+        return jax.shard_map(function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_vma=False)
+    from jax.experimental.shard_map import shard_map  # noqa: PLC0415 - jax < 0.6
+
+    return shard_map(function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_rep=False)
+
+
 def _chunks(total: int, size: int) -> list[tuple[int, int]]:
     return [(start, min(start + size, total)) for start in range(0, total, size)]
 
 
-def _take(robot: PlanarRobot, start: int, stop: int, size: int, devices: int) -> PlanarRobot:
+def _take(robot, start: int, stop: int, size: int, devices: int):
     """Rows start:stop, padded to ``size`` by repeating the last row (static shapes),
     as ``(devices, size // devices, ...)``: one row of designs per device."""
     index = np.minimum(np.arange(start, start + size), stop - 1).reshape(devices, -1)
@@ -122,8 +134,16 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
     # slower per design on CPU), while chunk_size alone bounds the memory.
     per_device = chunk // devices
-    step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(DESIGNS_PER_STEP, per_device)))
-    evaluate = jax.jit(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)))
+    per_step = min([DESIGNS_PER_STEP] + [METRICS[m.name].designs_per_step for m in spec.metrics
+                                         if METRICS[m.name].designs_per_step])
+    step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(per_step, per_device)))
+    # shard_map: each device runs its own rows with no collective inside. Under plain
+    # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
+    # needs the loop predicate reduced across devices every iteration, and that
+    # deadlocked with several CPU devices in one process.
+    evaluate = jax.jit(_shard_map(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)),
+                                  mesh=mesh, in_specs=jax.sharding.PartitionSpec("designs"),
+                                  out_specs=jax.sharding.PartitionSpec("designs")))
     columns = metric_columns(spec.metrics)
 
     compile_s = 0.0
@@ -141,6 +161,13 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
                 continue
             if all(v.shape == (stop - start,) for v in piece.values()):
                 pieces[number] = piece
+    if jax.process_count() > 1:
+        # Many processes: process 0's saved chunks decide (only it writes them, and the
+        # others may not share its disk); every process must run the same chunks.
+        saved_mask = np.array([n in pieces for n in range(len(spans))])
+        saved_mask = np.asarray(multihost_utils.broadcast_one_to_all(saved_mask)).astype(bool)
+        if jax.process_index() != 0:
+            pieces = {n: None for n in np.flatnonzero(saved_mask)}
     todo = [n for n in range(len(spans)) if n not in pieces]
     run_start = time.perf_counter()
     bar = tqdm(total=total, desc=f"sweep {spec.name}", unit="design", disable=not progress, file=sys.stderr,
@@ -171,14 +198,13 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
         bar.close()
     run_s = time.perf_counter() - run_start - compile_s
 
+    if jax.process_index() != 0:  # multi-host: the first process writes the results
+        return SweepResult(out_dir, {}, {}, [])
     metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
     table: dict[str, np.ndarray] = {"design": np.arange(total)}
     table.update(points)
     table.update(design_columns(robot, spec.axes))
     table.update(metric_values)
-
-    if jax.process_index() != 0:  # multi-host: the first process writes the results
-        return SweepResult(out_dir, table, {}, [])
     files = [write_csv(out_dir / "table.csv", table)]
     grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
     grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})

@@ -28,8 +28,9 @@ import yaml
 
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, check_memory, describe_yaml_error, is_number, read_yaml
-from ..models import load_robot
-from ..models.planar import PlanarRobot, robot_from_mapping, robot_to_mapping
+from ..models import load_robot, robot_from_file_mapping
+from ..models.planar import PlanarRobot, robot_to_mapping
+from ..models.spatial import SpatialRobot
 from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field
 from .metrics import METRICS, MetricSpec, metric_specs
 from .table2 import REPORT_CHECKS, REPORTS
@@ -49,7 +50,7 @@ class SweepSpec:
 
     name: str
     config: dict
-    robot: PlanarRobot
+    robot: PlanarRobot | SpatialRobot
     axes: tuple[Axis, ...]
     combine: str
     metrics: tuple[MetricSpec, ...]
@@ -78,7 +79,7 @@ class SweepSpec:
         return f"{self.name}: {count} over {axes} [{self.combine}]; metrics {names}"
 
 
-def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
+def _axis_values(where: str, spec: Mapping, numbers: int) -> np.ndarray:
     if ("values" in spec) == ("range" in spec):
         raise ConfigError(f"{where}: give exactly one of 'values' (a list) or 'range' (start, stop, num | step)")
     if "values" in spec:
@@ -109,7 +110,7 @@ def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
         num = rng["num"]
         if not isinstance(num, int) or isinstance(num, bool) or num < 1:
             raise ConfigError(f"{where}.range.num: must be a positive integer, got {num!r}")
-        _check_size(f"{where}.range", num, f"num: {num}", n_links)
+        _check_size(f"{where}.range", num, f"num: {num}", numbers)
         return np.linspace(start, stop, num)
     step = rng["step"]
     if not is_number(step) or step == 0 or not math.isfinite(step):
@@ -120,7 +121,7 @@ def _axis_values(where: str, spec: Mapping, n_links: int) -> np.ndarray:
     count = int(math.floor(steps + 1e-9)) + 1
     if count < 1:
         raise ConfigError(f"{where}.range: stepping by {step:g} from {start:g} never reaches {stop:g}; the axis is empty")
-    _check_size(f"{where}.range", count, f"{count} steps", n_links)
+    _check_size(f"{where}.range", count, f"{count} steps", numbers)
     return start + step * np.arange(count)
 
 
@@ -194,12 +195,19 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
             raise ConfigError(f"{where}: robot: '{robot_entry}' is a folder, not a robot file")
         robot = load_robot(robot_path)
         robot_source = str(robot_entry)
+        robot_mapping = _spatial_mapping(robot_path, read_yaml(robot_path, what="robot file")) \
+            if isinstance(robot, SpatialRobot) else robot_to_mapping(robot)
     elif isinstance(robot_entry, Mapping):
-        robot = robot_from_mapping(robot_entry, source=f"{where}: robot")
+        robot = robot_from_file_mapping(robot_entry, source=f"{where}: robot", base_dir=base_dir)
         robot_source = "inline"
+        robot_mapping = _spatial_mapping(base_dir / "robot.yaml", robot_entry) \
+            if isinstance(robot, SpatialRobot) else robot_to_mapping(robot)
     else:
         raise ConfigError(f"{where}: robot: must be a file path or an inline robot mapping")
 
+    family = "spatial" if isinstance(robot, SpatialRobot) else "planar"
+    # Numbers per design (float64 leaves), for the memory check of the batched designs.
+    size = 30 + 30 * robot.n_joints if family == "spatial" else 3 + 6 * robot.n_links
     axes_entry = config.get("axes")
     if not isinstance(axes_entry, Mapping) or not axes_entry:
         raise ConfigError(f"{where}: axes: must be a non-empty mapping of axis name -> {{field, values | range}}")
@@ -213,16 +221,16 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         check_keys(f"{at}: ", spec, _AXIS_KEYS)
         if "field" not in spec:
             raise ConfigError(f"{at}.field: missing required key; fields: {FIELD_HELP}")
-        field = check_field(at, spec["field"], robot.n_links)
+        field = check_field(at, spec["field"], robot)
         relative = spec.get("relative", False)
         if not isinstance(relative, bool):
             raise ConfigError(f"{at}.relative: must be true or false, got {relative!r}")
-        axes.append(Axis(axis_name, field, _axis_values(at, spec, robot.n_links), relative))
+        axes.append(Axis(axis_name, field, _axis_values(at, spec, size), relative, family))
 
-    check_axes_compatible(where, axes, robot.n_links)
+    check_axes_compatible(where, axes, robot)
     if config.get("combine", "product") == "product":
         _check_size(f"{where}: axes", math.prod(len(a.values) for a in axes),
-                    " x ".join(str(len(a.values)) for a in axes), robot.n_links)
+                    " x ".join(str(len(a.values)) for a in axes), size)
 
     combine = config.get("combine", "product")
     if combine not in ("product", "zip"):
@@ -246,7 +254,7 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     resolved = {
         "name": name,
         "description": config.get("description", ""),
-        "robot": robot_to_mapping(robot),  # inline, so the resolved config is itself a sweep file
+        "robot": robot_mapping,  # inline, so the resolved config is itself a sweep file
         "axes": {a.name: {"field": a.field, "relative": a.relative, "values": a.values.tolist()} for a in axes},
         "combine": combine,
         "metrics": [{"name": m.name, **m.options} for m in metrics],
@@ -261,13 +269,34 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     if report is not None:
         REPORT_CHECKS[report](spec)
     for i, metric in enumerate(metrics):
-        METRICS[metric.name].check_robot(f"{where}: metrics[{i}]", metric.options, robot)
+        entry = METRICS[metric.name]
+        if family not in entry.families:
+            others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
+            raise ConfigError(f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
+                              f"robots; the robot is {family}; its metrics: {others}")
+        entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
     build_designs(spec)  # validates every sweep point before anything is written
     return spec
 
 
-def _check_size(where: str, count: int, sizes: str, n_links: int) -> None:
+def _spatial_mapping(path: Path, config: Mapping) -> dict:
+    """A spatial robot file's mapping for the resolved config, its URDF path made to work
+    from the current folder (relative when below it), so the resolved config is itself a
+    sweep file for a run from the same folder."""
+    mapping = copy.deepcopy(dict(config))
+    arm = dict(mapping.get("arm", {}))
+    if isinstance(arm.get("urdf"), str) and not os.path.isabs(arm["urdf"]):
+        urdf = (Path(path).resolve().parent / arm["urdf"]).resolve()
+        try:
+            arm["urdf"] = str(urdf.relative_to(Path.cwd().resolve()))
+        except ValueError:
+            arm["urdf"] = str(urdf)
+    mapping["arm"] = arm
+    return mapping
+
+
+def _check_size(where: str, count: int, sizes: str, numbers: int) -> None:
     """Refuse a sweep whose designs alone would not fit in memory (they are built at once),
-    before anything that large is allocated."""
-    need = count * 8 * (3 + 6 * n_links) * 4  # float64 leaves, with room for temporaries
+    before anything that large is allocated; ``numbers``: float64 leaves per design."""
+    need = count * 8 * numbers * 4  # with room for temporaries
     check_memory(where, need, f"{count:,} designs ({sizes})", "split the sweep into several files")

@@ -5,6 +5,8 @@
 - `schema`: the robot file (``arm:`` key) and `load_spatial_robot`;
 - `primitives`: per-posture primitives and closed forms (one design, one posture);
 - `family`: `SPATIAL`, the family the generic kernels dispatch on;
+- `fields`: named design numbers (``mount.xyz[0]``, ``arm.length``, ...) that sweeps
+  and design problems set;
 - `metrics`: spatial-only batched kernels (rotational/full/dynamic
   manipulability, H_m, H*, C(q), rotational and fixed-base ellipsoids).
 """

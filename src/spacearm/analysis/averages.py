@@ -1,0 +1,338 @@
+"""Averages of posture metrics over the joint box, with error estimates (issue 17, item 2).
+
+Each average is the mean of a per-posture metric under the uniform measure on the joint
+box (:mod:`.joint_box`: limits where given, one turn for a continuous joint):
+
+- :func:`average_manipulability`: translational w* = sqrt det(J*_v J*_v^T), m^3
+  (eq. 10 in 3-D; planar robots keep the paper's eq. 12, normalized by L^2);
+- :func:`global_conditioning_index`: 1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]
+  (Gosselin & Angeles 1991, over the joint box instead of the workspace);
+- :func:`average_base_disturbance`: ||C_w||_F, the Frobenius norm of the angular rows of
+  C = -I_S^-1 I_M, rad per rad (Dubowsky & Torres 1991's disturbance, as a scalar);
+- :func:`average_dynamic_manipulability`: w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T),
+  (m / (kg m^2))^3 for revolute joints: tip acceleration per joint torque (Yoshikawa
+  1985 applied to J*, with H* the arm inertia at zero momentum; spatial robots only).
+
+Why Frobenius for the disturbance: ||C_w||_F^2 = sum of the squared singular values =
+n times the mean of ||C_w u||^2 over unit joint-rate directions u, so it is the RMS
+bus angular rate per unit joint rate (times sqrt n); it is smooth everywhere (the
+spectral norm has kinks where singular values cross), which gradient search needs.
+
+Why the translational rows for w_d: the spatial J* is 6 x n; for n < 6 the full Gram
+determinant vanishes identically, so w_d uses J*_v, as w* does (and as
+``models.spatial.dynamic_manipulability``).
+
+Estimator. Randomized quasi-Monte Carlo: R independent digital shifts of one Sobol
+sequence (:mod:`.joint_box`); points come in blocks of B per shift, and after 2^j
+blocks (a power of two: the points form a net) the estimate is the mean of the R
+shift means and the error estimate their standard error s_R / sqrt(R). Blocks are
+added until error <= rtol |mean| (checked at powers of two) or ``max_samples`` is reached.
+The loop is a ``lax.while_loop``, so it runs under ``jit`` and ``vmap`` (over designs:
+each design stops at its own sample count). The mean is differentiable in the design
+(a ``custom_vjp``: the backward pass sums the per-block gradients over exactly the
+blocks the forward pass used, so the gradient is that of the returned estimate); the
+error estimate and the sample count carry no gradient.
+
+Accuracy, measured (tests/test_averages.py; RMS over 4 seeds against a reference):
+
+========================  ===========  ===========  ===========  ===========
+mean w*, relative error   N = 2^12     2^14         2^16         2^18
+========================  ===========  ===========  ===========  ===========
+Table 1 (planar, exact)   --           4.0e-5       3.9e-6       5.5e-7
+3-DOF arm, 100 kg bus     1.2e-4       1.3e-4       1.9e-5       4.4e-6
+UR5 on a 500 kg smallsat  5.6e-4       2.8e-4       1.2e-4       4.4e-5
+========================  ===========  ===========  ===========  ===========
+
+(planar: the Gauss-Legendre rule of ``average_manipulability(robot, measure="joint")``;
+spatial: 2^21 postures). The error estimate follows the actual error within a factor
+of about 1.5. The default rtol = 1e-4 stops at 16k-32k postures (planar, 3-DOF) and
+131k (UR5). The integrands have kinks where J*_v loses rank, so the rate is between
+N^-1/2 and N^-1, not QMC's N^-1 log^d N for smooth integrands.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import jax
+import jax.numpy as jnp
+
+from .._core.errors import ConfigError
+from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
+from ..models.family import family_of
+from ..models.planar.robot import PlanarRobot
+from ..models.spatial.metrics import dynamic_manipulability
+from . import manipulability_average
+from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
+
+__all__ = [
+    "JointAverage",
+    "joint_average",
+    "average_manipulability",
+    "joint_average_manipulability",
+    "global_conditioning_index",
+    "average_base_disturbance",
+    "average_dynamic_manipulability",
+    "METRICS",
+]
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class JointAverage:
+    """An average over the joint box with its error estimate.
+
+    Attributes:
+        value: ``(...)`` the estimate (mean over the R randomizations), the metric's unit.
+        error: ``(...)`` its standard error, s_R / sqrt(R) (one sigma; same unit).
+        samples: ``(...)`` postures used in all (R x points per randomization), int.
+    """
+
+    value: jax.Array
+    error: jax.Array
+    samples: jax.Array
+
+    @property
+    def relative_error(self) -> jax.Array:
+        return self.error / jnp.abs(self.value)
+
+
+# Per-posture metrics: (robot, postures (..., p)) -> (...). ---------------------------
+
+
+def _translational_jacobian(robot, posture):
+    family = family_of(robot)
+    return generalized_jacobian(robot, posture)[..., : family.translational_rows, :]
+
+
+def manipulability_metric(robot, posture):
+    """Translational w* (m^2 planar, m^3 spatial)."""
+    return manipulability(robot, posture)
+
+
+def inverse_condition_metric(robot, posture):
+    """1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]; 0 at singular postures."""
+    J = _translational_jacobian(robot, posture)
+    gram = J @ jnp.swapaxes(J, -1, -2)
+    eigenvalues = jnp.linalg.eigvalsh(gram)  # ascending
+    ratio = eigenvalues[..., 0] / eigenvalues[..., -1]
+    positive = ratio > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, ratio, 1.0)), 0.0)
+
+
+def base_disturbance_metric(robot, posture):
+    """||C_w||_F: bus angular rate per joint rate (Frobenius), rad/rad (m/rad rows excluded)."""
+    C = base_rate_matrix(robot, posture)
+    # Spatial base coordinates are [v of the bus centroid; w] (3 angular rows); the
+    # planar base coordinate is the attitude phi0 alone.
+    angular = C[..., -3:, :] if family_of(robot).rotates_with_base else C
+    return jnp.sqrt(jnp.sum(angular * angular, axis=(-2, -1)))
+
+
+def dynamic_manipulability_metric(robot, posture):
+    """w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) (spatial robots)."""
+    return dynamic_manipulability(robot, posture)
+
+
+METRICS = {
+    "manipulability": manipulability_metric,
+    "conditioning": inverse_condition_metric,
+    "base_disturbance": base_disturbance_metric,
+    "dynamic_manipulability": dynamic_manipulability_metric,
+}
+
+
+# The estimator ------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class _Plan:
+    """Static options of one estimator program (hashable: a jit/custom_vjp static argument)."""
+
+    metric: str
+    rtol: float
+    randomizations: int
+    block: int
+    min_blocks: int
+    max_blocks: int
+
+
+def _block_sums(plan: _Plan, robot, shifts, block_index):
+    """``(R,)`` sums of the metric over block ``block_index`` of each randomization."""
+    n = family_of(robot).joint_count(robot)
+    directions = jnp.asarray(sobol_direction_numbers(n))
+    unit = sobol_points(directions, block_index * plan.block, plan.block, shifts)  # (R, B, n)
+    values = METRICS[plan.metric](robot, box_postures(robot, unit))
+    return jnp.sum(values, axis=-1)
+
+
+def _summary(plan: _Plan, sums, blocks):
+    means = sums / (blocks * plan.block).astype(sums.dtype)
+    value = jnp.mean(means)
+    error = jnp.std(means, ddof=1) / jnp.sqrt(plan.randomizations)
+    return value, error
+
+
+def _is_power_of_two(k):
+    return (k & (k - 1)) == 0
+
+
+def _forward(plan: _Plan, robot, shifts):
+    dtype = jnp.result_type(float)
+
+    def cond(state):
+        blocks, _, done = state
+        return ~done
+
+    def body(state):
+        blocks, sums, _ = state
+        sums = sums + _block_sums(plan, robot, shifts, blocks)
+        blocks = blocks + 1
+        value, error = _summary(plan, sums, blocks)
+        checkpoint = _is_power_of_two(blocks) & (blocks >= plan.min_blocks)
+        done = (checkpoint & (error <= plan.rtol * jnp.abs(value))) | (blocks >= plan.max_blocks)
+        return blocks, sums, done
+
+    state = (jnp.asarray(0, jnp.int32), jnp.zeros((plan.randomizations,), dtype), jnp.asarray(False))
+    blocks, sums, _ = jax.lax.while_loop(cond, body, state)
+    value, error = _summary(plan, sums, blocks)
+    return value, error, blocks
+
+
+@functools.partial(jax.custom_vjp, nondiff_argnums=(0,))
+def _estimate(plan: _Plan, robot, shifts):
+    value, error, blocks = _forward(plan, robot, shifts)
+    return value, error, blocks
+
+
+def _estimate_fwd(plan: _Plan, robot, shifts):
+    value, error, blocks = _forward(plan, robot, shifts)
+    return (value, error, blocks), (robot, shifts, blocks)
+
+
+def _estimate_bwd(plan: _Plan, residuals, cotangents):
+    robot, shifts, blocks = residuals
+    g = cotangents[0]  # the error estimate and the block count carry no gradient
+    scale = g / (plan.randomizations * blocks * plan.block).astype(g.dtype)
+
+    def body(state):
+        k, accumulated = state
+        _, pullback = jax.vjp(lambda r: jnp.sum(_block_sums(plan, r, shifts, k)), robot)
+        (grad,) = pullback(scale)
+        return k + 1, jax.tree_util.tree_map(jnp.add, accumulated, grad)
+
+    zeros = jax.tree_util.tree_map(jnp.zeros_like, robot)
+    _, gradient = jax.lax.while_loop(lambda s: s[0] < blocks, body, (jnp.asarray(0, jnp.int32), zeros))
+    return gradient, None  # the shifts are integers: no cotangent
+
+
+_estimate.defvjp(_estimate_fwd, _estimate_bwd)
+
+
+@functools.partial(jax.jit, static_argnames=("plan", "designs_per_chunk"))
+def _estimate_batched(robot, shifts, plan: _Plan, designs_per_chunk: int):
+    batch = robot.batch_shape
+
+    def single(design):
+        value, error, blocks = _estimate(plan, design, shifts)
+        return JointAverage(value, error, blocks * plan.block * plan.randomizations)
+
+    if not batch:
+        return single(robot)
+    size = 1
+    for s in batch:
+        size *= s
+    flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch):])), robot)
+    out = jax.lax.map(single, flat, batch_size=min(designs_per_chunk, size))
+    return jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch), out)
+
+
+def joint_average(
+    robot,
+    metric: str = "manipulability",
+    *,
+    rtol: float = 1e-4,
+    randomizations: int = 8,
+    block: int = 1024,
+    min_samples: int = 2**14,
+    max_samples: int = 2**24,
+    seed: int = 0,
+    designs_per_chunk: int = 8,
+) -> JointAverage:
+    """The mean of a posture metric over the joint box, to a relative standard error ``rtol``.
+
+    Args:
+        robot: a design of either family, or a batch of designs (leading axes on every
+            leaf; each design stops at its own sample count).
+        metric: one of :data:`METRICS` ("manipulability", "conditioning",
+            "base_disturbance", "dynamic_manipulability").
+        rtol: target relative standard error (one sigma) of the mean.
+        randomizations: R independent digital shifts (>= 2; the error estimate has
+            R - 1 degrees of freedom).
+        block: Sobol points per randomization per loop step (a power of two).
+        min_samples, max_samples: bounds on the postures used in all (R x points);
+            when ``max_samples`` is hit first the returned error says how far it got.
+        seed: seed of the digital shifts (a new seed does not recompile).
+        designs_per_chunk: designs evaluated together under ``lax.map`` for batches.
+
+    Returns:
+        :class:`JointAverage` with ``(...)`` fields. ``value`` is differentiable in the
+        design (``jax.grad``); under ``vmap`` or ``jit`` it works as well.
+    """
+    if metric not in METRICS:
+        raise ConfigError(f"metric: must be one of {', '.join(METRICS)}, got {metric!r}")
+    if metric == "dynamic_manipulability" and not family_of(robot).rotates_with_base:
+        raise ConfigError("metric: dynamic_manipulability needs the arm inertia H*, which only spatial robots provide")
+    if randomizations < 2:
+        raise ConfigError(f"randomizations: must be at least 2 for an error estimate, got {randomizations}")
+    if block < 1 or block & (block - 1):
+        raise ConfigError(f"block: must be a power of two, got {block}")
+    if not rtol > 0:
+        raise ConfigError(f"rtol: must be positive, got {rtol}")
+    check_joint_box(robot)
+    per_block = block * randomizations
+    max_blocks = max(1, max_samples // per_block)
+    max_blocks = 1 << (max_blocks.bit_length() - 1)  # a power of two: the last estimate is on a net
+    min_blocks = min(max_blocks, max(1, -(-min_samples // per_block)))
+    plan = _Plan(metric, float(rtol), int(randomizations), int(block), int(min_blocks), int(max_blocks))
+    shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
+    return _estimate_batched(robot, shifts, plan, designs_per_chunk)
+
+
+def joint_average_manipulability(robot, **options) -> JointAverage:
+    """Mean translational w* over the joint box (either family; m^2 planar, m^3 spatial), not normalized."""
+    return joint_average(robot, "manipulability", **options)
+
+
+def average_manipulability(robot, **options):
+    """The average manipulability of a design, by family (the public ``sa.average_manipulability``).
+
+    - Planar robots: the paper's w-bar exactly as before (eq. 12, normalized by L^2;
+      :func:`spacearm.analysis.manipulability_average.average_manipulability`, same
+      options, same closed-form quadrature), a ``(...)`` array.
+    - Spatial robots: the mean translational w* over the joint box, m^3, as a
+      :class:`JointAverage` (value, error, samples) to relative standard error ``rtol``
+      (default 1e-4); options of :func:`joint_average`.
+    """
+    if isinstance(robot, PlanarRobot):
+        return manipulability_average.average_manipulability(robot, **options)
+    return joint_average(robot, "manipulability", **options)
+
+
+def global_conditioning_index(robot, **options) -> JointAverage:
+    """Gosselin & Angeles' global conditioning index: the mean of 1/kappa(J*_v) over the joint box (dimensionless)."""
+    return joint_average(robot, "conditioning", **options)
+
+
+def average_base_disturbance(robot, **options) -> JointAverage:
+    """The mean of ||C_w||_F (bus angular rate per joint rate, Frobenius) over the joint box, rad/rad."""
+    return joint_average(robot, "base_disturbance", **options)
+
+
+def average_dynamic_manipulability(robot, **options) -> JointAverage:
+    """The mean of w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) over the joint box (spatial robots)."""
+    return joint_average(robot, "dynamic_manipulability", **options)
+
+
+__all__ += ["manipulability_metric", "inverse_condition_metric", "base_disturbance_metric", "dynamic_manipulability_metric"]

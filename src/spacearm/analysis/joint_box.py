@@ -1,0 +1,171 @@
+"""The joint box and its uniform measure, with randomized Sobol points for averages over it.
+
+The joint box of a design is the product of its joint ranges:
+
+- a joint with finite limits covers [lower, upper];
+- a revolute joint without limits (URDF ``continuous``, planar links without
+  ``limit_deg``) covers one turn, [-pi, pi);
+- a revolute joint whose limits span more than a turn (the UR5's +-2 pi) covers one
+  turn from its lower limit: every posture appears once, and every kinematic quantity
+  is periodic in a revolute angle, so averages and extremes are the same as over the
+  full range;
+- a prismatic joint must have finite limits (:class:`~spacearm.ConfigError` otherwise).
+
+The box is written for any robot family (planar postures get phi0 = 0 in front,
+``family.posture_offset``). The limits are design leaves: averages and extremes over
+the box are differentiable in them too (the points move with the box).
+
+Quasi-Monte Carlo points: a Sobol sequence (Joe & Kuo's direction numbers,
+``new-joe-kuo-6.21201``, for up to 10 joints; tests/test_averages.py checks them
+against SciPy's generator) in its natural order, so the first 2^m points of any
+block-aligned run form a (t, m, s)-net. Randomization by a random digital shift (an
+XOR of every point with one random 32-bit word per dimension): each randomization is
+an unbiased estimate, and the spread of independent randomizations estimates the
+error.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._core.errors import ConfigError
+from ..models.family import family_of
+
+__all__ = [
+    "MAX_SOBOL_DIMENSION",
+    "joint_kinds",
+    "periodic_joints",
+    "joint_box",
+    "check_joint_box",
+    "box_postures",
+    "sobol_direction_numbers",
+    "sobol_points",
+    "digital_shifts",
+]
+
+# Joe & Kuo (2008), new-joe-kuo-6.21201: (degree s, coefficients a, initial m_1..m_s)
+# for dimensions 2..10 (dimension 1 is the van der Corput sequence, m_k = 1).
+_JOE_KUO = (
+    (1, 0, (1,)),
+    (2, 1, (1, 3)),
+    (3, 1, (1, 3, 1)),
+    (3, 2, (1, 1, 1)),
+    (4, 1, (1, 1, 3, 3)),
+    (4, 4, (1, 3, 5, 13)),
+    (5, 2, (1, 1, 5, 5, 17)),
+    (5, 4, (1, 1, 5, 5, 5)),
+    (5, 7, (1, 1, 7, 11, 19)),
+)
+MAX_SOBOL_DIMENSION = len(_JOE_KUO) + 1
+_BITS = 32
+
+
+def sobol_direction_numbers(dimension: int) -> np.ndarray:
+    """``(dimension, 32)`` uint32 direction numbers v_{d,k} = m_{d,k} 2^(32-k), k = 1..32."""
+    if not 1 <= dimension <= MAX_SOBOL_DIMENSION:
+        raise ConfigError(f"joints: the joint-box averages support 1 to {MAX_SOBOL_DIMENSION} joints, got {dimension}")
+    table = np.zeros((dimension, _BITS), dtype=np.uint64)
+    table[0] = 1
+    for d in range(1, dimension):
+        s, a, initial = _JOE_KUO[d - 1]
+        m = list(initial)
+        for k in range(s, _BITS):
+            value = m[k - s] ^ (m[k - s] << s)
+            for i in range(1, s):
+                if (a >> (s - 1 - i)) & 1:
+                    value ^= m[k - i] << i
+            m.append(value)
+        table[d] = m[:_BITS]
+    shifts = np.arange(_BITS - 1, -1, -1, dtype=np.uint64)  # 2^(32 - k) for k = 1..32
+    return (table << shifts).astype(np.uint32)
+
+
+def sobol_points(directions: jax.Array, start, count: int, shift: jax.Array) -> jax.Array:
+    """Digitally shifted Sobol points of indices ``start .. start + count - 1`` (natural order).
+
+    Args:
+        directions: ``(d, 32)`` uint32 from :func:`sobol_direction_numbers`.
+        start: first index (a traced integer is fine).
+        count: number of points (static).
+        shift: ``(..., d)`` uint32 digital shifts (one row per randomization).
+
+    Returns:
+        ``(..., count, d)`` points in (0, 1): x = ((Sobol integer XOR shift) + 1/2) 2^-32.
+    """
+    index = (jnp.asarray(start, jnp.uint32) + jnp.arange(count, dtype=jnp.uint32))[:, None]
+    bits = ((index >> jnp.arange(_BITS, dtype=jnp.uint32)) & 1).astype(bool)  # (count, 32)
+    words = jnp.where(bits[:, None, :], directions[None, :, :], jnp.uint32(0))  # (count, d, 32)
+    integer = jax.lax.reduce(words, jnp.uint32(0), jax.lax.bitwise_xor, (2,))  # (count, d)
+    shifted = jnp.bitwise_xor(integer, jnp.asarray(shift, jnp.uint32)[..., None, :])
+    dtype = jnp.result_type(float)
+    return (shifted.astype(dtype) + 0.5) * (2.0**-_BITS)
+
+
+def digital_shifts(seed: int, randomizations: int, dimension: int) -> jax.Array:
+    """``(randomizations, dimension)`` independent uniform uint32 words from ``seed``."""
+    return jax.random.bits(jax.random.key(seed), (randomizations, dimension), jnp.uint32)
+
+
+def joint_kinds(robot) -> tuple[str, ...]:
+    """Static joint kinds: the spatial robot's ``joint_kinds``; every planar joint is revolute."""
+    kinds = getattr(robot, "joint_kinds", None)
+    if kinds:
+        return tuple(kinds)
+    return ("revolute",) * family_of(robot).joint_count(robot)
+
+
+def periodic_joints(robot) -> np.ndarray:
+    """``(n,)`` static bools: revolute joints (kinematics periodic in the angle)."""
+    return np.array([kind == "revolute" for kind in joint_kinds(robot)])
+
+
+def joint_box(robot) -> tuple[jax.Array, jax.Array]:
+    """``(lower, upper)``, each ``(..., n)``: the box the joint-uniform measure covers.
+
+    Revolute joints: free ones [-pi, pi), wider ones one turn from the lower limit;
+    prismatic joints: their limits (m), which must be finite (:func:`check_joint_box`).
+    """
+    revolute = jnp.asarray(periodic_joints(robot))
+    lower = jnp.asarray(robot.joint_lower)
+    upper = jnp.asarray(robot.joint_upper)
+    lower = jnp.where(jnp.isfinite(lower), lower, -jnp.pi)
+    upper = jnp.where(jnp.isfinite(upper), upper, lower + 2.0 * jnp.pi)
+    upper = jnp.where(revolute, jnp.minimum(upper, lower + 2.0 * jnp.pi), upper)
+    return lower, upper
+
+
+def check_joint_box(robot) -> None:
+    """Raise :class:`ConfigError` naming the joint when a prismatic joint has an infinite limit.
+
+    Skipped under tracing (the limits are then unknown); an infinite prismatic range
+    would give NaN there.
+    """
+    if isinstance(robot.joint_lower, jax.core.Tracer) or isinstance(robot.joint_upper, jax.core.Tracer):
+        return
+    kinds = joint_kinds(robot)
+    lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
+    names = getattr(getattr(robot, "labels", None), "joint_names", ()) or ()
+    for i, kind in enumerate(kinds):
+        if kind == "prismatic" and not (np.all(np.isfinite(lower[..., i])) and np.all(np.isfinite(upper[..., i]))):
+            label = f"'{names[i]}'" if i < len(names) else f"{i}"
+            raise ConfigError(f"joints[{i}] {label}: a prismatic joint needs finite limits for a joint-box average or search")
+
+
+def box_postures(robot, unit: jax.Array) -> jax.Array:
+    """Map points of the unit cube to postures of the family.
+
+    Args:
+        robot: one design (no batch axes).
+        unit: ``(..., n)`` points in [0, 1]^n.
+
+    Returns:
+        ``(..., posture_offset + n)``: planar [phi0 = 0, phi1..phin]; spatial q.
+    """
+    lower, upper = joint_box(robot)
+    joints = lower + (upper - lower) * unit
+    offset = family_of(robot).posture_offset
+    if offset:
+        joints = jnp.concatenate([jnp.zeros(joints.shape[:-1] + (offset,), joints.dtype), joints], axis=-1)
+    return joints

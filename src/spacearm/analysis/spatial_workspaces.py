@@ -1,0 +1,538 @@
+"""Workspaces of any robot family by search over the joint box (issue 17, item 1).
+
+The paper's workspaces in 3-D (Umetani & Yoshida 1990, sec. 3, and Papadopoulos &
+Dubowsky 1993). All radii are tip distances from the system centroid, which zero
+momentum keeps fixed in space; a bus rotation turns the tip about the centroid, and
+cyclic joint motions inside the box turn the bus by any rotation, so every workspace
+below is a spherical shell (planar: an annulus) described by radii.
+
+- Maximum Reachable Space (Area 3): the shell between the smallest and the largest
+  |tip| over the joint box. Found by batched multi-start projected gradient ascent
+  (Adam steps in the unit-cube coordinates of the box, revolute joints that cover a
+  turn wrapped, limited ones clipped; all starts in one ``vmap``-ed ``jit``).
+  Differentiable in the design by the envelope theorem: the returned radius is |tip|
+  at the optimizer's joints held fixed (``stop_gradient``), the box map included, so
+  the derivative with respect to a limit that binds is kept.
+- Dynamic singular set: postures where the translational Generalized Jacobian J*_v
+  loses rank (det J*_v = 0 for a square J*_v, sigma_min(J*_v) = 0 otherwise).
+  Sampled on Sobol points of the joint box, then the ``keep`` samples closest to it
+  (smallest |s|, s the signed determinant or sigma_min) are moved onto it by Newton
+  projection, q <- q - s grad s / |grad s|^2.
+- Path-independent workspace (Papadopoulos & Dubowsky): the sphere about the centroid
+  that no dynamic-singular tip position enters; its radius is min |tip| over the
+  singular set, found by sampling, then descent of |tip|^2 along the singular set
+  (tangent steps, each followed by Newton projection back onto it).
+- Guaranteed Workspace (Area 5) in 3-D: the shell between the inner reachable radius
+  and the path-independent radius (empty if the first exceeds the second). Beside it
+  the analogue of eq. (8): the same search over the *kinematic* singular set (the
+  fixed-base J_v losing rank), the paper's argument. For a planar two-link arm the
+  kinematic value is min(|K0 - (K1 + K2)|, |K0 - |K1 - K2||) (eq. 8 and its folded
+  branch, :func:`~spacearm.analysis.workspaces.kinematic_singularity_radius`), and
+  the dynamic one :func:`~spacearm.analysis.singularities.path_independent_radius`.
+
+Every search here is single-design (``vmap`` it for batches; the options are static).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_determinant, tip_position
+from ..models.family import family_of
+from ..models.planar.robot import PlanarRobot
+from ..motion.spatial_paths import spatial_straight_tip_path
+from . import workspaces
+from .joint_box import box_postures, check_joint_box, digital_shifts, joint_box, periodic_joints, sobol_direction_numbers, sobol_points
+
+__all__ = [
+    "ReachableRadii",
+    "SingularPostures",
+    "GuaranteedWorkspace",
+    "reachable_radii",
+    "maximum_reachable_radius",
+    "maximum_reachable_inner_radius",
+    "singularity_measure",
+    "singular_postures",
+    "singular_radius",
+    "guaranteed_workspace",
+    "icosphere_directions",
+    "StraightPathWorkspace",
+    "spatial_straight_path_workspace",
+]
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class ReachableRadii:
+    """The Maximum Reachable shell about the system centroid.
+
+    Attributes:
+        inner, outer: smallest and largest |tip| over the joint box, m.
+        joints_inner, joints_outer: ``(n,)`` joint positions where they occur.
+    """
+
+    inner: jax.Array
+    outer: jax.Array
+    joints_inner: jax.Array
+    joints_outer: jax.Array
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class SingularPostures:
+    """Postures on a singular set, refined by Newton projection.
+
+    Attributes:
+        joints: ``(k, n)`` joint positions.
+        residual: ``(k,)`` |s| after refinement (s: det J_v or sigma_min(J_v), m^t or m).
+        on_set: ``(k,)`` bool: the refinement converged (|s| <= tol times the median
+            |s| of the samples; tol 1e-9 for det J_v, 1e-6 for sigma_min, which comes
+            from the square root of an eigenvalue and bottoms out near sqrt(eps)).
+        radius: ``(k,)`` |tip| about the system centroid, m.
+        tip: ``(k, d)`` tip about the centroid, bus (robot) axes, m.
+        tolerance: the absolute bound on |s| that ``on_set`` used.
+    """
+
+    joints: jax.Array
+    residual: jax.Array
+    on_set: jax.Array
+    radius: jax.Array
+    tip: jax.Array
+    tolerance: jax.Array
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class GuaranteedWorkspace:
+    """The 3-D Guaranteed Workspace and its eq.-(8) analogue, radii about the centroid, m.
+
+    Attributes:
+        inner: the inner reachable radius (the shell's hole).
+        path_independent: min |tip| over the dynamic singular set (Papadopoulos & Dubowsky).
+        kinematic: min |tip| over the kinematic (fixed-base) singular set: eq. (8)'s argument.
+        outer: the outer reachable radius.
+        empty: bool, no point is both reachable and inside the singularity-free sphere
+            (path_independent <= inner, to 1e-9 of the outer radius).
+
+    Note: where |tip| has an interior extremum over the joint box, p^T J*_v = 0 there,
+    so J*_v is singular: a hole whose nearest posture is not at a joint limit is
+    bounded by singular tips, and the sphere is empty (the UR5 on its smallsat). Then
+    the path-independent regions are the radial gaps between the shells that singular
+    tips sweep (Papadopoulos & Dubowsky), visible in ``spatial_shells``; this record
+    gives only the innermost sphere.
+    """
+
+    inner: jax.Array
+    path_independent: jax.Array
+    kinematic: jax.Array
+    outer: jax.Array
+    empty: jax.Array
+
+
+# Maximum Reachable Space ---------------------------------------------------------------
+
+
+def _wraps(robot):
+    """``(n,)`` bool: the joint's box coordinate is periodic (a revolute joint covering one turn)."""
+    lower, upper = joint_box(robot)
+    return jnp.asarray(periodic_joints(robot)) & (upper - lower >= 2.0 * jnp.pi * (1.0 - 1e-12))
+
+
+def _project(u, wraps):
+    return jnp.where(wraps, jnp.mod(u, 1.0), jnp.clip(u, 0.0, 1.0))
+
+
+def _start_points(robot, starts: int, seed: int):
+    n = family_of(robot).joint_count(robot)
+    shift = digital_shifts(seed, 1, n)
+    return sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, starts, shift)[0]
+
+
+def _adam_search(objective, u0, wraps, steps: int, rate: float):
+    """Minimize ``objective(u)`` from each row of ``u0`` by projected Adam with a cosine-decaying rate."""
+    grad = jax.vmap(jax.grad(objective))
+    b1, b2, eps = 0.9, 0.999, 1e-12
+
+    def step(k, state):
+        u, m, v = state
+        g = grad(u)
+        m = b1 * m + (1 - b1) * g
+        v = b2 * v + (1 - b2) * g * g
+        t = (k + 1).astype(u.dtype)
+        lr = rate * (1e-4 + (1 - 1e-4) * 0.5 * (1 + jnp.cos(jnp.pi * k / steps)))
+        u = u - lr * (m / (1 - b1**t)) / (jnp.sqrt(v / (1 - b2**t)) + eps)
+        return _project(u, wraps), m, v
+
+    zeros = jnp.zeros_like(u0)
+    u, _, _ = jax.lax.fori_loop(0, steps, step, (u0, zeros, zeros))
+    return u
+
+
+@functools.partial(jax.jit, static_argnames=("starts", "steps", "seed"))
+def _reachable(robot, starts: int, steps: int, seed: int, rate: float):
+    wraps = _wraps(robot)
+    u0 = _start_points(robot, starts, seed)
+
+    def radius_sq(u):
+        return jnp.sum(tip_position(robot, box_postures(robot, u)) ** 2)
+
+    lower, upper = joint_box(robot)
+    results = []
+    for sign in (-1.0, 1.0):  # inner: minimize |tip|^2; outer: maximize
+        u = _adam_search(lambda u: -sign * radius_sq(u), u0, wraps, steps, rate)
+        values = jax.vmap(radius_sq)(u)
+        best = jax.lax.stop_gradient(u[jnp.argmax(sign * values)])
+        # Envelope theorem: the radius at the optimizer's box coordinates, differentiable
+        # in the design and the limits (through the box map).
+        p = tip_position(robot, box_postures(robot, best))
+        squared = jnp.sum(p * p)
+        positive = squared > 0
+        radius = jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
+        results.append((radius, lower + (upper - lower) * best))
+    (inner, j_in), (outer, j_out) = results
+    return ReachableRadii(inner, outer, j_in, j_out)
+
+
+def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0, rate: float = 0.05) -> ReachableRadii:
+    """The Maximum Reachable shell of one design (either family), by multi-start search.
+
+    Args:
+        robot: one design (``vmap`` for batches).
+        starts: Sobol starting points in the joint box.
+        steps: projected Adam steps per start (cosine-decaying rate from ``rate``, in
+            unit-box coordinates).
+
+    Returns:
+        :class:`ReachableRadii`. For planar arms without limits the radii equal the
+        closed forms K0+..+Kn and max(0, 2 max K - sum K) (tests/test_spatial_workspaces.py).
+    """
+    check_joint_box(robot)
+    return _reachable(robot, starts, steps, seed, rate)
+
+
+def maximum_reachable_radius(robot, **options) -> jax.Array:
+    """Area 3's outer radius about the system centroid, m (the public ``sa.maximum_reachable_radius``).
+
+    Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)), exactly as before.
+    Spatial robots: the largest |tip| over the joint box, by :func:`reachable_radii`.
+    """
+    if isinstance(robot, PlanarRobot):
+        return workspaces.maximum_reachable_radius(robot)
+    return reachable_radii(robot, **options).outer
+
+
+def maximum_reachable_inner_radius(robot, **options) -> jax.Array:
+    """Area 3's hole (smallest |tip| over the joint box), m; planar: the closed form."""
+    if isinstance(robot, PlanarRobot):
+        return workspaces.maximum_reachable_inner_radius(robot)
+    return reachable_radii(robot, **options).inner
+
+
+# Singular sets ---------------------------------------------------------------------------
+
+
+def _joints_to_posture(robot, joints):
+    offset = family_of(robot).posture_offset
+    if not offset:
+        return joints
+    return jnp.concatenate([jnp.zeros(joints.shape[:-1] + (offset,), joints.dtype), joints], axis=-1)
+
+
+def singularity_measure(robot, joints: jax.Array, jacobian: str = "generalized") -> jax.Array:
+    """s(q): zero exactly where the translational Jacobian loses rank.
+
+    Args:
+        robot: one design.
+        joints: ``(..., n)`` joint positions (planar: without phi0).
+        jacobian: "generalized" (J*_v, dynamic singularities) or "fixed_base" (J_v,
+            kinematic singularities).
+
+    Returns:
+        ``(...)``: det J_v for a square J_v (t = n; signed, so it changes sign across
+        the set), else sigma_min(J_v) >= 0 (m/rad).
+    """
+    if jacobian not in ("generalized", "fixed_base"):
+        raise ValueError(f"jacobian: 'generalized' or 'fixed_base', got {jacobian!r}")
+    t = family_of(robot).translational_rows
+    J = _translational(robot, joints, jacobian)
+    if J.shape[-1] == t and t <= 3:
+        return square_determinant(J)
+    smallest = jnp.linalg.eigvalsh(J @ jnp.swapaxes(J, -1, -2))[..., 0]
+    positive = smallest > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, smallest, 1.0)), 0.0)
+
+
+def _tip_radius_sq(robot, joints):
+    return jnp.sum(tip_position(robot, _joints_to_posture(robot, joints)) ** 2, axis=-1)
+
+
+def _translational(robot, joints, jacobian):
+    t = family_of(robot).translational_rows
+    if jacobian == "generalized":
+        return generalized_jacobian(robot, _joints_to_posture(robot, joints))[..., :t, :]
+    return fixed_base_jacobian(robot, joints)[..., :t, :]
+
+
+def _newton_project(robot, joints, jacobian, steps, lower, upper, wraps):
+    """Move each row of ``joints`` onto the singular set (clipped to the box).
+
+    Square J_v: Newton steps on the scalar det J_v along its gradient. Redundant
+    J_v (t < n): rank loss is codimension n - t + 1 > 1 and sigma_min is not smooth
+    enough for scalar Newton to converge fast; instead Gauss-Newton (minimum-norm steps)
+    on the system J_v(q)^T u = 0, |u|^2 = 1 in the unknowns (q, u), u the left null
+    direction (started at the smallest left singular vector): quadratic convergence
+    onto the set.
+    """
+    t = family_of(robot).translational_rows
+    n = joints.shape[-1]
+    if n == t:
+        value_and_grad = jax.vmap(jax.value_and_grad(lambda q: singularity_measure(robot, q, jacobian)))
+
+        def step(_, q):
+            s, g = value_and_grad(q)
+            norm_sq = jnp.sum(g * g, axis=-1, keepdims=True)
+            ok = norm_sq > 0
+            q = q - jnp.where(ok, s[:, None] * g / jnp.where(ok, norm_sq, 1.0), 0.0)
+            return jnp.where(wraps, q, jnp.clip(q, lower, upper))
+
+        return jax.lax.fori_loop(0, steps, step, joints)
+
+    def residual(z):
+        q, u = z[:n], z[n:]
+        return jnp.concatenate([_translational(robot, q, jacobian).T @ u, 0.5 * (jnp.sum(u * u) - 1.0)[None]])
+
+    def gauss_newton(z):
+        G = residual(z)
+        A = jax.jacfwd(residual)(z)  # (n + 1, n + t)
+        gram = A @ A.T
+        damping = 1e-14 * jnp.trace(gram) / gram.shape[0]
+        dz = A.T @ jnp.linalg.solve(gram + damping * jnp.eye(gram.shape[0], dtype=gram.dtype), G)
+        z = z - dz
+        q = jnp.where(wraps, z[:n], jnp.clip(z[:n], lower, upper))
+        return jnp.concatenate([q, z[n:]])
+
+    def start(q):
+        J = _translational(robot, q, jacobian)
+        _, vectors = jnp.linalg.eigh(J @ J.T)
+        return jnp.concatenate([q, vectors[:, 0]])
+
+    z = jax.vmap(start)(joints)
+    z = jax.lax.fori_loop(0, steps, lambda _, z: jax.vmap(gauss_newton)(z), z)
+    return z[:, :n]
+
+
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "newton_steps", "seed", "tol"))
+def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
+    n = family_of(robot).joint_count(robot)
+    lower, upper = joint_box(robot)
+    wraps = _wraps(robot)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples, digital_shifts(seed, 1, n))[0]
+    joints = lower + (upper - lower) * unit
+    s = singularity_measure(robot, joints, jacobian)
+    scale = jnp.median(jnp.abs(s))
+    _, nearest = jax.lax.top_k(-jnp.abs(s), keep)
+    q = _newton_project(robot, joints[nearest], jacobian, newton_steps, lower, upper, wraps)
+    residual = jnp.abs(singularity_measure(robot, q, jacobian))
+    tip = tip_position(robot, _joints_to_posture(robot, q))
+    if tol is None:
+        tol = 1e-9 if n == family_of(robot).translational_rows else 1e-6
+    tolerance = tol * scale
+    return SingularPostures(q, residual, residual <= tolerance, jnp.linalg.norm(tip, axis=-1), tip, tolerance)
+
+
+def singular_postures(
+    robot,
+    jacobian: str = "generalized",
+    *,
+    samples: int = 2**14,
+    keep: int = 2048,
+    newton_steps: int = 16,
+    seed: int = 0,
+    tol: float | None = None,
+) -> SingularPostures:
+    """The dynamic (``"generalized"``) or kinematic (``"fixed_base"``) singular set, sampled then refined.
+
+    ``samples`` Sobol points of the joint box; the ``keep`` with the smallest |s| are
+    moved onto s = 0 by ``newton_steps`` Newton projections (see
+    :func:`singularity_measure`). Rows with ``on_set`` False did not converge (for
+    example where the set meets a joint limit); discard them.
+    """
+    check_joint_box(robot)
+    return _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol)
+
+
+@functools.partial(jax.jit, static_argnames=("jacobian", "candidates", "descent_steps", "newton_steps"))
+def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, descent_steps, newton_steps):
+    lower, upper = joint_box(robot)
+    wraps = _wraps(robot)
+    radius = jnp.where(postures.on_set, postures.radius, jnp.inf)
+    _, best = jax.lax.top_k(-radius, candidates)
+    q0 = postures.joints[best]
+    measure_grad = jax.vmap(jax.grad(lambda q: singularity_measure(robot, q, jacobian)))
+    radius_grad = jax.vmap(jax.grad(lambda q: _tip_radius_sq(robot, q)))
+    span = jnp.max(upper - lower)
+
+    def step(k, q):
+        g, normal = radius_grad(q), measure_grad(q)
+        nn = jnp.sum(normal * normal, axis=-1, keepdims=True)
+        tangent = g - jnp.sum(g * normal, axis=-1, keepdims=True) * normal / jnp.where(nn > 0, nn, 1.0)
+        size = jnp.linalg.norm(tangent, axis=-1, keepdims=True)
+        length = span * 0.02 * 0.5 ** (12.0 * k / descent_steps)  # geometric: 2 % of the box to ~5e-6
+        moved = q - length * tangent / jnp.where(size > 0, size, 1.0)
+        moved = _newton_project(robot, moved, jacobian, newton_steps, lower, upper, wraps)
+        better = _tip_radius_sq(robot, moved) < _tip_radius_sq(robot, q)
+        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= postures.tolerance
+        return jnp.where((better & on_set)[:, None], moved, q)
+
+    q = jax.lax.fori_loop(0, descent_steps, step, q0)
+    q = jax.lax.stop_gradient(q)
+    on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= postures.tolerance
+    radii = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, q)), jnp.inf)
+    k = jnp.argmin(radii)
+    return radii[k], q[k]
+
+
+def singular_radius(
+    robot,
+    jacobian: str = "generalized",
+    *,
+    samples: int = 2**14,
+    keep: int = 2048,
+    candidates: int = 32,
+    descent_steps: int = 150,
+    newton_steps: int = 4,
+    seed: int = 0,
+) -> tuple[jax.Array, jax.Array]:
+    """The closest approach to the system centroid of the tip over a singular set.
+
+    With ``jacobian="generalized"``: the path-independent workspace radius
+    (Papadopoulos & Dubowsky 1993), the largest sphere about the centroid with no
+    dynamic-singular tip position inside. With ``"fixed_base"``: the analogue of the
+    paper's eq. (8), which takes the straight-path boundary to be the kinematic
+    singularity.
+
+    The ``candidates`` refined singular postures of smallest radius are moved along
+    the set (tangent descent of |tip|^2, Newton projection after each step, steps
+    shrinking geometrically).
+
+    Returns:
+        ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
+        ``inf`` when no sampled posture converged onto the set (none in the box).
+        The radius is differentiable in the design by the envelope theorem only in the
+        sense that the posture is held fixed (a constrained minimum also moves with the set).
+    """
+    postures = singular_postures(robot, jacobian, samples=samples, keep=keep, seed=seed)
+    return _closest_singular(robot, postures, jacobian, candidates, descent_steps, newton_steps)
+
+
+def guaranteed_workspace(robot, **options) -> GuaranteedWorkspace:
+    """The Guaranteed Workspace in 3-D (any family), with the eq.-(8) analogue beside it.
+
+    The shell between the inner reachable radius and the path-independent radius
+    (Papadopoulos & Dubowsky): from any initial posture, along any tip path inside it,
+    J*_v keeps full rank. ``kinematic`` is the same construction with the fixed-base
+    Jacobian, the paper's eq. (8) argument; the difference between the two is the
+    free base's share (eq. 8 overestimates the safe radius where the dynamic singular
+    set bulges inwards: Table 1, 2.5 m against 1.0 m).
+
+    Args:
+        options: passed to :func:`singular_radius` (sampling and refinement).
+    """
+    reach = reachable_radii(robot)
+    dynamic, _ = singular_radius(robot, "generalized", **options)
+    kinematic, _ = singular_radius(robot, "fixed_base", **options)
+    empty = dynamic <= reach.inner + 1e-9 * reach.outer
+    return GuaranteedWorkspace(reach.inner, dynamic, kinematic, reach.outer, empty)
+
+
+# Directions --------------------------------------------------------------------------
+
+
+def icosphere_directions(subdivisions: int = 4) -> np.ndarray:
+    """Unit vectors of an icosphere: 10 4^k + 2 nearly uniform directions (k = 4: 2,562).
+
+    Each subdivision splits every triangle of the icosahedron into four and projects the
+    new vertices onto the sphere.
+    """
+    phi = (1.0 + math.sqrt(5.0)) / 2.0
+    vertices = [(-1, phi, 0), (1, phi, 0), (-1, -phi, 0), (1, -phi, 0), (0, -1, phi), (0, 1, phi),
+                (0, -1, -phi), (0, 1, -phi), (phi, 0, -1), (phi, 0, 1), (-phi, 0, -1), (-phi, 0, 1)]  # fmt: skip
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
+             (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]  # fmt: skip
+    points = [np.asarray(v, float) / np.linalg.norm(v) for v in vertices]
+    for _ in range(subdivisions):
+        midpoint: dict[tuple[int, int], int] = {}
+
+        def middle(a: int, b: int) -> int:
+            key = (min(a, b), max(a, b))
+            if key not in midpoint:
+                m = points[a] + points[b]
+                points.append(m / np.linalg.norm(m))
+                midpoint[key] = len(points) - 1
+            return midpoint[key]
+
+        new_faces = []
+        for a, b, c in faces:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            new_faces += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = new_faces
+    return np.stack(points)
+
+
+# Straight-Path Workspace in 3-D ------------------------------------------------------------
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class StraightPathWorkspace:
+    """Area 4 in 3-D from one initial posture: where straight tip paths end, per direction.
+
+    Attributes:
+        directions: ``(k, 3)`` unit directions of the paths, inertial axes.
+        start: ``(3,)`` tip at the initial posture, about the system centroid, m.
+        ends: ``(k, 3)`` tip where each path ended (the boundary of Area 4), m.
+        lengths: ``(k,)`` distance travelled along each direction, m.
+        reasons: ``(k,)`` int32 why each path ended (0 singular, 1 max_length, 2 joint
+            limit, 3 step budget; :class:`~spacearm.motion.spatial_paths.SpatialStraightPath`).
+    """
+
+    directions: jax.Array
+    start: jax.Array
+    ends: jax.Array
+    lengths: jax.Array
+    reasons: jax.Array
+
+
+def spatial_straight_path_workspace(
+    robot, q_start: jax.Array, *, subdivisions: int = 4, base_rotation: jax.Array | None = None, **path_options
+) -> StraightPathWorkspace:
+    """The 3-D Straight-Path Workspace from one posture (sec. 3.1 (3-b) in 3-D).
+
+    From ``q_start`` the tip moves along each of the 10 4^k + 2 icosphere directions
+    (k = ``subdivisions``; 2,562 for k = 4) until J*_v loses rank, a joint limit or
+    ``max_length`` (:func:`~spacearm.motion.spatial_paths.spatial_straight_tip_path`,
+    the bus attitude integrated with the joints); the end points bound the
+    star-shaped set reachable by straight lines from the start.
+
+    Args:
+        robot: one spatial design.
+        q_start: ``(n,)`` initial joints.
+        base_rotation: ``(3, 3)`` bus attitude at the start (default identity).
+        path_options: passed to the path integrator (``max_length``, ``max_step``, ``tol`` ...).
+    """
+    directions = jnp.asarray(icosphere_directions(subdivisions), jnp.result_type(float))
+    q_start = jnp.asarray(q_start, directions.dtype)
+    k = directions.shape[0]
+    rotation = None if base_rotation is None else jnp.broadcast_to(jnp.asarray(base_rotation, directions.dtype), (k, 3, 3))
+    paths = spatial_straight_tip_path(
+        robot, jnp.broadcast_to(q_start, (k, q_start.shape[-1])), directions, base_rotation=rotation, **path_options
+    )
+    start = tip_position(robot, q_start, base_rotation=None if base_rotation is None else jnp.asarray(base_rotation))
+    return StraightPathWorkspace(directions, start, paths.end_tip, paths.length, paths.reason)

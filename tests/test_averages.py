@@ -1,0 +1,162 @@
+"""Joint-box averages (issue 17, item 2): randomized QMC against closed forms, convergence, gradients."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import spacearm as sa
+from spacearm.analysis import averages, manipulability_average
+from spacearm.analysis.joint_box import joint_box, sobol_direction_numbers
+
+from .conftest import random_robot
+
+
+def _planar_joint_wbar(robot):
+    """The planar joint-uniform w-bar by its Gauss-Legendre rule (exact to ~1e-13), times L^2: mean w*, m^2."""
+    return float(sa.average_manipulability(robot, measure="joint")) * float(robot.reach) ** 2
+
+
+def test_sobol_directions_match_scipy():
+    qmc = pytest.importorskip("scipy.stats").qmc
+    for d in (1, 3, 6, 10):
+        V = sobol_direction_numbers(d).astype(np.uint64)
+        engine = qmc.Sobol(d, scramble=False, bits=32)
+        for j in range(32):  # natural-order point 2^j is v_j; SciPy's Gray-code order puts it at 2^(j+1) - 1
+            engine.reset()
+            engine.fast_forward(2 ** (j + 1) - 1)
+            np.testing.assert_array_equal(np.round(engine.random(1)[0] * 2.0**32).astype(np.uint64), V[:, j])
+
+
+def test_joint_box_one_turn_and_limits():
+    robot = sa.load_robot("configs/ur5-smallsat.yaml")
+    lower, upper = joint_box(robot)
+    np.testing.assert_allclose(np.asarray(upper - lower), 2 * np.pi)  # +-2 pi limits: one turn
+    planar = sa.umetani1990()
+    lower, upper = joint_box(planar)
+    np.testing.assert_allclose(np.asarray(lower), -np.pi)
+    np.testing.assert_allclose(np.asarray(upper), np.pi)
+
+
+@pytest.mark.parametrize("seed", [None, 4])
+def test_mean_manipulability_matches_planar_closed_form(seed):
+    robot = sa.umetani1990() if seed is None else random_robot(np.random.default_rng(seed), 2)
+    exact = _planar_joint_wbar(robot)
+    estimate = averages.joint_average_manipulability(robot)  # default rtol 1e-4
+    assert float(estimate.relative_error) <= 1e-4
+    assert abs(float(estimate.value) - exact) <= 4.0 * float(estimate.error)
+    assert abs(float(estimate.value) - exact) <= 2e-4 * exact
+
+
+def test_error_estimate_tracks_the_error_as_samples_grow():
+    robot = sa.umetani1990()
+    exact = _planar_joint_wbar(robot)
+    rows = []
+    for m in (13, 15, 17):
+        actual, estimated = [], []
+        for seed in range(3):
+            a = averages.joint_average_manipulability(robot, rtol=1e-15, min_samples=2**m, max_samples=2**m, seed=seed)
+            assert int(a.samples) == 2**m
+            actual.append(float(a.value) - exact)
+            estimated.append(float(a.error))
+        rows.append((np.sqrt(np.mean(np.square(actual))) / exact, np.mean(estimated) / exact))
+    # Measured (Table 1): rms relative error 1.1e-4, 1.3e-5, 5.6e-7 at 2^13, 2^15, 2^17 postures.
+    assert rows[1][0] < rows[0][0] / 3 and rows[2][0] < rows[1][0] / 3
+    for actual, estimated in rows:
+        assert actual <= 4.0 * estimated
+
+
+def test_planar_dispatch_is_unchanged():
+    robot = sa.umetani1990()
+    assert float(averages.average_manipulability(robot)) == float(manipulability_average.average_manipulability(robot))
+
+
+def test_base_disturbance_and_conditioning_against_a_grid():
+    robot = sa.umetani1990()
+    k = 256
+    angles = -np.pi + 2 * np.pi * np.arange(k) / k
+    p1, p2 = np.meshgrid(angles, angles, indexing="ij")
+    phi = jnp.stack([jnp.zeros_like(p1), p1, p2], axis=-1)
+    # ||C_w|| is smooth and periodic: the periodic trapezoid is spectrally accurate.
+    grid = float(jnp.mean(averages.base_disturbance_metric(robot, phi)))
+    estimate = averages.average_base_disturbance(robot)
+    assert abs(float(estimate.value) - grid) <= max(4.0 * float(estimate.error), 1e-12 * grid)
+    # 1/kappa has kinks at the singular postures: compare at the grid's accuracy.
+    grid = float(jnp.mean(averages.inverse_condition_metric(robot, phi)))
+    estimate = averages.global_conditioning_index(robot)
+    assert float(estimate.relative_error) <= 1e-4
+    assert abs(float(estimate.value) - grid) <= 1e-3 * grid
+
+
+def test_batched_designs_each_stop_on_their_own():
+    rng = np.random.default_rng(7)
+    robots = [random_robot(rng, 2), random_robot(rng, 2)]
+    batch = sa.stack_robots(robots)
+    together = averages.joint_average_manipulability(batch)
+    for i, robot in enumerate(robots):
+        alone = averages.joint_average_manipulability(robot)
+        np.testing.assert_allclose(float(together.value[i]), float(alone.value), rtol=1e-13)
+        assert int(together.samples[i]) == int(alone.samples)
+
+
+def _finite_difference(f, robot, field, h):
+    def shifted(delta):
+        return robot.replace(**{field: jnp.asarray(getattr(robot, field)) + delta})
+
+    return (f(shifted(h)) - f(shifted(-h))) / (2 * h)
+
+
+def test_gradient_matches_finite_differences_planar():
+    robot = sa.umetani1990()
+    options = dict(rtol=1e-15, min_samples=2**13, max_samples=2**13)
+
+    def mean(r):
+        return averages.joint_average_manipulability(r, **options).value
+
+    grad = jax.grad(mean)(robot)
+    fd = _finite_difference(mean, robot, "base_mass", 1e-2)
+    np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-6)
+    e = jnp.zeros(2).at[1].set(1.0)
+    fd = (mean(robot.replace(link_a=robot.link_a + 1e-5 * e)) - mean(robot.replace(link_a=robot.link_a - 1e-5 * e))) / 2e-5
+    np.testing.assert_allclose(float(grad.link_a[1]), float(fd), rtol=1e-6)
+
+
+def test_spatial_averages_and_gradient():
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    options = dict(rtol=1e-15, min_samples=2**12, max_samples=2**12)
+
+    def mean(r):
+        return averages.joint_average_manipulability(r, **options).value
+
+    value, grad = jax.value_and_grad(mean)(robot)
+    assert value > 0
+    fd = _finite_difference(mean, robot, "base_mass", 1e-2)
+    np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-6)
+    e = jnp.zeros(3).at[2].set(1.0)
+    fd = (mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e)) - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))) / 2e-6
+    np.testing.assert_allclose(float(grad.mount_xyz[2]), float(fd), rtol=1e-5)
+    # The public dispatch returns the estimate with its error for spatial robots.
+    estimate = averages.average_manipulability(robot, rtol=1e-3)
+    assert float(estimate.relative_error) <= 1e-3
+
+
+@pytest.mark.parametrize("metric", ["conditioning", "base_disturbance", "dynamic_manipulability"])
+def test_other_averages_are_differentiable(metric):
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    options = dict(rtol=1e-15, min_samples=2**11, max_samples=2**11, block=256)
+
+    def mean(r):
+        return averages.joint_average(r, metric, **options).value
+
+    value, grad = jax.value_and_grad(mean)(robot)
+    assert np.isfinite(float(value)) and float(value) > 0
+    fd = _finite_difference(mean, robot, "base_mass", 1e-2)
+    np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-5)
+    e = jnp.zeros(3).at[0].set(1.0)
+    fd = (mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e)) - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))) / 2e-6
+    np.testing.assert_allclose(float(grad.mount_xyz[0]), float(fd), rtol=1e-5, atol=1e-9 * abs(float(value)))
+
+
+def test_dynamic_manipulability_needs_a_spatial_robot():
+    with pytest.raises(sa.ConfigError, match="spatial"):
+        averages.average_dynamic_manipulability(sa.umetani1990())

@@ -1,0 +1,90 @@
+"""Workspaces by search over the joint box (issue 17, item 1), checked on the planar closed forms."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import spacearm as sa
+from spacearm.analysis import singularities, spatial_workspaces as sw, workspaces
+
+from .conftest import random_robot
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_reachable_radii_match_planar_closed_forms(n):
+    robot = sa.umetani1990() if n == 2 else random_robot(np.random.default_rng(11), 3)
+    radii = sw.reachable_radii(robot)
+    np.testing.assert_allclose(float(radii.outer), float(workspaces.maximum_reachable_radius(robot)), rtol=1e-10)
+    assert abs(float(radii.inner) - float(workspaces.maximum_reachable_inner_radius(robot))) < 1e-8
+
+
+def test_reachable_radius_gradient_is_the_envelope():
+    robot = sa.umetani1990()
+    grad = jax.grad(lambda r: sw.reachable_radii(r).outer)(robot)
+    exact = jax.grad(lambda r: workspaces.maximum_reachable_radius(r))(robot)
+    for field in ("base_mass", "base_attach", "link_mass", "link_a", "link_b"):
+        np.testing.assert_allclose(np.asarray(getattr(grad, field)), np.asarray(getattr(exact, field)), rtol=1e-7, atol=1e-12)
+
+
+def test_public_dispatch_keeps_the_planar_closed_form():
+    robot = sa.umetani1990()
+    assert float(sw.maximum_reachable_radius(robot)) == float(workspaces.maximum_reachable_radius(robot))
+
+
+@pytest.mark.parametrize("seed", [None, 3])
+def test_singular_radii_match_planar_references(seed):
+    robot = sa.umetani1990() if seed is None else random_robot(np.random.default_rng(seed), 2)
+    dynamic, joints = sw.singular_radius(robot, "generalized")
+    np.testing.assert_allclose(float(dynamic), float(singularities.path_independent_radius(robot)), rtol=1e-8)
+    assert abs(float(sw.singularity_measure(robot, joints))) < 1e-10
+    kinematic, _ = sw.singular_radius(robot, "fixed_base")
+    np.testing.assert_allclose(float(kinematic), float(workspaces.kinematic_singularity_radius(robot)), rtol=1e-8)
+
+
+def test_singular_postures_lie_on_the_dynamic_set():
+    robot = sa.umetani1990()
+    postures = sw.singular_postures(robot)
+    on = np.asarray(postures.on_set)
+    assert on.mean() > 0.9
+    phi = jnp.concatenate([jnp.zeros((on.sum(), 1)), postures.joints[on]], axis=-1)
+    det = np.asarray(jnp.linalg.det(sa.generalized_jacobian(robot, phi)))
+    assert np.max(np.abs(det)) < 1e-9
+
+
+def test_spatial_guaranteed_workspace_is_ordered():
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    g = sw.guaranteed_workspace(robot)
+    assert 0 <= float(g.inner) < float(g.path_independent) < float(g.outer)
+    assert float(g.kinematic) < float(g.outer)
+    # No sampled posture reaches farther than the searched outer radius, or nearer than the inner one.
+    q = np.random.default_rng(0).uniform(np.asarray(robot.joint_lower), np.asarray(robot.joint_upper), (20000, 3))
+    r = np.linalg.norm(np.asarray(sa.tip_position(robot, q)), axis=-1)
+    assert r.max() <= float(g.outer) + 1e-9 and r.min() >= float(g.inner) - 1e-9
+    assert r.max() > float(g.outer) - 0.02
+
+
+def test_icosphere_directions():
+    d = sw.icosphere_directions(4)
+    assert d.shape == (2562, 3)
+    np.testing.assert_allclose(np.linalg.norm(d, axis=-1), 1.0, rtol=1e-14)
+    cos = d @ d.T - 2 * np.eye(len(d))
+    nearest = np.arccos(np.clip(cos.max(axis=1), -1, 1))
+    assert nearest.max() / nearest.min() < 1.3  # nearly uniform
+
+
+def test_straight_path_workspace_ends_on_lines_and_outside_the_path_independent_sphere():
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    area4 = sw.spatial_straight_path_workspace(robot, np.array([0.3, 0.5, 1.2]), subdivisions=1)
+    d = np.asarray(area4.directions)
+    travel = np.asarray(area4.ends) - np.asarray(area4.start)
+    along = np.sum(travel * d, axis=-1)
+    np.testing.assert_allclose(along, np.asarray(area4.lengths), rtol=1e-9, atol=1e-12)
+    assert np.max(np.linalg.norm(travel - along[:, None] * d, axis=-1)) < 1e-9
+    singular = np.asarray(area4.reasons) == 0
+    assert singular.sum() > 0
+    # Paths that stop at a dynamic singularity stop on a singular tip, never inside the
+    # singularity-free sphere found by the independent search over the singular set.
+    radius, _ = sw.singular_radius(robot, "generalized")
+    ends = np.linalg.norm(np.asarray(area4.ends)[singular], axis=-1)
+    assert ends.min() >= float(radius) - 1e-6
