@@ -395,7 +395,28 @@ def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, d
     on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= postures.tolerance
     radii = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, q)), jnp.inf)
     k = jnp.argmin(radii)
-    return radii[k], q[k]
+    best = q[k]
+    # Joints resting on a limit follow the limit (a design leaf); the others stay put.
+    span = upper - lower
+    at_lower = ~wraps & (best <= lower + 1e-6 * span)
+    at_upper = ~wraps & (best >= upper - 1e-6 * span)
+    posture = jnp.where(at_upper, upper, jnp.where(at_lower, lower, best))
+    value = jnp.sqrt(_tip_radius_sq(robot, posture))
+    if best.shape[-1] == family_of(robot).translational_rows:
+        # A minimum of |tip| on the hypersurface s = 0 moves with the design: by the
+        # envelope theorem for the constrained minimum, d radius / d design =
+        # d r / d design - lambda d s / d design at the fixed posture, with the Lagrange
+        # multiplier lambda = (grad_F r . grad_F s) / |grad_F s|^2 over the free joints F
+        # (stationarity grad_F r = lambda grad_F s; the joints on a limit carry their own
+        # multipliers, accounted for by moving them with the limit above). The value is
+        # unchanged (s = 0 at the posture to rounding).
+        free = ~(at_lower | at_upper)
+        grad_r = jnp.where(free, jax.grad(lambda x: jnp.sqrt(_tip_radius_sq(robot, x)))(best), 0.0)
+        grad_s = jnp.where(free, jax.grad(lambda x: singularity_measure(robot, x, jacobian))(best), 0.0)
+        multiplier = jax.lax.stop_gradient(jnp.dot(grad_r, grad_s) / jnp.maximum(jnp.dot(grad_s, grad_s), 1e-300))
+        constraint = singularity_measure(robot, posture, jacobian)
+        value = value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
+    return jnp.where(jnp.isfinite(radii[k]), value, jnp.inf), best
 
 
 def singular_radius(
@@ -424,8 +445,11 @@ def singular_radius(
     Returns:
         ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
         ``inf`` when no sampled posture converged onto the set (none in the box).
-        The radius is differentiable in the design by the envelope theorem only in the
-        sense that the posture is held fixed (a constrained minimum also moves with the set).
+        The radius is differentiable in the design: for a square J_v (n = 3 spatial,
+        n = 2 planar) by the envelope theorem of the constrained minimum (the Lagrange
+        multiplier of s = 0; tested against the planar closed form); for redundant arms
+        only with the singular posture held fixed (the motion of the set is not
+        included). Joints at a limit at the minimum move with the limit.
     """
     postures = singular_postures(robot, jacobian, samples=samples, keep=keep, seed=seed)
     return _closest_singular(robot, postures, jacobian, candidates, descent_steps, newton_steps)
