@@ -204,6 +204,9 @@ def base_rate_matrix(robot, posture: jax.Array) -> jax.Array:
         family's base twist coordinates per joint rate, bus axes.
     """
     family = family_of(robot)
+    fast = family.fast_paths.get("base_rate_matrix")
+    if fast is not None:
+        return fast(robot, posture)
     return map_leading(lambda p: _base_matrix_one(family, robot, p), posture, core_ndims=(1,))
 
 

@@ -12,7 +12,7 @@ import itertools
 import jax
 import jax.numpy as jnp
 
-__all__ = ["gram_determinant", "gram_root_determinant", "square_determinant", "adjugate"]
+__all__ = ["gram_determinant", "gram_root_determinant", "square_determinant", "adjugate", "symmetric_eigenvalues"]
 
 
 def gram_determinant(J: jax.Array) -> jax.Array:
@@ -65,3 +65,36 @@ def adjugate(A: jax.Array) -> jax.Array:
         rows = [jnp.cross(A[:, (i + 1) % 3], A[:, (i + 2) % 3]) for i in range(3)]
         return jnp.stack(rows)  # row i of adj(A) = column (i+1) x column (i+2)
     raise ValueError(f"straight paths need 1 to 3 task rows, got {t}")
+
+
+def symmetric_eigenvalues(S: jax.Array) -> jax.Array:
+    """Eigenvalues of symmetric ``(..., t, t)`` matrices, t <= 3, ascending, in closed form.
+
+    The characteristic polynomial solved directly (the trigonometric form of the cubic
+    for t = 3), so no LAPACK call runs per posture: cheaper under ``vmap`` for these
+    sizes, and free of the two-device hang of LAPACK custom calls seen with
+    jaxlib 0.10.2 on CPU (benchmarks/repro_two_device_hang.py). Accurate to a few ulps of
+    the largest eigenvalue.
+    """
+    t = S.shape[-1]
+    if t == 1:
+        return S[..., 0:1, 0]
+    if t == 2:
+        a, b, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]
+        mean, half = 0.5 * (a + d), jnp.sqrt(0.25 * (a - d) ** 2 + b * b)
+        return jnp.stack([mean - half, mean + half], axis=-1)
+    if t != 3:
+        return jnp.linalg.eigvalsh(S)
+    q = (S[..., 0, 0] + S[..., 1, 1] + S[..., 2, 2]) / 3.0
+    off = S[..., 0, 1] ** 2 + S[..., 0, 2] ** 2 + S[..., 1, 2] ** 2
+    diag = (S[..., 0, 0] - q) ** 2 + (S[..., 1, 1] - q) ** 2 + (S[..., 2, 2] - q) ** 2
+    p = jnp.sqrt((diag + 2.0 * off) / 6.0)
+    safe_p = jnp.where(p > 0, p, 1.0)
+    B = (S - q[..., None, None] * jnp.eye(3, dtype=S.dtype)) / safe_p[..., None, None]
+    r = jnp.clip(0.5 * square_determinant(B), -1.0, 1.0)
+    phi = jnp.arccos(r) / 3.0
+    largest = q + 2.0 * p * jnp.cos(phi)
+    smallest = q + 2.0 * p * jnp.cos(phi + 2.0 * jnp.pi / 3.0)
+    middle = 3.0 * q - largest - smallest
+    values = jnp.stack([smallest, middle, largest], axis=-1)
+    return jnp.where((p > 0)[..., None], values, q[..., None])

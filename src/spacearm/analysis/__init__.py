@@ -1,10 +1,11 @@
 """Workspaces, singular sets, areas, averaged metrics and maps (sections 3-5 of the paper)."""
 
 from .manipulability_average import (
-    average_manipulability as average_manipulability,
     fixed_base_average_manipulability as fixed_base_average_manipulability,
     check_average_options as check_average_options,
 )
+from .averages import average_manipulability as average_manipulability
+from .spatial_workspaces import maximum_reachable_radius as maximum_reachable_radius
 from .manipulability_maps import (
     check_single_design as check_single_design,
     joint_grid as joint_grid,
@@ -19,7 +20,6 @@ from .workspaces import (
     fixed_vehicle_center as fixed_vehicle_center,
     attitude_constraint as attitude_constraint,
     attitude_constraint_inner_radius as attitude_constraint_inner_radius,
-    maximum_reachable_radius as maximum_reachable_radius,
     maximum_reachable_inner_radius as maximum_reachable_inner_radius,
     guaranteed_radius as guaranteed_radius,
     kinematic_singularity_radius as kinematic_singularity_radius,

@@ -1,15 +1,15 @@
 """Averages of posture metrics over the joint box, with error estimates (issue 17, item 2).
 
 Each average is the mean of a per-posture metric under the uniform measure on the joint
-box (:mod:`.joint_box`: limits where given, one turn for a continuous joint):
+box (`joint_box`: limits where given, one turn for a continuous joint):
 
-- :func:`average_manipulability`: translational w* = sqrt det(J*_v J*_v^T), m^3
+- `average_manipulability`: translational w* = sqrt det(J*_v J*_v^T), m^3
   (eq. 10 in 3-D; planar robots keep the paper's eq. 12, normalized by L^2);
-- :func:`global_conditioning_index`: 1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]
+- `global_conditioning_index`: 1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]
   (Gosselin & Angeles 1991, over the joint box instead of the workspace);
-- :func:`average_base_disturbance`: ||C_w||_F, the Frobenius norm of the angular rows of
+- `average_base_disturbance`: ||C_w||_F, the Frobenius norm of the angular rows of
   C = -I_S^-1 I_M, rad per rad (Dubowsky & Torres 1991's disturbance, as a scalar);
-- :func:`average_dynamic_manipulability`: w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T),
+- `average_dynamic_manipulability`: w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T),
   (m / (kg m^2))^3 for revolute joints: tip acceleration per joint torque (Yoshikawa
   1985 applied to J*, with H* the arm inertia at zero momentum; spatial robots only).
 
@@ -23,7 +23,7 @@ determinant vanishes identically, so w_d uses J*_v, as w* does (and as
 ``models.spatial.dynamic_manipulability``).
 
 Estimator. Randomized quasi-Monte Carlo: R independent digital shifts of one Sobol
-sequence (:mod:`.joint_box`); points come in blocks of B per shift, and after 2^j
+sequence (`joint_box`); points come in blocks of B per shift, and after 2^j
 blocks (a power of two: the points form a net) the estimate is the mean of the R
 shift means and the error estimate their standard error s_R / sqrt(R). Blocks are
 added until error <= rtol |mean| (checked at powers of two) or ``max_samples`` is reached.
@@ -59,11 +59,12 @@ import jax
 import jax.numpy as jnp
 
 from .._core.errors import ConfigError
+from .._core.linalg import symmetric_eigenvalues
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.metrics import dynamic_manipulability
-from . import manipulability_average
+from .manipulability_average import average_manipulability as planar_average_manipulability
 from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
 
 __all__ = [
@@ -115,7 +116,7 @@ def inverse_condition_metric(robot, posture):
     """1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]; 0 at singular postures."""
     J = _translational_jacobian(robot, posture)
     gram = J @ jnp.swapaxes(J, -1, -2)
-    eigenvalues = jnp.linalg.eigvalsh(gram)  # ascending
+    eigenvalues = symmetric_eigenvalues(gram)  # ascending, closed form (no LAPACK per posture)
     ratio = eigenvalues[..., 0] / eigenvalues[..., -1]
     positive = ratio > 0
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, ratio, 1.0)), 0.0)
@@ -265,7 +266,7 @@ def joint_average(
     Args:
         robot: a design of either family, or a batch of designs (leading axes on every
             leaf; each design stops at its own sample count).
-        metric: one of :data:`METRICS` ("manipulability", "conditioning",
+        metric: one of `METRICS` ("manipulability", "conditioning",
             "base_disturbance", "dynamic_manipulability").
         rtol: target relative standard error (one sigma) of the mean.
         randomizations: R independent digital shifts (>= 2; the error estimate has
@@ -277,7 +278,7 @@ def joint_average(
         designs_per_chunk: designs evaluated together under ``lax.map`` for batches.
 
     Returns:
-        :class:`JointAverage` with ``(...)`` fields. ``value`` is differentiable in the
+        `JointAverage` with ``(...)`` fields. ``value`` is differentiable in the
         design (``jax.grad``); under ``vmap`` or ``jit`` it works as well.
     """
     if metric not in METRICS:
@@ -309,14 +310,14 @@ def average_manipulability(robot, **options):
     """The average manipulability of a design, by family (the public ``sa.average_manipulability``).
 
     - Planar robots: the paper's w-bar exactly as before (eq. 12, normalized by L^2;
-      :func:`spacearm.analysis.manipulability_average.average_manipulability`, same
+      `spacearm.analysis.manipulability_average.average_manipulability`, same
       options, same closed-form quadrature), a ``(...)`` array.
     - Spatial robots: the mean translational w* over the joint box, m^3, as a
-      :class:`JointAverage` (value, error, samples) to relative standard error ``rtol``
-      (default 1e-4); options of :func:`joint_average`.
+      `JointAverage` (value, error, samples) to relative standard error ``rtol``
+      (default 1e-4); options of `joint_average`.
     """
     if isinstance(robot, PlanarRobot):
-        return manipulability_average.average_manipulability(robot, **options)
+        return planar_average_manipulability(robot, **options)
     return joint_average(robot, "manipulability", **options)
 
 

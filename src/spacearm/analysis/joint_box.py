@@ -9,7 +9,7 @@ The joint box of a design is the product of its joint ranges:
   turn from its lower limit: every posture appears once, and every kinematic quantity
   is periodic in a revolute angle, so averages and extremes are the same as over the
   full range;
-- a prismatic joint must have finite limits (:class:`~spacearm.ConfigError` otherwise).
+- a prismatic joint must have finite limits (`ConfigError` otherwise).
 
 The box is written for any robot family (planar postures get phi0 = 0 in front,
 ``family.posture_offset``). The limits are design leaves: averages and extremes over
@@ -86,7 +86,7 @@ def sobol_points(directions: jax.Array, start, count: int, shift: jax.Array) -> 
     """Digitally shifted Sobol points of indices ``start .. start + count - 1`` (natural order).
 
     Args:
-        directions: ``(d, 32)`` uint32 from :func:`sobol_direction_numbers`.
+        directions: ``(d, 32)`` uint32 from `sobol_direction_numbers`.
         start: first index (a traced integer is fine).
         count: number of points (static).
         shift: ``(..., d)`` uint32 digital shifts (one row per randomization).
@@ -125,7 +125,7 @@ def joint_box(robot) -> tuple[jax.Array, jax.Array]:
     """``(lower, upper)``, each ``(..., n)``: the box the joint-uniform measure covers.
 
     Revolute joints: free ones [-pi, pi), wider ones one turn from the lower limit;
-    prismatic joints: their limits (m), which must be finite (:func:`check_joint_box`).
+    prismatic joints: their limits (m), which must be finite (`check_joint_box`).
     """
     revolute = jnp.asarray(periodic_joints(robot))
     lower = jnp.asarray(robot.joint_lower)
@@ -137,7 +137,7 @@ def joint_box(robot) -> tuple[jax.Array, jax.Array]:
 
 
 def check_joint_box(robot) -> None:
-    """Raise :class:`ConfigError` naming the joint when a prismatic joint has an infinite limit.
+    """Raise `ConfigError` naming the joint when a prismatic joint has an infinite limit.
 
     Skipped under tracing (the limits are then unknown); an infinite prismatic range
     would give NaN there.

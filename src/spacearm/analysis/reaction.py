@@ -6,18 +6,18 @@ the reaction null space (Nenchev, Umetani & Yoshida, IEEE TRA 8(1), 1992; flown 
 ETS-VII, Yoshida, Hashizume & Abiko, ICRA 2001), of dimension n - 3 for an arm with
 n > 3 joints where C_w has full rank.
 
-- :func:`reaction_null_space`: an orthonormal basis of ker C_w(q);
-- :func:`disturbance`, :func:`disturbance_map`: ||C_w(q) u|| for unit joint rates u,
+- `reaction_null_space`: an orthonormal basis of ker C_w(q);
+- `disturbance`, `disturbance_map`: ||C_w(q) u|| for unit joint rates u,
   its extreme values over u (the singular values of C_w) and the least-disturbing
   direction (the right singular vector of the smallest one; Dubowsky & Torres, ICRA
   1991), over any batch of postures (e.g. a joint grid);
-- :func:`reaction_free_tip_path`: a straight tip translation with zero bus rotation:
+- `reaction_free_tip_path`: a straight tip translation with zero bus rotation:
   q' solves [C_w; J*_v] q' = [0; R0^T d] (minimum norm for n > 6; least squares, with
   the tip residual reported, where the null space cannot produce the direction, n < 6).
   The bus attitude then stays R0, so the bus-frame direction is constant; the path is
   integrated in the tip distance with fixed DOP853 steps, and the reached bus rotation
   is measured independently by running the sampled joint path through the SO(3)
-  integrator (:func:`spacearm.motion.integrate_joint_path`).
+  integrator (`spacearm.motion.integrate_joint_path`).
 
 Everything is batched over leading axes and written for one posture under ``vmap``.
 """
@@ -103,7 +103,7 @@ class DisturbanceMap:
 def disturbance_map(robot: SpatialRobot, q: jax.Array) -> DisturbanceMap:
     """Extremes of ||C_w(q) u|| over unit joint rates u (Dubowsky & Torres 1991), ``q (..., n)``.
 
-    Over a joint grid (e.g. :func:`numpy.meshgrid` of two joints, the others fixed) this is
+    Over a joint grid (e.g. `numpy.meshgrid` of two joints, the others fixed) this is
     the disturbance map; the least-disturbing direction is the right singular vector of
     the smallest singular value of C_w.
     """
@@ -201,7 +201,7 @@ def reaction_free_tip_path(
         steps: fixed DOP853 steps in the tip distance (static).
 
     Returns:
-        :class:`ReactionFreePath` with the broadcast batch shape.
+        `ReactionFreePath` with the broadcast batch shape.
     """
     n = robot.n_joints
     if n < 4:

@@ -27,8 +27,8 @@ below is a spherical shell (planar: an annulus) described by radii.
   the analogue of eq. (8): the same search over the *kinematic* singular set (the
   fixed-base J_v losing rank), the paper's argument. For a planar two-link arm the
   kinematic value is min(|K0 - (K1 + K2)|, |K0 - |K1 - K2||) (eq. 8 and its folded
-  branch, :func:`~spacearm.analysis.workspaces.kinematic_singularity_radius`), and
-  the dynamic one :func:`~spacearm.analysis.singularities.path_independent_radius`.
+  branch, `kinematic_singularity_radius`), and
+  the dynamic one `path_independent_radius`.
 
 Every search here is single-design (``vmap`` it for batches; the options are static).
 """
@@ -47,7 +47,8 @@ from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_deter
 from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
 from ..motion.spatial_paths import spatial_straight_tip_path
-from . import workspaces
+from .workspaces import maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius
+from .workspaces import maximum_reachable_radius as planar_maximum_reachable_radius
 from .joint_box import box_postures, check_joint_box, digital_shifts, joint_box, periodic_joints, sobol_direction_numbers, sobol_points
 
 __all__ = [
@@ -209,7 +210,7 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
             unit-box coordinates).
 
     Returns:
-        :class:`ReachableRadii`. For planar arms without limits the radii equal the
+        `ReachableRadii`. For planar arms without limits the radii equal the
         closed forms K0+..+Kn and max(0, 2 max K - sum K) (tests/test_spatial_workspaces.py).
     """
     check_joint_box(robot)
@@ -220,17 +221,17 @@ def maximum_reachable_radius(robot, **options) -> jax.Array:
     """Area 3's outer radius about the system centroid, m (the public ``sa.maximum_reachable_radius``).
 
     Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)), exactly as before.
-    Spatial robots: the largest |tip| over the joint box, by :func:`reachable_radii`.
+    Spatial robots: the largest |tip| over the joint box, by `reachable_radii`.
     """
     if isinstance(robot, PlanarRobot):
-        return workspaces.maximum_reachable_radius(robot)
+        return planar_maximum_reachable_radius(robot)
     return reachable_radii(robot, **options).outer
 
 
 def maximum_reachable_inner_radius(robot, **options) -> jax.Array:
     """Area 3's hole (smallest |tip| over the joint box), m; planar: the closed form."""
     if isinstance(robot, PlanarRobot):
-        return workspaces.maximum_reachable_inner_radius(robot)
+        return planar_maximum_reachable_inner_radius(robot)
     return reachable_radii(robot, **options).inner
 
 
@@ -360,7 +361,7 @@ def singular_postures(
 
     ``samples`` Sobol points of the joint box; the ``keep`` with the smallest |s| are
     moved onto s = 0 by ``newton_steps`` Newton projections (see
-    :func:`singularity_measure`). Rows with ``on_set`` False did not converge (for
+    `singularity_measure`). Rows with ``on_set`` False did not converge (for
     example where the set meets a joint limit); discard them.
     """
     check_joint_box(robot)
@@ -466,7 +467,7 @@ def guaranteed_workspace(robot, **options) -> GuaranteedWorkspace:
     set bulges inwards: Table 1, 2.5 m against 1.0 m).
 
     Args:
-        options: passed to :func:`singular_radius` (sampling and refinement).
+        options: passed to `singular_radius` (sampling and refinement).
     """
     reach = reachable_radii(robot)
     dynamic, _ = singular_radius(robot, "generalized", **options)
@@ -524,7 +525,7 @@ class StraightPathWorkspace:
         ends: ``(k, 3)`` tip where each path ended (the boundary of Area 4), m.
         lengths: ``(k,)`` distance travelled along each direction, m.
         reasons: ``(k,)`` int32 why each path ended (0 singular, 1 max_length, 2 joint
-            limit, 3 step budget; :class:`~spacearm.motion.spatial_paths.SpatialStraightPath`).
+            limit, 3 step budget; `SpatialStraightPath`).
     """
 
     directions: jax.Array
@@ -541,7 +542,7 @@ def spatial_straight_path_workspace(
 
     From ``q_start`` the tip moves along each of the 10 4^k + 2 icosphere directions
     (k = ``subdivisions``; 2,562 for k = 4) until J*_v loses rank, a joint limit or
-    ``max_length`` (:func:`~spacearm.motion.spatial_paths.spatial_straight_tip_path`,
+    ``max_length`` (`spatial_straight_tip_path`,
     the bus attitude integrated with the joints); the end points bound the
     star-shaped set reachable by straight lines from the start.
 

@@ -2,7 +2,7 @@
 
 Every command is a module here with ``register(subparsers)`` (its arguments and help,
 importing nothing heavy) and ``run(args)`` (which imports the library layers it needs),
-named in :data:`COMMANDS`. Building the parser imports only these light modules, so
+named in `COMMANDS`. Building the parser imports only these light modules, so
 ``spacearm --help`` loads neither optax nor the design or studies layers; a command's
 library layers are imported when it runs.
 
@@ -82,6 +82,6 @@ def _draw_into_files() -> None:
 
 
 def console_main() -> int:
-    """The ``spacearm`` console script: :func:`main` with one JAX device per CPU core."""
+    """The ``spacearm`` console script: `main` with one JAX device per CPU core."""
     use_every_cpu_core()
     return main()

@@ -1,7 +1,7 @@
 """``spacearm validate FILE``: check a robot, sweep or design-problem file as a run would.
 
 Each kind is checked by the loader its run uses (the robot families' schema,
-:func:`spacearm.studies.spec.load_sweep`, :func:`spacearm.design.problem.load_problem`),
+`spacearm.studies.spec.load_sweep`, `spacearm.design.problem.load_problem`),
 so a file that validates is one a run accepts.
 """
 

@@ -5,24 +5,24 @@ distance b0 raises the average manipulability w-bar (eq. 12) and shrinks the Gua
 Workspace (eq. 8), so "careful trade-off is necessary". This package makes the
 trade-off computable.
 
-* A :class:`DesignProblem` declares design variables with bounds (YAML), holds the
+* A `DesignProblem` declares design variables with bounds (YAML), holds the
   fixed quantities (total reach L, total mass, base radius of gyration) through its
-  parametrization :meth:`DesignProblem.robot`, and maps a variable vector to a
-  :class:`~spacearm.models.planar.PlanarRobot` whose leaves are all traced, so every objective
+  parametrization `DesignProblem.robot`, and maps a variable vector to a
+  `PlanarRobot` whose leaves are all traced, so every objective
   is differentiable with respect to every variable.
 * Objectives (all maximized): ``wbar`` (eq. 12, from
-  :func:`spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
-  pi L^2, see :func:`guaranteed_area`) and ``S_M`` (maximum reachable space).
-* :func:`pareto_search` optimizes many smoothed Chebyshev scalarizations at once: one
+  `spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
+  pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space).
+* `pareto_search` optimizes many smoothed Chebyshev scalarizations at once: one
   optax optimizer (projected Adam on the unit box) vmapped over directions x starts,
   jitted in chunks of steps. Every evaluated design is archived; the front is the
-  non-dominated subset of the archive (:func:`nondominated`) and its quality is the
-  exact 2-D hypervolume (:func:`hypervolume_2d`).
+  non-dominated subset of the archive (`nondominated`) and its quality is the
+  exact 2-D hypervolume (`hypervolume_2d`).
 * Baselines measured with the same objective code: a dense grid
-  (:func:`grid_search`) and NSGA-II from pymoo (:func:`nsga2_search`).
-* :func:`run_problem` runs the problem and its baselines and writes ``pareto.csv``,
+  (`grid_search`) and NSGA-II from pymoo (`nsga2_search`).
+* `run_problem` runs the problem and its baselines and writes ``pareto.csv``,
   ``summary.json`` and the manifest; ``spacearm optimize FILE [--out DIR]`` adds three
-  figures (:mod:`spacearm.figures.design`).
+  figures (`spacearm.figures.design`).
 
 Modules: ``problem`` (variables, parametrization, YAML), ``objectives``, ``fronts``
 (non-dominated sets, hypervolume), ``search`` (the gradient search), ``baselines``

@@ -81,7 +81,7 @@ def hypervolume_2d(objectives: np.ndarray, reference: Sequence[float] = (0.0, 0.
 def hypervolume(objectives: np.ndarray, reference: Sequence[float]) -> float:
     """Exact hypervolume of a point set (all objectives maximized) above ``reference``.
 
-    Two objectives: :func:`hypervolume_2d`. Three or more: moocore's exact algorithms
+    Two objectives: `hypervolume_2d`. Three or more: moocore's exact algorithms
     (``moocore.hypervolume``, a maintained C library; pip install moocore, in the
     ``optimize`` extra).
 

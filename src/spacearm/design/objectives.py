@@ -54,9 +54,9 @@ def objective(name: str, *, wbar_options: Mapping[str, Any] | None = None,
     """The objective ``name`` as ``f(robot) -> scalar`` (options checked by the problem's loader).
 
     Args:
-        name: one of :data:`OBJECTIVES`.
-        wbar_options: keyword arguments of :func:`spacearm.analysis.average_manipulability`.
-        clamp_guaranteed: see :func:`guaranteed_area`.
+        name: one of `OBJECTIVES`.
+        wbar_options: keyword arguments of `spacearm.analysis.average_manipulability`.
+        clamp_guaranteed: see `guaranteed_area`.
     """
     if name == "wbar":
         options = dict(wbar_options or {})

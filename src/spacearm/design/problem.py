@@ -1,7 +1,7 @@
 """A design problem: variables with bounds, the fixed quantities, the parametrization, and
 its YAML file (see ``sweeps/pareto-attachment.yaml``).
 
-:func:`load_problem` checks everything a run uses (every section, every option of the
+`load_problem` checks everything a run uses (every section, every option of the
 w-bar quadrature, the baselines), so ``spacearm validate`` refuses what a run would.
 """
 
@@ -51,7 +51,7 @@ class Variable:
 
 @dataclasses.dataclass(frozen=True)
 class SearchSettings:
-    """Settings of :func:`pareto_search` (see its docstring)."""
+    """Settings of `pareto_search` (see its docstring)."""
 
     directions: int = 64
     starts: int = 2
@@ -97,8 +97,8 @@ class DesignProblem:
         variables: the optimized variables, in column order.
         objectives: objective names, all maximized.
         reference_point: hypervolume reference point, one value per objective.
-        wbar_options: keyword arguments for :func:`spacearm.analysis.average_manipulability`.
-        clamp_guaranteed: see :func:`guaranteed_area`.
+        wbar_options: keyword arguments for `spacearm.analysis.average_manipulability`.
+        clamp_guaranteed: see `guaranteed_area`.
     """
 
     name: str
@@ -137,10 +137,10 @@ class DesignProblem:
         """The design for one variable vector.
 
         Args:
-            x: ``(d,)`` variable values in :attr:`variables` order (physical units).
+            x: ``(d,)`` variable values in `variables` order (physical units).
 
         Returns:
-            A :class:`PlanarRobot` built without validation (leaves may be tracers);
+            A `PlanarRobot` built without validation (leaves may be tracers);
             vmap this method for a batch.
         """
         x = jnp.asarray(x)
@@ -224,7 +224,7 @@ def variable_names_for(n_links: int) -> tuple[str, ...]:
 
 
 def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") -> DesignProblem:
-    """Build a :class:`DesignProblem` from its YAML mapping (see ``sweeps/pareto-attachment.yaml``).
+    """Build a `DesignProblem` from its YAML mapping (see ``sweeps/pareto-attachment.yaml``).
 
     Checks every section a run uses, so a problem that loads also runs.
 
@@ -325,7 +325,7 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
 
 
 def parse_search(source: str, search_map: Any) -> SearchSettings:
-    """The ``search:`` section of a problem file as :class:`SearchSettings` (checked)."""
+    """The ``search:`` section of a problem file as `SearchSettings` (checked)."""
     search_map = search_map or {}
     if not isinstance(search_map, Mapping):
         raise ConfigError(f"{source}: search: must be a mapping")

@@ -1,8 +1,8 @@
 """The whole optimization run: the gradient search and the declared baselines, compared,
-with the fronts, a summary and the manifest written atomically through :mod:`spacearm.io`.
+with the fronts, a summary and the manifest written atomically through `spacearm.io`.
 
 Figures are drawn by the caller (``spacearm optimize`` passes
-:func:`spacearm.figures.design.plot_results` as an output); this layer draws nothing.
+`spacearm.figures.design.plot_results` as an output); this layer draws nothing.
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, baselines
     Cost of a value-and-gradient in values (``value_and_gradient_cost_ratio``): with
     ``cost_ratio="search"`` (default) the quotient of the per-design times of the
     fastest value call and the fastest chunk of gradient steps the search ran anyway;
-    with ``"measured"``, :func:`value_and_grad_cost_ratio` times both on one batch
+    with ``"measured"``, `value_and_grad_cost_ratio` times both on one batch
     (best of 5), at the price of compiling a gradient program of its own.
 
     Returns:

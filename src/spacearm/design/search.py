@@ -3,7 +3,7 @@ projected Adam (optax), every evaluated design archived.
 
 Counting evaluations: one *evaluation* is one design's objective vector. The
 gradient search evaluates value and gradient together; each counts as one
-evaluation in ``evaluations``, and :func:`value_and_grad_cost_ratio` measures the cost
+evaluation in ``evaluations``, and `value_and_grad_cost_ratio` measures the cost
 of a value-and-gradient relative to a value, so the counts compare honestly with the
 value-only baselines.
 """
@@ -188,7 +188,7 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     3. The steps run in jitted chunks of ``chunk`` steps (compiled once, same shapes
        every call). After each chunk the ideal point and scales are re-read from the
        archive and, with ``reaim``, the rays are re-aimed at points evenly spaced by
-       arc length along the current front (:func:`_front_rays`); the first start of
+       arc length along the current front (`_front_rays`); the first start of
        each direction restarts from the archived design nearest its new target, the
        other starts continue their own trajectories. Rays then follow the front's
        shape, so a flat or a steep stretch of the front gets its share of points, and
@@ -204,7 +204,7 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     gradient for free); the front is the non-dominated part of the archive.
 
     Returns:
-        A :class:`SearchResult` with every evaluated design in order.
+        A `SearchResult` with every evaluated design in order.
     """
     settings = settings or problem.search
     objective = problem.objective_function()

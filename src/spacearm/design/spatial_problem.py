@@ -12,7 +12,7 @@ reference_point: [0.0, 0.0, -1.0]
 average: {samples: 2048, randomizations: 8, seed: 0}   # one fixed QMC rule for every design
 ```
 
-The averages are :func:`spacearm.analysis.averages.joint_average` with a fixed sample
+The averages are `spacearm.analysis.averages.joint_average` with a fixed sample
 count (``min_samples = max_samples``): the same randomized-QMC points for every design,
 so each objective is a smooth, deterministic function of the design and its gradient is
 exact for that rule (an adaptive sample count would make it jump where the count changes).
@@ -62,7 +62,7 @@ class SpatialDesignProblem:
         base: the robot file's design; variables not optimized keep its values.
         robot_file: the robot file, as named in the problem file.
         variables: design fields with bounds (field units: m, rad, kg or a factor).
-        objectives: names from :data:`SPATIAL_OBJECTIVES`, all maximized.
+        objectives: names from `SPATIAL_OBJECTIVES`, all maximized.
         reference_point: hypervolume reference point, one value per objective.
         samples, randomizations, seed: the fixed QMC rule of every average.
     """
@@ -132,7 +132,7 @@ class SpatialDesignProblem:
 
 def spatial_problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
                                  base_dir: str | os.PathLike = ".") -> SpatialDesignProblem:
-    """Build a :class:`SpatialDesignProblem` from its YAML mapping; checks every section.
+    """Build a `SpatialDesignProblem` from its YAML mapping; checks every section.
 
     Raises:
         ConfigError: naming the field and the reason.

@@ -1,8 +1,8 @@
 """The paper's figures and ours, one module per family, gathered by a registry.
 
 A figure function takes the output folder and returns the paths it wrote. Modules
-register their figures with :func:`figure`; ``spacearm figures`` imports every module
-in :data:`FIGURE_MODULES` and runs them all.
+register their figures with `figure`; ``spacearm figures`` imports every module
+in `FIGURE_MODULES` and runs them all.
 """
 
 from __future__ import annotations

@@ -74,7 +74,7 @@ def _equal(ax, points):
 
 
 def demo_loop(segments: int = 16) -> np.ndarray:
-    """``(segments + 1, n)`` a closed loop through :data:`LOOP_START` (pan, shoulder and elbow; wrists still)."""
+    """``(segments + 1, n)`` a closed loop through `LOOP_START` (pan, shoulder and elbow; wrists still)."""
     s = np.linspace(0.0, 1.0, segments + 1)
     loop = np.repeat(LOOP_START[None], segments + 1, axis=0)
     loop[:, 1] += 0.6 * (np.cos(2 * np.pi * s) - 1.0)
@@ -174,7 +174,7 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
 
 
 def draw_spatial_reach(robot, q_start, plan, path, *, base_rotation=None, samples: int = 16) -> Path:
-    """Draw a :class:`~spacearm.planning.spatial_reach.SpatialReachPlan` in 3-D (for ``spacearm reach``).
+    """Draw a `SpatialReachPlan` in 3-D (for ``spacearm reach``).
 
     The arm at the start, after the bus-turning loop (joints back at q0, bus turned) and
     at the end; the tip along the loop and along the final straight path (sampled by

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
-from .. import results
+from ..io import save_figure
 from ..analysis.spatial_workspaces import guaranteed_workspace, singular_postures, singularity_measure
 from ..analysis.joint_box import joint_box
 from ..kinematics import manipulability, tip_position
@@ -40,7 +40,7 @@ def _config_path(name: str) -> Path:
 
 
 def _save(fig, path: Path) -> Path:
-    return results.save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+    return save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
 
 
 def _shell(ax, radius, **style):

@@ -28,8 +28,8 @@ product of the rotations is a balanced tree of 3x3 products (depth log2 of the s
 count). The public entry points flatten paths, start attitudes and designs into one
 batch inside one ``jit``.
 
-SO(3) helpers: :func:`hat`, :func:`vee`, :func:`expm` (Rodrigues), :func:`log`,
-:func:`geodesic_distance`, all batched over leading axes and safe to differentiate at
+SO(3) helpers: `hat`, `vee`, `expm` (Rodrigues), `log`,
+`geodesic_distance`, all batched over leading axes and safe to differentiate at
 the identity.
 """
 
@@ -88,7 +88,7 @@ def hat(v: jax.Array) -> jax.Array:
 
 
 def vee(W: jax.Array) -> jax.Array:
-    """``(..., 3, 3) -> (..., 3)`` the vector of the skew part of W (inverse of :func:`hat`)."""
+    """``(..., 3, 3) -> (..., 3)`` the vector of the skew part of W (inverse of `hat`)."""
     return 0.5 * jnp.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0], W[..., 1, 0] - W[..., 0, 1]], -1)
 
 
@@ -181,7 +181,7 @@ def _magnus4(a):
     """4th-order Magnus on two Gauss nodes; ``a (..., 2, 3)`` = h * generator at the nodes.
 
     Written for Y' = A Y (left); the bus attitude (right action) runs it on Y = R^T
-    with A = -[omega]x, see :func:`step_generators`.
+    with A = -[omega]x, see `step_generators`.
     """
     a1, a2 = a[..., 0, :], a[..., 1, :]
     return 0.5 * (a1 + a2) + (math.sqrt(3.0) / 12.0) * jnp.cross(a2, a1)
@@ -249,7 +249,7 @@ def step_generators(maps: jax.Array, waypoints: jax.Array, steps: int, order=DEF
     """Rotation vectors Omega of every sub-step of joint polylines.
 
     Args:
-        maps: ``(..., k-1, steps, s, 3, n)`` C_w at :func:`step_nodes`.
+        maps: ``(..., k-1, steps, s, 3, n)`` C_w at `step_nodes`.
         waypoints: ``(..., k, n)`` the polylines.
 
     Returns:
@@ -283,7 +283,7 @@ def path_rotation(
         omega_map: ``q (..., n) -> (..., 3, n)`` bus angular velocity per joint rate,
             bus axes, batched over leading axes (e.g. ``functools.partial(bus_rate_map, robot)``).
         waypoints: ``(..., k, n)`` joint positions joined by straight segments.
-        steps, order: sub-steps per segment and scheme (static), see :func:`step_nodes`.
+        steps, order: sub-steps per segment and scheme (static), see `step_nodes`.
 
     Returns:
         ``(..., 3, 3)``.
@@ -330,7 +330,7 @@ def _prepare(robot: SpatialRobot, q_start, joint_waypoints, base_rotation):
 def choose_steps(joint_waypoints, steps: int | None) -> int:
     """Magnus steps per segment: ``steps`` if given; else from the largest joint move of
     any segment (``MAX_STEP`` per step, rounded up to a power of two so that few step
-    counts, hence few compilations, occur); :data:`DEFAULT_STEPS` under tracing."""
+    counts, hence few compilations, occur); `DEFAULT_STEPS` under tracing."""
     if steps is not None:
         if int(steps) < 1:
             raise ConfigError(f"steps: expected a positive number of Magnus steps per segment, got {steps}")
@@ -369,7 +369,7 @@ def integrate_spatial_joint_path(
     Integrates R' = R [C_w(q) q']x along straight joint segments by the 6th-order
     Magnus scheme (module docstring), ``steps`` sub-steps per segment. By default the
     step count follows the largest joint move of any segment, at most ``MAX_STEP``
-    (0.15 rad) per step, rounded up to a power of two (:func:`choose_steps`): about
+    (0.15 rad) per step, rounded up to a power of two (`choose_steps`): about
     1e-11 rad or better on the UR5 for segments up to 2 rad.
 
     Args:
@@ -427,7 +427,7 @@ def spatial_joint_path_history(
 
     Returns:
         ``(R (..., S, 3, 3), q (..., S, n))`` with S = (k - 1) samples_per_segment + 1;
-        ``R[..., -1, :, :]`` equals :func:`integrate_spatial_joint_path`'s attitude.
+        ``R[..., -1, :, :]`` equals `integrate_spatial_joint_path`'s attitude.
     """
     q_start, joint_waypoints, base_rotation = _prepare(robot, q_start, joint_waypoints, base_rotation)
     batch, flat_robot, batched, (wp_flat, R_flat, _) = flatten_batch(

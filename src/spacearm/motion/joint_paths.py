@@ -125,7 +125,7 @@ def integrate_joint_path(
 
     Spatial robots: ``R_end, q_end = integrate_joint_path(robot, q_start,
     joint_waypoints, base_rotation=R0)`` integrates the bus attitude on SO(3)
-    (:func:`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` 6th-order
+    (`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` 6th-order
     Magnus steps per segment, by default from the segment lengths; ``order`` the
     scheme); ``nodes`` and ``pieces`` are planar only. The rest of this docstring is the planar case.
 
@@ -182,8 +182,8 @@ def joint_path_base_increments(
 
     Args:
         joint_waypoints: ``(..., k, n)`` joint angles, rad.
-        nodes: quadrature points per panel, as in :func:`integrate_joint_path`.
-        pieces: panels per segment, as in :func:`integrate_joint_path`.
+        nodes: quadrature points per panel, as in `integrate_joint_path`.
+        pieces: panels per segment, as in `integrate_joint_path`.
 
     Returns:
         ``(..., k-1)`` increments of phi0, rad.
@@ -240,7 +240,7 @@ def joint_path_history(
     Returns:
         ``postures (..., S, n+1)`` rad and ``tips (..., S, 2)`` inertial, m, with
         S = (k - 1) * samples_per_segment + 1; the last posture equals
-        :func:`integrate_joint_path`'s result.
+        `integrate_joint_path`'s result.
     """
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(

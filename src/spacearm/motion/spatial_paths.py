@@ -10,13 +10,13 @@ the joint rates: the state (q, R) is integrated together,
     s' = tip speed along d,
 
 with respect to the joint-space arc length sigma. The rates are
-:func:`spacearm.kinematics.straight_path_rates`, written once for every family: for
+`spacearm.kinematics.straight_path_rates`, written once for every family: for
 n = 3 the adjugate form sgn0 adj(J*_v) R^T d / |adj(J*_v) R^T d| (finite through
 det J*_v = 0), for n > 3 the minimum-norm rates J*_v^T (J*_v J*_v^T)^-1 R^T d,
 regularized with adj(J*_v J*_v^T). The path ends where ds/dsigma = 0: the tip can no
 longer advance along the line, the translational part of J* has lost rank (a dynamic
 singularity; Papadopoulos & Dubowsky 1993), or at a joint limit, or after
-``max_length``. As for planar arms (:mod:`.straight_paths`), the scheme is DOP853
+``max_length``. As for planar arms (`straight_paths`), the scheme is DOP853
 with its embedded error control in a ``lax.while_loop``, the events located by Newton
 predictions on the event functions; the 9 entries of R are integrated as a vector
 and projected back onto SO(3) (polar factor) at the end, a correction at the level of
@@ -237,7 +237,7 @@ def spatial_straight_tip_path(
         max_steps: step budget per path (static).
 
     Returns:
-        :class:`SpatialStraightPath` with the batch shape.
+        `SpatialStraightPath` with the batch shape.
     """
     n = robot.n_joints
     if n < 3:
@@ -272,13 +272,13 @@ def spatial_go_and_back(
     """The tip out along ``direction`` by ``length`` and straight back (Fig. 9 in 3-D).
 
     The field of the straight path is odd in the direction (the regularized rates of
-    :func:`spacearm.kinematics.straight_path_rates` and the bus rate both change sign
+    `spacearm.kinematics.straight_path_rates` and the bus rate both change sign
     with d), so away from singular ends the way back retraces the way out: joints and
     bus attitude return to the start up to the integration tolerance. Where the way out
     ends at a singularity (``out.reason == 0``) the way back may leave on another branch.
 
     Returns:
-        ``(out, back)``: the two :class:`SpatialStraightPath`; ``back.length`` equals
+        ``(out, back)``: the two `SpatialStraightPath`; ``back.length`` equals
         ``out.length`` unless the way back met an event first.
     """
     out = spatial_straight_tip_path(robot, q_start, direction, length, base_rotation=base_rotation, **options)

@@ -219,8 +219,8 @@ def plan_reach(
     """Plan how the tip reaches an inertial target from a posture (sec. 3.2, points B and C).
 
     Spatial robots: ``plan_reach(robot, q_start, target_xyz, base_rotation=R0)`` returns a
-    :class:`~spacearm.planning.spatial_reach.SpatialReachPlan`
-    (:func:`~spacearm.planning.spatial_reach.plan_spatial_reach`; its keyword options
+    `SpatialReachPlan`
+    (`plan_spatial_reach`; its keyword options
     pass through). The rest of this docstring is the planar case.
 
     1. Point B: if the straight tip path towards the target (J* inverted, base

@@ -389,7 +389,7 @@ def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0,
 
     Spatial robots: ``plan_reorientation(robot, q_start, target_rotation)`` returns a
     closed joint path after which the bus attitude is ``R0 @ target_rotation`` to
-    1e-9 rad (:func:`spacearm.planning.spatial_reorientation.plan_spatial_reorientation`;
+    1e-9 rad (`spacearm.planning.spatial_reorientation.plan_spatial_reorientation`;
     options are its settings). The rest of this docstring is the planar case.
 
     A closed joint-space loop through q0 = phi_start[1:], repeated N times where one

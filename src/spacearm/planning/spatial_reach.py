@@ -1,14 +1,14 @@
 """Reaching an inertial point with a spatial arm: straight, or turn the bus first (3-D sec. 3.2).
 
 1. If the straight tip path towards the target (translation, bus attitude integrated
-   with the joints; :func:`spacearm.motion.spatial_straight_tip_path`) gets there
+   with the joints; `spacearm.motion.spatial_straight_tip_path`) gets there
    before J*_v loses rank or a joint limit, that path is the plan.
 2. Otherwise turn the bus first. A closed joint loop leaves the joints at q0 and turns
    the bus by Q (bus frame): the tip moves to R0 Q p_bus(q0) and the straight paths
    start from (q0, R0 Q). For a set of candidate rotations (rotation vectors on a
    Fibonacci sphere of axes times a few angles; one batched call) the straight path
    towards the target is run from (q0, R0 Q); the smallest rotation whose path gets
-   there is planned with :func:`spacearm.planning.plan_spatial_reorientation_details`,
+   there is planned with `spacearm.planning.plan_spatial_reorientation_details`,
    then the straight path runs from the attitude actually reached.
 
 The target is about the system centroid, inertial axes (zero momentum fixes the
@@ -96,7 +96,7 @@ def plan_spatial_reach(
         q_start: ``(n,)`` joints at the start.
         target: ``(3,)`` inertial point about the system centroid, m.
         base_rotation: ``(3, 3)`` bus attitude at the start (default identity).
-        rotations: ``(c, 3)`` candidate bus rotation vectors (default :func:`candidate_rotations`).
+        rotations: ``(c, 3)`` candidate bus rotation vectors (default `candidate_rotations`).
         tolerance: accepted tip error at the end, m.
 
     Raises:

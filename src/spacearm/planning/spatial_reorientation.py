@@ -1,7 +1,7 @@
 """Turning the bus of a spatial arm by a target rotation with a closed joint loop.
 
 Along a closed joint path the joints come back but the bus turns (the attitude ODE
-R' = R [C_w(q) q']x is nonholonomic; :mod:`spacearm.motion.attitude`). In 3-D the net
+R' = R [C_w(q) q']x is nonholonomic; `spacearm.motion.attitude`). In 3-D the net
 rotation of a loop is a rotation, not an angle, and small loops turn the bus about
 axes set by the curvature of C_w; three independent rotation components need loops
 that use several joint planes at once. A loop repeated N times turns the bus by the
@@ -21,7 +21,7 @@ The planner, for candidate repetition counts N (all candidates in one batch, one
 3. finishes with minimum-norm Gauss-Newton steps on the 3-vector residual
    (dc = -J^T (J J^T + mu 1)^-1 r): 3 equations in 2 H n unknowns, quadratic
    convergence to rounding from the Adam result;
-4. checks each candidate with :func:`spacearm.integrate_joint_path` at 4 times the
+4. checks each candidate with `spacearm.integrate_joint_path` at 4 times the
    optimizer's Magnus steps (converged to ~1e-14 rad for these loops):
    the rotation error of the repeated loop and the joint limits; returns the valid
    candidate with the least joint travel.
@@ -64,7 +64,7 @@ class SpatialLoopSettings:
         limit_margin: the loop keeps this far inside finite joint limits, rad (m).
         adam_magnus_steps: Magnus steps per segment in the Adam phase (cheap and rough).
         magnus_steps: Magnus steps per segment in the Gauss-Newton phase (the default of
-            :func:`spacearm.integrate_joint_path`); the final check uses 4 times as many.
+            `spacearm.integrate_joint_path`); the final check uses 4 times as many.
         tolerance: accepted geodesic error of the final rotation, rad.
         seed: random seed of the starting loops.
     """
@@ -211,7 +211,7 @@ def plan_spatial_reorientation_details(
         q_start: ``(n,)`` joints at the start (inside the limits).
         target_rotation: ``(3, 3)`` rotation in the bus frame (or a ``(3,)`` rotation
             vector), to be reached to ``settings.tolerance`` (1e-9 rad).
-        settings: :class:`SpatialLoopSettings`.
+        settings: `SpatialLoopSettings`.
 
     Raises:
         ConfigError: bad inputs, or no candidate loop reached the tolerance within the
@@ -270,5 +270,5 @@ def plan_spatial_reorientation_details(
 def plan_spatial_reorientation(robot: SpatialRobot, q_start, target_rotation, **options) -> np.ndarray:
     """``(k, n)`` closed joint path (first and last rows ``q_start``) turning the bus by
     ``target_rotation`` (bus frame): after it the attitude is ``R0 @ target_rotation``
-    to 1e-9 rad. Options are :class:`SpatialLoopSettings` fields."""
+    to 1e-9 rad. Options are `SpatialLoopSettings` fields."""
     return plan_spatial_reorientation_details(robot, q_start, target_rotation, SpatialLoopSettings(**options)).waypoints

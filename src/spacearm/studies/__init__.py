@@ -1,9 +1,9 @@
 """Design studies: YAML sweep files -> one batched design pytree -> tables and grids.
 
-Modules: ``spec`` (the sweep file schema, ``--set`` overrides, :class:`SweepSpec`),
+Modules: ``spec`` (the sweep file schema, ``--set`` overrides, `SweepSpec`),
 ``designs`` (design fields and the batched designs), ``metrics`` (the metric registry),
 ``runner`` (chunked, sharded, resumable execution and the files), ``table2`` (the
-Table 2 report). Figures of a sweep live in :mod:`spacearm.figures.sweep`.
+Table 2 report). Figures of a sweep live in `spacearm.figures.sweep`.
 """
 
 from .designs import (

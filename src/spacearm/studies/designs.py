@@ -3,11 +3,11 @@ applied, and every sweep point as one batched robot (planar or spatial).
 
 Planar fields: ``base.mass``, ``base.inertia``, ``base.attach``, ``links[i].FIELD`` or
 ``links[*].FIELD`` (mass, inertia, a, b, length), and the derived ``arm.mass``,
-``arm.mass_ratio`` and ``arm.length_split`` (see :data:`FIELD_HELP`).
+``arm.mass_ratio`` and ``arm.length_split`` (see `FIELD_HELP`).
 
 Spatial fields (``mount.xyz[i]``, ``mount.rpy[i]``, ``base.com[i]``, ``arm.length``,
 ``links.<name>.mass``, ...) live with the spatial family,
-:mod:`spacearm.models.spatial.fields` (:data:`SPATIAL_FIELD_HELP`), shared with the
+`spacearm.models.spatial.fields` (`SPATIAL_FIELD_HELP`), shared with the
 design problems; this module dispatches on the base robot's type.
 """
 
@@ -54,7 +54,7 @@ class Axis:
 
 
 class SweepSpec(Protocol):
-    """What design construction reads of a sweep (:class:`spacearm.studies.spec.SweepSpec`)."""
+    """What design construction reads of a sweep (`spacearm.studies.spec.SweepSpec`)."""
 
     robot: PlanarRobot | SpatialRobot
     axes: tuple[Axis, ...]
@@ -86,7 +86,7 @@ FIELD_HELP = (
 
 
 def check_field(where: str, field: Any, robot: PlanarRobot | SpatialRobot | int) -> str:
-    """The field name of an axis, or :class:`ConfigError` naming ``where`` (with a did-you-mean).
+    """The field name of an axis, or `ConfigError` naming ``where`` (with a did-you-mean).
 
     ``robot``: the sweep's base robot (a planar robot's link count is accepted too)."""
     if isinstance(robot, SpatialRobot):

@@ -1,13 +1,13 @@
 """Running a sweep: every design in compiled, vmapped chunks sharded over the JAX devices,
 finished chunks kept on disk so an interrupted sweep resumes, then the table, the grids,
-the report and the manifest (through :mod:`spacearm.io`). No figures here.
+the report and the manifest (through `spacearm.io`). No figures here.
 
 All designs are stacked into one robot pytree (planar or spatial) with a leading axis
 and evaluated by one compiled function in chunks of bounded size. Under
 ``jax.distributed`` (``spacearm sweep --coordinator ...``) the device mesh spans every
 process: each chunk is sharded over all of their devices, the results are gathered,
 and process 0 alone writes the chunks, the table and the manifest; the others return
-an empty :class:`SweepResult`.
+an empty `SweepResult`.
 """
 
 from __future__ import annotations
@@ -112,7 +112,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     Args:
         outputs: further writers, each ``fn(spec, out_dir, table) -> [paths]``, run after
             the report and before the manifest, which lists their files (``spacearm sweep``
-            passes :func:`spacearm.figures.sweep.write_figures`). This layer draws nothing.
+            passes `spacearm.figures.sweep.write_figures`). This layer draws nothing.
     """
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)

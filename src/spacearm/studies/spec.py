@@ -1,4 +1,4 @@
-"""Sweep files: the schema, ``--set`` overrides and the validated :class:`SweepSpec`.
+"""Sweep files: the schema, ``--set`` overrides and the validated `SweepSpec`.
 
 A sweep file names a base robot (a file in ``configs/`` or an inline mapping), the
 design axes to vary, how to combine them, and the metrics to compute::
@@ -9,7 +9,7 @@ design axes to vary, how to combine them, and the metrics to compute::
       b0_over_B0: {field: base.attach, relative: true, values: [0, 0.5, 1.0, 1.5, 2.0]}
     metrics: [wbar, S_M, S_G]
 
-:func:`load_sweep` checks everything a run uses, down to every sweep point's design, so
+`load_sweep` checks everything a run uses, down to every sweep point's design, so
 an invalid sweep fails before anything is written.
 """
 

@@ -2,8 +2,8 @@
 
 ``REPORTS["table2"](out_dir, rows, spec)`` writes ``table.md`` (Table 2 of Umetani &
 Yoshida 1990 with our values and the relative differences, then the readings of the
-w-bar column we tried, from :mod:`spacearm.studies.table2_readings`). ``spacearm sweep``
-adds Fig. 10 beside it (:func:`spacearm.figures.sweep.report_figures`).
+w-bar column we tried, from `spacearm.studies.table2_readings`). ``spacearm sweep``
+adds Fig. 10 beside it (`spacearm.figures.sweep.report_figures`).
 ``REPORT_CHECKS["table2"](spec)`` refuses, when the sweep is loaded, a sweep the report
 cannot compare with the paper.
 """
@@ -54,9 +54,9 @@ FIG10_RATIOS = (0.0, 1.0, 2.0)
 def wbar_readings(base: PlanarRobot | None = None, ratios=tuple(PAPER_TABLE2)) -> list[dict]:
     """Every reading of the w-bar column tried against the printed values.
 
-    Each model variant of :func:`spacearm.studies.table2_readings.model_variants` (the faithful
+    Each model variant of `spacearm.studies.table2_readings.model_variants` (the faithful
     derivation, every single departure and every pair) by each averaging rule of
-    :data:`spacearm.studies.AVERAGES`, then three readings outside that grid
+    `spacearm.studies.AVERAGES`, then three readings outside that grid
     (B0 read as the base length; the ground robot's closed forms). Each entry: ``name``,
     ``note``, ``departures`` (how many choices differ from eq. 1-12 as written) and
     ``values`` (w-bar x 1e-2 at ``ratios``; NaN where the variant's I_S vanishes on the

@@ -1,13 +1,13 @@
 """Derivation variants of the free-floating model, for the readings of Table 2's w-bar.
 
 Table 2 of Umetani & Yoshida (1990) prints w-bar = 5.59 ... 8.08 (x1e-2) for b0/B0 =
-0 ... 2; the faithful model (eq. 1-12, :mod:`spacearm.kinematics`) gives 8.77 ... 10.23,
+0 ... 2; the faithful model (eq. 1-12, `spacearm.kinematics`) gives 8.77 ... 10.23,
 and no rule of averaging the exact w* changes its growth (x1.17 against the printed
 x1.45). The paper prints the tip kinematics (eq. 1, 2; S_M and S_G confirm them) but
 not I_S and I_M of eq. 5, so this module asks which *derivation* of the momentum
 equation a hand calculation in 1990 could have made instead.
 
-A :class:`Derivation` is one such model: a choice, without a free parameter, of the
+A `Derivation` is one such model: a choice, without a free parameter, of the
 reference point of the angular momentum, the terms it keeps, the inertias it uses and
 the point the tip is measured from. Every variant is written in the same
 virtual-manipulator form as the faithful model,
@@ -15,14 +15,14 @@ virtual-manipulator form as the faithful model,
     L = sum_l h_l(theta) dtheta_l,   h_l = I_l + sum_k W_kl cos(theta_k - theta_l),
     W_kl = sum_i m_i R_ik R_il,       tip = sum_k K_k u(theta_k),
 
-with design-only coefficients (:func:`derivation_coefficients`), then per posture
+with design-only coefficients (`derivation_coefficients`), then per posture
 I_S = H_0, I_M = (H_1..H_n) with H_j = sum_{l>=j} h_l (eq. 5), J* = J_M - J_S I_M / I_S
-(eq. 6) and w* = sqrt(det J* J*^T) (eq. 10). :data:`FAITHFUL` reproduces
-:mod:`spacearm.kinematics` exactly; nothing here changes the package's defaults.
+(eq. 6) and w* = sqrt(det J* J*^T) (eq. 10). `FAITHFUL` reproduces
+`spacearm.kinematics` exactly; nothing here changes the package's defaults.
 
-:func:`grid_averages` evaluates w*/L^2 of any batch of (derivation, design) pairs on one
+`grid_averages` evaluates w*/L^2 of any batch of (derivation, design) pairs on one
 midpoint grid of the elbow-down strip and returns every averaging rule of
-:data:`AVERAGES`; :func:`wbar_readings` crosses the departures of :data:`DEPARTURES`
+`AVERAGES`; `wbar_readings` crosses the departures of `DEPARTURES`
 (alone and in pairs) with those rules for the Table 2 report.
 """
 
@@ -327,7 +327,7 @@ def _grid_statistics(coeffs: DesignCoefficients, link_rates, sign, reach, l1l2, 
 
 
 def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[str, np.ndarray]:
-    """w-bar of every (derivation, design) pair by every rule of :data:`AVERAGES`.
+    """w-bar of every (derivation, design) pair by every rule of `AVERAGES`.
 
     Args:
         derivations: the variants.
@@ -337,7 +337,7 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
         ``{rule: (len(derivations), designs)}``, dimensionless; NaN where I_S vanishes
         somewhere on the strip (w* has a pole, the average diverges). Computed on a 512 x 256
         midpoint grid of the elbow-down strip (under 1e-5 relative to the adaptive rule
-        of :func:`spacearm.metrics.average_manipulability` for the faithful model).
+        of `spacearm.metrics.average_manipulability` for the faithful model).
     """
     if robots.n_links != 2 or len(robots.batch_shape) != 1:
         raise ValueError("grid_averages takes a one-axis batch of n = 2 designs")
@@ -394,7 +394,7 @@ def model_variants(max_departures: int = 2) -> list[tuple[tuple[str, ...], Deriv
 def wbar_readings(
     base: PlanarRobot | None = None, ratios=(0.0, 0.5, 1.0, 1.5, 2.0), *, max_departures: int = 2
 ) -> list[dict]:
-    """Every reading: each model variant of :func:`model_variants` by each rule of AVERAGES.
+    """Every reading: each model variant of `model_variants` by each rule of AVERAGES.
 
     Returns:
         dicts with ``model`` (tuple of departure names, () = faithful), ``average``
@@ -439,7 +439,7 @@ def chance_level(values: np.ndarray, printed, *, trials: int = 1000, seed: int =
     Args:
         values: ``(readings, rows)`` the readings' values (rows with NaN or a zero first value are skipped).
         printed: ``(rows,)`` the printed column.
-        statistic: "rms" (rms relative error) or "shape" (:func:`shape_error`).
+        statistic: "rms" (rms relative error) or "shape" (`shape_error`).
 
     Returns:
         ``(fraction, median)``: the fraction of random columns fitted at least as well as

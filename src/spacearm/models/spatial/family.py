@@ -65,6 +65,7 @@ class SpatialFamily(RobotFamily):
         "generalized_jacobian": generalized_jacobian,
         "manipulability": _manipulability,
         "base_rate": _base_rate,
+        "base_rate_matrix": base_twist_map,
         "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
     }
