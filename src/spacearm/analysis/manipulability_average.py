@@ -1,4 +1,4 @@
-"""Manipulability maps and averages over the posture space (section 4.2, 5, eq. 11, 12).
+"""The average manipulability w-bar of eq. (12): the planar family's adaptive quadrature (section 5, eq. 11, 12).
 
 Everything here lives in the robot frame Sigma_R (origin at joint 1, axes along the
 base): w* does not depend on the base attitude phi0, so phi0 = 0 throughout.
