@@ -20,7 +20,8 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, check_memory, choice, integer, number, read_yaml
-from ..analysis import average_manipulability, check_average_options
+from ..analysis import check_average_options
+from ..analysis.manipulability_average import average_manipulability as planar_average_manipulability
 from ..models.planar import PlanarRobot
 from .objectives import OBJECTIVES, objective
 
@@ -37,7 +38,7 @@ __all__ = [
 ]
 
 # The options of analysis.average_manipulability a problem's ``wbar:`` section may set.
-WBAR_OPTIONS = tuple(name for name in inspect.signature(average_manipulability).parameters if name != "robot")
+WBAR_OPTIONS = tuple(name for name in inspect.signature(planar_average_manipulability).parameters if name != "robot")
 
 
 @dataclasses.dataclass(frozen=True)
