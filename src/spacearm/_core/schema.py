@@ -28,6 +28,7 @@ __all__ = [
     "choice",
     "number_list",
     "check_memory",
+    "robot_file_name",
 ]
 
 
@@ -131,3 +132,16 @@ def check_memory(where: str, need_bytes: float, what: str, advice: str) -> None:
             f"{where}: {what} need about {need_bytes / 2**30:,.0f} GiB, "
             f"more than half of this machine's {have / 2**30:.0f} GiB; {advice}"
         )
+
+
+def robot_file_name(source: str, config: Any, allowed: Iterable[str]) -> str:
+    """Check a robot file's top level (a mapping, known keys, a ``base``) and return its name."""
+    if not isinstance(config, Mapping):
+        raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
+    check_keys(f"{source}: ", config, allowed)
+    name = config.get("name", "robot")
+    if not isinstance(name, str):
+        raise ConfigError(f"{source}: name: must be a string, got {name!r}")
+    if "base" not in config:
+        raise ConfigError(f"{source}: base: missing required key")
+    return name

@@ -73,8 +73,28 @@ class SearchSettings:
     seed: int = 0
 
 
+class VariableBounds:
+    """Names and box bounds of a problem's ``variables`` (shared by planar and spatial problems)."""
+
+    variables: tuple[Variable, ...]
+
+    @property
+    def variable_names(self) -> tuple[str, ...]:
+        return tuple(v.name for v in self.variables)
+
+    @property
+    def lower(self) -> np.ndarray:
+        """``(d,)`` lower bounds."""
+        return np.array([v.lower for v in self.variables], dtype=np.float64)
+
+    @property
+    def upper(self) -> np.ndarray:
+        """``(d,)`` upper bounds."""
+        return np.array([v.upper for v in self.variables], dtype=np.float64)
+
+
 @dataclasses.dataclass(frozen=True)
-class DesignProblem:
+class DesignProblem(VariableBounds):
     """A multi-objective design problem over a family of planar space robots.
 
     The parametrization holds the total reach L, the total mass w = m0 + m_arm and
@@ -119,20 +139,6 @@ class DesignProblem:
     grid_chunk: int = 2048
     nsga2: Mapping[str, Any] | None = None
     description: str = ""
-
-    @property
-    def variable_names(self) -> tuple[str, ...]:
-        return tuple(v.name for v in self.variables)
-
-    @property
-    def lower(self) -> np.ndarray:
-        """``(d,)`` lower bounds."""
-        return np.array([v.lower for v in self.variables], dtype=np.float64)
-
-    @property
-    def upper(self) -> np.ndarray:
-        """``(d,)`` upper bounds."""
-        return np.array([v.upper for v in self.variables], dtype=np.float64)
 
     def robot(self, x: jax.Array) -> PlanarRobot:
         """The design for one variable vector.

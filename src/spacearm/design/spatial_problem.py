@@ -27,7 +27,6 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, choice, integer, number
@@ -36,7 +35,7 @@ from ..analysis.joint_box import check_joint_box
 from ..models import load_robot
 from ..models.spatial import SpatialRobot
 from ..models.spatial import fields as spatial_fields
-from .problem import DesignProblem, SearchSettings, Variable, parse_baselines, parse_search, problem_from_mapping
+from .problem import DesignProblem, SearchSettings, Variable, VariableBounds, parse_baselines, parse_search, problem_from_mapping
 from .._core.schema import read_yaml
 
 __all__ = ["SpatialDesignProblem", "SPATIAL_OBJECTIVES", "spatial_problem_from_mapping", "load_design_problem"]
@@ -54,7 +53,7 @@ _AVERAGE_KEYS = {"samples", "randomizations", "seed"}
 
 
 @dataclasses.dataclass(frozen=True)
-class SpatialDesignProblem:
+class SpatialDesignProblem(VariableBounds):
     """A multi-objective design problem over one spatial robot's design fields.
 
     Attributes:
@@ -81,18 +80,6 @@ class SpatialDesignProblem:
     grid_chunk: int = 2048
     nsga2: Mapping[str, Any] | None = None
     description: str = ""
-
-    @property
-    def variable_names(self) -> tuple[str, ...]:
-        return tuple(v.name for v in self.variables)
-
-    @property
-    def lower(self) -> np.ndarray:
-        return np.array([v.lower for v in self.variables], dtype=np.float64)
-
-    @property
-    def upper(self) -> np.ndarray:
-        return np.array([v.upper for v in self.variables], dtype=np.float64)
 
     def fixed_summary(self) -> dict:
         return dict(robot=self.robot_file, samples=self.samples, randomizations=self.randomizations, seed=self.seed)

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ..._core.schema import check_keys, number
+from ..._core.schema import check_keys, number, robot_file_name
 from .robot import PlanarRobot
 
 __all__ = ["robot_from_mapping", "robot_to_mapping", "umetani1990", "is_planar_mapping"]
@@ -61,14 +61,7 @@ def robot_from_mapping(config: Mapping[str, Any], *, source: str = "robot") -> P
     Raises:
         ConfigError: naming the field and the reason.
     """
-    if not isinstance(config, Mapping):
-        raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
-    check_keys(f"{source}: ", config, _TOP_KEYS)
-    name = config.get("name", "robot")
-    if not isinstance(name, str):
-        raise ConfigError(f"{source}: name: must be a string, got {name!r}")
-    if "base" not in config:
-        raise ConfigError(f"{source}: base: missing required key")
+    name = robot_file_name(source, config, _TOP_KEYS)
     base = config["base"]
     if not isinstance(base, Mapping):
         raise ConfigError(f"{source}: base: must be a mapping with keys mass, inertia, attach")

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ..._core.schema import check_keys, number, read_yaml
+from ..._core.schema import check_keys, number, read_yaml, robot_file_name
 from .robot import SpatialRobot, robot_from_chain
 from .urdf import check_inertia, read_urdf
 
@@ -113,14 +113,7 @@ def spatial_robot_from_mapping(
     Raises:
         ConfigError: naming the file and the field.
     """
-    if not isinstance(config, Mapping):
-        raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
-    check_keys(f"{source}: ", config, _TOP_KEYS)
-    name = config.get("name", "robot")
-    if not isinstance(name, str):
-        raise ConfigError(f"{source}: name: must be a string, got {name!r}")
-    if "base" not in config:
-        raise ConfigError(f"{source}: base: missing required key")
+    name = robot_file_name(source, config, _TOP_KEYS)
     base = _mapping(f"{source}: base", config["base"], _BASE_KEYS)
     check_keys(f"{source}: base: ", base, _BASE_KEYS)
     for key in ("mass", "inertia"):
