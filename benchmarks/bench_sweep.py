@@ -29,7 +29,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
-from spacearm.metrics import average_manipulability, normalized_areas  # noqa: E402
+from spacearm.analysis import average_manipulability, normalized_areas  # noqa: E402
 from spacearm.studies import build_designs, load_sweep, run_sweep  # noqa: E402
 
 RULES = {

@@ -1,4 +1,4 @@
-"""Cost and accuracy of the default (adaptive) w-bar rule of metrics.average_manipulability.
+"""Cost and accuracy of the default (adaptive) w-bar rule of spacearm.analysis.average_manipulability.
 
 Run: python benchmarks/bench_wbar_rule.py [--designs 1000] [--random 400] [--baseline OLD_METRICS.py]
 
@@ -14,8 +14,8 @@ random_robot, a quarter of them with light bases: base mass 20-60 kg, inertia
 2-20 kg m^2, b0 0-4 m) against a converged reference (phi1_panels=16, phi2_panels=8,
 order=16, newton_steps=8).
 
-``--baseline`` takes another version of src/spacearm/metrics.py (for example
-``git show <commit>:src/spacearm/metrics.py > /tmp/old_metrics.py``), loads it as a
+``--baseline`` takes another version of src/spacearm/analysis/manipulability_average.py (for example
+``git show <commit>:src/spacearm/analysis/manipulability_average.py > /tmp/old_metrics.py``), loads it as a
 module of the installed package and times and checks it in the same run, interleaved
 with the current one (timings on a shared machine are noisy: compare within one run).
 """
@@ -33,7 +33,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa  # noqa: E402
-from spacearm import metrics  # noqa: E402
+from spacearm import analysis as metrics  # noqa: E402
 from spacearm.studies import build_designs, load_sweep  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -123,7 +123,7 @@ def main():
     parser.add_argument("--designs", type=int, default=1000)
     parser.add_argument("--random", type=int, default=400)
     parser.add_argument("--rounds", type=int, default=3, help="interleaved timing rounds (best kept)")
-    parser.add_argument("--baseline", help="another metrics.py to compare with in the same run")
+    parser.add_argument("--baseline", help="another manipulability_average.py to compare with in the same run")
     args = parser.parse_args()
     print(f"devices: {jax.devices()}  float64: {jax.config.jax_enable_x64}")
 

@@ -1,5 +1,6 @@
-"""The command line's shape: one module per command, a light --help, the deprecated paths."""
+"""The command line's shape: one module per command, a light --help, the removed module paths."""
 
+import importlib
 import subprocess
 import sys
 
@@ -45,8 +46,6 @@ def test_sweep_help_lists_fields_and_metrics(capsys):
 
 
 def test_each_command_module_has_register_and_run():
-    import importlib
-
     parser = build_parser()
     assert parser.prog == "spacearm"
     for _, module in COMMANDS:
@@ -54,16 +53,11 @@ def test_each_command_module_has_register_and_run():
         assert callable(loaded.register) and callable(loaded.run)
 
 
-def test_deprecated_paths_still_import():
-    import spacearm.config
-    import spacearm.reports
-    import spacearm.results
-    import spacearm.sweep
-    import spacearm.validate
-    from spacearm import io, studies
-
-    assert spacearm.sweep.run_sweep is studies.run_sweep
-    assert spacearm.results.manifest is io.build_manifest
-    assert callable(spacearm.validate.validate_file)
-    assert spacearm.reports.REPORTS is studies.REPORTS
-    assert callable(spacearm.config.enable_x64)
+@pytest.mark.parametrize(
+    "old", ["robot", "metrics", "workspace", "sweep", "results", "reports", "validate", "config"]
+)
+def test_removed_module_paths_are_gone(old):
+    """The one-release re-export modules are deleted: an old import fails loudly instead of
+    silently serving a renamed function (``workspace.normalized_areas`` did)."""
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(f"spacearm.{old}")

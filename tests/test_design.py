@@ -19,7 +19,7 @@ import pytest
 import yaml
 
 import spacearm as sa
-from spacearm import design
+from spacearm import analysis, design
 from spacearm.cli import main as cli_main
 
 from .conftest import count_compiles
@@ -136,8 +136,7 @@ def test_guaranteed_area_table2_and_the_honest_clamp():
     assert abs(float(slope(jnp.float64(4.4 - 1e-7)))) < 1e-7
     assert float(slope(jnp.float64(4.4 + 1e-7))) == 0.0
     # Agrees with the table-2 helper's closed form where the disc exists.
-    metrics = pytest.importorskip("spacearm.metrics")
-    np.testing.assert_allclose(metrics.normalized_areas(table1)[1], design.guaranteed_area(table1), rtol=1e-14)
+    np.testing.assert_allclose(analysis.normalized_areas(table1)[1], design.guaranteed_area(table1), rtol=1e-14)
 
 
 def test_objective_gradients_match_finite_differences():
@@ -196,11 +195,9 @@ def b0_only():
 def independent_curve(b0):
     """(wbar, S_G) along b0 for the Table 1 robot, built without the design module
     (with uniform-rod inertias m l^2 / 12 = 33.33 kg m^2 as the problem declares)."""
-    from spacearm import metrics
-
     table1 = sa.umetani1990().replace(link_inertia=np.full(2, 100.0 * 4.0 / 12.0))
     robots = sa.stack_robots([table1.replace(base_attach=np.float64(b)) for b in b0])
-    wbar = jax.jit(lambda r: metrics.average_manipulability(r, **CHEAP_WBAR))(robots)
+    wbar = jax.jit(lambda r: analysis.average_manipulability(r, **CHEAP_WBAR))(robots)
     K = np.asarray(sa.tip_coefficients(robots))
     s_g = np.maximum(K[:, 1] + K[:, 2] - K[:, 0], 0.0) ** 2 / 16.0
     return np.stack([np.asarray(wbar), s_g], axis=1)

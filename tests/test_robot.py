@@ -155,7 +155,7 @@ def test_fast_validity_check_agrees_with_the_detailed_one(table1):
 
 
 def test_console_script_uses_every_cpu_core_unless_told_otherwise(monkeypatch):
-    from spacearm.config import use_every_cpu_core
+    from spacearm._core.numeric import use_every_cpu_core
 
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_thunk_runtime=true")
     count = use_every_cpu_core()

@@ -117,12 +117,6 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.cli.optimize", "Command line", "`spacearm optimize`"),
 ]
 
-# Old module paths kept as re-exports for one release: not documented.
-DEPRECATED_MODULES = {
-    "spacearm.robot", "spacearm.metrics", "spacearm.workspace", "spacearm.sweep",
-    "spacearm.results", "spacearm.reports", "spacearm.validate", "spacearm.config",
-}
-
 CLI_WIDTH = "88"  # columns of the rendered --help text
 
 
@@ -137,7 +131,7 @@ def check_module_list() -> None:
     listed = {name for name, _, _ in API_MODULES}
     found = {"spacearm"}
     for info in pkgutil.walk_packages(spacearm.__path__, "spacearm."):
-        if not any(part.startswith("_") for part in info.name.split(".")) and info.name not in DEPRECATED_MODULES:
+        if not any(part.startswith("_") for part in info.name.split(".")):
             found.add(info.name)
     for name in sorted(listed - found):
         log.warning("docs/scripts/gen_pages.py: API_MODULES lists %s, which does not exist", name)

@@ -103,7 +103,7 @@ def reachable_bounds(robot: PlanarRobot) -> tuple[float, float]:
     """Inner and outer radius of the Maximum Reachable space (Area 3) about the system centroid, m.
 
     Outer K0 + .. + Kn (sec. 3.1 (3-a)); inner max(0, 2 max_k K_k - sum_k K_k), the hole
-    when one coefficient outweighs the rest (both from `spacearm.workspace`). Joint
+    when one coefficient outweighs the rest (both from `spacearm.analysis`). Joint
     limits are not taken into account here (they can only shrink the space).
     """
 

@@ -1,8 +1,0 @@
-"""Deprecated path (one release): use `spacearm._core.numeric` (and `spacearm.enable_x64`)."""
-
-from ._core.numeric import (
-    enable_compilation_cache as enable_compilation_cache,
-    enable_x64 as enable_x64,
-    use_every_cpu_core as use_every_cpu_core,
-    x64_enabled as x64_enabled,
-)
