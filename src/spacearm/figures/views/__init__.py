@@ -1,0 +1,19 @@
+"""Interactive 3-D views as self-contained offline HTML files (the optional ``view`` extra).
+
+- `model`: the kinematic model as JSON for the browser (`fk.js` evaluates it);
+- `page`: one page with plotly.js, the forward kinematics and the data inlined;
+- `arm`: a robot on its bus with a slider per joint (``spacearm view``);
+- `replay`: a recorded maneuver replayed (``spacearm reach --html``);
+- `front`: a Pareto front with the design variables on hover (``spacearm optimize``).
+
+Library choice (measured on a UR5 scene, Plotly 7.1, meshcat 0.3.2, viser 1.1.1): Plotly
+inlines its 4.8 MB plotly.js and renders offline from ``file://`` in headless Chromium
+with hover, zoom and turn built in; meshcat's ``static_html`` is smaller (0.86 MB) but
+records only through a ZeroMQ server it starts on local ports and has no hover or
+custom controls; viser's recordings are loaded by its client over HTTP, so they need a
+server. See docs/guide/views.md.
+"""
+
+from .arm import write_arm_view as write_arm_view
+from .page import VIEW_EXTRA_MESSAGE as VIEW_EXTRA_MESSAGE, MissingViewExtra as MissingViewExtra
+from .replay import replay_from_npz as replay_from_npz, write_replay_view as write_replay_view
