@@ -226,3 +226,20 @@ def test_network_check_sees_an_external_request(tmp_path):
     page.write_text('<html><body><img src="https://example.com/x.png"><p>x</p></body></html>')
     _, requested = _render(page, tmp_path)
     assert requested == ["https://example.com/x.png"]
+
+
+@needs_node
+def test_reach_html_replays_the_planar_plan(tmp_path, capsys):
+    """``spacearm reach --html``: reach.html beside reach.npz; its frames put the tip on the planned tips."""
+    out = tmp_path / "reach"
+    assert main(["reach", str(ROOT / "configs" / "umetani1990.yaml"), "--from", "0,-60,120", "--to", "2,1",
+                 "--out", str(out), "--html"]) == 0
+    assert "reach.html" in capsys.readouterr().out
+    program = _page_scripts(out / "reach.html") + """
+    const D = window.SPACEARM, F = D.frames;
+    console.log(JSON.stringify(F.q.map((q) => spacearmPose(D.model, q).joints.slice(-1)[0])));"""
+    drawn = np.array(_node(program))
+    with np.load(out / "reach.npz") as history:
+        tips = history["tips_m"]
+    assert len(tips) > 10 and np.linalg.norm(tips[-1] - [2.0, 1.0]) < 1e-9
+    np.testing.assert_allclose(drawn[:, :2], tips, rtol=0, atol=1e-9)
