@@ -23,6 +23,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import jax
 import matplotlib.image
 import numpy as np
 import pytest
@@ -205,15 +206,17 @@ def _pixels_near(image: np.ndarray, rgb, tolerance: int = 40) -> int:
 
 @needs_chromium
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", ["ur5", "planar", "replay"])
-def test_pages_render_offline_in_chromium(pages, tmp_path, kind):
-    """A few seconds each: the page draws the links (their blue) and requests nothing from the network."""
-    page = pages[kind]
+@pytest.mark.parametrize("kind", ["ur5", "planar", "replay", "front", "front3"])
+def test_pages_render_offline_in_chromium(pages, front_pages, tmp_path, kind):
+    """A few seconds each: the page draws the links (their blue) or the front's markers, and requests
+    nothing from the network."""
+    page = {**pages, "front": front_pages["spatial"], "front3": front_pages["three"]}[kind]
     image, requested = _render(page, tmp_path)
     plot = image[:, : image.shape[1] - 340]  # left of the control panel
     background = int((plot.min(axis=-1) >= 250).sum())
     assert plot.shape[0] * plot.shape[1] - background > 0.01 * plot.size / 3  # not blank
-    assert _pixels_near(plot, (31, 119, 180)) > 200, "no link drawn"  # the links' colour, #1f77b4
+    colour = {"front": (214, 39, 40), "front3": (31, 119, 180)}.get(kind, (31, 119, 180))  # markers; links #1f77b4
+    assert _pixels_near(plot, colour) > 200, "nothing of the scene drawn"
     assert requested == []
     size = page.stat().st_size
     assert 4.5e6 < size < 5.5e6, f"{page.name}: {size} bytes"
@@ -243,3 +246,41 @@ def test_reach_html_replays_the_planar_plan(tmp_path, capsys):
         tips = history["tips_m"]
     assert len(tips) > 10 and np.linalg.norm(tips[-1] - [2.0, 1.0]) < 1e-9
     np.testing.assert_allclose(drawn[:, :2], tips, rtol=0, atol=1e-9)
+
+
+@pytest.fixture(scope="session")
+def front_pages(tmp_path_factory):
+    """front.html of a spatial problem (UR5 mount) from a made-up search result, and a 3-objective front."""
+    from spacearm.design import SearchResult
+    from spacearm.design.spatial_problem import load_design_problem
+    from spacearm.figures.views import front_view, write_front_view
+
+    out = tmp_path_factory.mktemp("fronts")
+    problem = load_design_problem(str(ROOT / "sweeps" / "pareto-mount-ur5.yaml"), base_dir=str(ROOT / "sweeps"))
+    rng = np.random.default_rng(3)
+    designs = problem.lower + rng.uniform(size=(12, len(problem.lower))) * (problem.upper - problem.lower)
+    first = np.sort(rng.uniform(size=12))
+    objectives = np.stack([first, 1.0 - first ** 2] + [rng.uniform(size=12)] * (len(problem.objectives) - 2), axis=1)
+    result = SearchResult(method="gradient", designs=designs, objectives=objectives, checkpoints=[],
+                          evaluations=12, compile_seconds=0.0, run_seconds=0.0)
+    (spatial,) = front_view(problem, {"gradient": result}, {}, out)
+    three = write_front_view(out / "front3.html", objective_names=["f1", "f2", "f3"], variable_names=["a", "b"],
+                             fronts={"nsga2": (rng.uniform(size=(30, 2)), rng.uniform(size=(30, 3)))})
+    return dict(problem=problem, designs=designs, objectives=objectives, spatial=spatial, three=three)
+
+
+@needs_node
+def test_front_robots_are_the_picked_designs(front_pages):
+    """The robot a click on the front draws is that point's design (tip at zero joints, to 1e-9 m)."""
+    program = _page_scripts(front_pages["spatial"]) + """
+    const D = window.SPACEARM, T = D.traces[0];
+    console.log(JSON.stringify(T.x.map((x, j) => [x, spacearmPose(D.robots[T.customdata[j]].model,
+        D.robots[T.customdata[j]].posture, null).joints.slice(-1)[0]])));"""
+    drawn = _node(program)
+    problem, designs, objectives = front_pages["problem"], front_pages["designs"], front_pages["objectives"]
+    assert len(drawn) == len(designs)
+    for x, tip in drawn:
+        row = int(np.argmin(np.abs(objectives[:, 0] - x)))
+        robot = jax.tree_util.tree_map(np.asarray, problem.robot(designs[row]))
+        expected = np.asarray(sa.tip_position(robot, np.zeros(robot.n_joints)))
+        np.testing.assert_allclose(tip, expected, rtol=0, atol=1e-9)

@@ -15,5 +15,10 @@ server. See docs/guide/views.md.
 """
 
 from .arm import write_arm_view as write_arm_view
-from .page import VIEW_EXTRA_MESSAGE as VIEW_EXTRA_MESSAGE, MissingViewExtra as MissingViewExtra
+from .front import front_view as front_view, write_front_view as write_front_view
+from .page import (
+    VIEW_EXTRA_MESSAGE as VIEW_EXTRA_MESSAGE,
+    MissingViewExtra as MissingViewExtra,
+    view_extra_available as view_extra_available,
+)
 from .replay import replay_from_npz as replay_from_npz, write_replay_view as write_replay_view

@@ -8,17 +8,7 @@
   var CONFIG = {displaylogo: false, responsive: true, showLink: false};
   var DEG = Math.PI / 180;
 
-  if (D.mode === "front") {
-    Plotly.newPlot(plot, D.traces, D.layout, CONFIG);
-    if (D.readout) readout.textContent = D.readout;
-    plot.on("plotly_click", function (ev) {
-      var p = ev.points[0];
-      if (p && p.text) readout.textContent = String(p.text).replace(/<br>/g, "\n");
-    });
-    return;
-  }
-
-  var M = D.model, planar = M.family === "planar", n = M.joint_kinds.length;
+  var M = D.model || {family: "spatial", joint_kinds: [], joint_names: []}, planar = M.family === "planar";
   // Box corner c has signs (x, y, z) = bits (4, 2, 1); faces as two triangles each.
   var FACES = [[0,1,3],[0,3,2],[4,5,7],[4,7,6],[0,1,5],[0,5,4],[2,3,7],[2,7,6],[0,2,6],[0,6,4],[1,3,7],[1,7,5]];
   var EDGES = [[0,1],[0,2],[0,4],[1,3],[1,5],[2,3],[2,6],[3,7],[4,5],[4,6],[5,7],[6,7]];
@@ -31,7 +21,8 @@
     return [[cy*cp, cy*sp*sr - sy*cr, cy*sp*cr + sy*sr], [sy*cp, sy*sp*sr + cy*cr, sy*sp*cr - cy*sr], [-sp, cp*sr, cp*cr]];
   }
   // The traces that move with the pose, in this order.
-  function poseTraces(pose) {
+  function poseTraces(pose, model) {
+    model = model || M;
     var bus = cols(pose.corners), edges = edgeLine(pose.corners), arm = cols(pose.joints);
     var root = cols([pose.bus, pose.mount, pose.joints[0]]), tip = pose.joints[pose.joints.length - 1];
     return [
@@ -44,7 +35,7 @@
        marker: {size: 3, color: "#56657a"}, name: "bus centroid to joint 1", hoverinfo: "name"},
       {type: "scatter3d", mode: "lines+markers", x: arm[0], y: arm[1], z: arm[2], line: {color: "#1f77b4", width: 14},
        marker: {size: 6, color: "#0b3c68"}, name: "links (joint origins, tip)",
-       text: M.joint_names.concat(["tip"]), hoverinfo: "text+x+y+z"},
+       text: model.joint_names.concat(["tip"]), hoverinfo: "text+x+y+z"},
       {type: "scatter3d", mode: "markers", x: [tip[0]], y: [tip[1]], z: [tip[2]], marker: {size: 7, color: "#d62728", symbol: "diamond"},
        name: "tip", hoverinfo: "name+x+y+z"}
     ];
@@ -53,14 +44,34 @@
     return [{type: "scatter3d", mode: "markers", x: [0], y: [0], z: [0], marker: {size: 5, color: "black", symbol: "x"},
              name: "system centroid (origin)", hoverinfo: "name"}];
   }
+  function sceneLayout(E, flat) {
+    return {aspectmode: "cube", xaxis: {range: [-E, E], title: {text: "x, m"}}, yaxis: {range: [-E, E], title: {text: "y, m"}},
+            zaxis: {range: [-E, E], title: {text: "z, m"}},
+            camera: flat ? {eye: {x: 0, y: 0, z: 2.0}, up: {x: 0, y: 1, z: 0}, projection: {type: "orthographic"}}
+                         : {eye: {x: 1.4, y: -1.4, z: 1.0}}};
+  }
+  if (D.mode === "front") {
+    Plotly.newPlot(plot, D.traces, D.layout, CONFIG);
+    readout.textContent = D.readout || "";
+    var robotDiv = document.createElement("div"); robotDiv.style.height = "320px"; controls.appendChild(robotDiv);
+    plot.on("plotly_click", function (ev) {
+      var p = ev.points[0];
+      if (!p) return;
+      readout.textContent = String(p.text || "").replace(/<br>/g, "\n");
+      var r = D.robots && p.customdata !== undefined && p.customdata !== null ? D.robots[p.customdata] : null;
+      if (!r) return;
+      var flat = r.model.family === "planar";
+      Plotly.react(robotDiv, poseTraces(spacearmPose(r.model, r.posture, null), r.model).concat(fixedTraces()),
+        {margin: {l: 0, r: 0, t: 20, b: 0}, showlegend: false, title: {text: "the picked design", font: {size: 12}},
+         scene: sceneLayout(r.extent, flat)}, CONFIG);
+    });
+    return;
+  }
   var E = D.extent;
   var layout = {
     margin: {l: 0, r: 0, t: 30, b: 0}, legend: {x: 0, y: 1},
     title: {text: D.title || "", font: {size: 14}},
-    scene: {aspectmode: "cube", xaxis: {range: [-E, E], title: {text: "x, m"}}, yaxis: {range: [-E, E], title: {text: "y, m"}},
-            zaxis: {range: [-E, E], title: {text: "z, m"}},
-            camera: planar ? {eye: {x: 0, y: 0, z: 2.0}, up: {x: 0, y: 1, z: 0}, projection: {type: "orthographic"}}
-                    : {eye: {x: 1.4, y: -1.4, z: 1.0}}}
+    scene: sceneLayout(E, planar)
   };
   var MOVING = [0, 1, 2, 3, 4];
   function restyle(traces, indices) {

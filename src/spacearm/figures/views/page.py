@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import html
 import importlib
+import importlib.util
 import json
 import math
 from pathlib import Path
@@ -21,7 +22,7 @@ from ..._core.errors import ConfigError
 from ...io import write_text
 from .model import FK_SCRIPT
 
-__all__ = ["MissingViewExtra", "VIEW_EXTRA_MESSAGE", "plotly_bundle", "write_page"]
+__all__ = ["MissingViewExtra", "VIEW_EXTRA_MESSAGE", "plotly_bundle", "view_extra_available", "write_page"]
 
 VIEW_EXTRA_MESSAGE = (
     "interactive HTML views need Plotly, the optional 'view' extra: "
@@ -46,6 +47,14 @@ button { margin: 4px 4px 4px 0; }
 
 class MissingViewExtra(ConfigError):
     """Plotly (the ``view`` extra) is not installed; the message says how to install it."""
+
+
+def view_extra_available() -> bool:
+    """Whether plotly (the ``view`` extra) is importable."""
+    try:
+        return importlib.util.find_spec("plotly") is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def plotly_bundle() -> str:
