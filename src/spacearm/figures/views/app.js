@@ -65,6 +65,7 @@
         {margin: {l: 0, r: 0, t: 20, b: 0}, showlegend: false, title: {text: "the picked design", font: {size: 12}},
          scene: sceneLayout(r.extent, flat)}, CONFIG);
     });
+    document.body.dataset.spacearm = "ready";
     return;
   }
   var E = D.extent;
@@ -124,6 +125,7 @@
       });
     }
     window.spacearmView = {pose: pose, posture: posture, attitude: attitude, update: update};
+    document.body.dataset.spacearm = "ready";
     return;
   }
 
@@ -174,5 +176,6 @@
     });
     show(0);
     window.spacearmView = {poseAt: poseAt, show: show, count: count};
+    document.body.dataset.spacearm = "ready";
   }
 })();

@@ -102,6 +102,8 @@ def write_page(path: str | Path, *, title: str, note: str, data: dict) -> Path:
         '<div id="plot"></div>',
         f'<div id="panel"><h1>{html.escape(title)}</h1><p>{html.escape(note)}</p>'
         '<div id="controls"></div><div id="readout"></div></div>',
+        # Any script error is kept on the page (data-error), where a test or a reader can see it.
+        "<script>window.addEventListener('error', function (e) { document.body.dataset.error = e.message; });</script>",
         f"<script>{bundle}</script>",
         f"<script>{FK_SCRIPT.read_text()}</script>",
         f"<script>window.SPACEARM = {_json(data)};</script>",
