@@ -207,11 +207,11 @@ def _pixels_near(image: np.ndarray, rgb, tolerance: int = 40) -> int:
 
 @needs_chromium
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", ["ur5", "planar", "replay", "front", "front3"])
-def test_pages_render_offline_in_chromium(pages, front_pages, tmp_path, kind):
+@pytest.mark.parametrize("kind", ["ur5", "planar", "replay", "front", "front3", "shells"])
+def test_pages_render_offline_in_chromium(pages, front_pages, shells_page, tmp_path, kind):
     """A few seconds each: the page draws the links (their blue) or the front's markers, and requests
     nothing from the network."""
-    page = {**pages, "front": front_pages["spatial"], "front3": front_pages["three"]}[kind]
+    page = {**pages, "front": front_pages["spatial"], "front3": front_pages["three"], "shells": shells_page["page"]}[kind]
     image, requested = _render(page, tmp_path)
     plot = image[:, : image.shape[1] - 340]  # left of the control panel
     background = int((plot.min(axis=-1) >= 250).sum())
@@ -335,3 +335,39 @@ def test_replay_frame_slider_in_chromium(robots, pages, tmp_path):
     assert state.get("spacearm") == "ready" and "error" not in state
     np.testing.assert_allclose(json.loads(state["result"])[-1], tip[k], rtol=0, atol=1e-9)
     assert np.linalg.norm(tip[k] - tip[0]) > 0.05  # frame k is elsewhere: the slider moved the arm
+
+
+@pytest.fixture(scope="session")
+def shells_page(tmp_path_factory):
+    """shells.html of a 3-design bus-mass sweep of the 3-DOF arm, with made-up radii (the metrics
+    themselves are tested in test_spatial_workspaces.py; here only the page)."""
+    from spacearm.figures.views import shells_view
+    from spacearm.studies import load_sweep
+
+    spec = load_sweep(dict(name="shells", robot=str(ROOT / "configs" / "arm3dof-100kg.yaml"),
+                           axes={"mass": {"field": "base.mass", "values": [50.0, 100.0, 400.0]}},
+                           metrics=[{"name": "reach_radii"}, {"name": "path_independent_radius"}]))
+    table = {"R_max_m": np.array([1.34, 1.47, 1.61]), "R_inner_m": np.array([0.02, 0.07, 0.12]),
+             "R_path_independent_m": np.array([0.03, np.inf, 0.18])}
+    out = tmp_path_factory.mktemp("shells")
+    assert shells_view(spec, out, {"w_avg_m3": np.ones(3)}) == []  # no shell column: no page
+    (page,) = shells_view(spec, out, table)
+    return dict(spec=spec, page=page)
+
+
+@needs_node
+def test_shells_page_holds_each_designs_robot(shells_page):
+    """Design k of the page is sweep point k (the bus mass moves the centroid, so the tip differs)."""
+    from spacearm.studies.designs import build_designs
+
+    program = _page_scripts(shells_page["page"]) + """
+    const D = window.SPACEARM;
+    console.log(JSON.stringify(D.designs.map((d) => [spacearmPose(d.model, d.posture, null).joints.slice(-1)[0],
+        d.shells.map((s) => s.radius)])));"""
+    drawn = _node(program)
+    robot, _ = build_designs(shells_page["spec"])
+    expected = np.stack([np.asarray(sa.tip_position(jax.tree_util.tree_map(lambda leaf: leaf[k], robot),
+                                                    np.zeros(robot.n_joints))) for k in range(3)])
+    np.testing.assert_allclose([tip for tip, _ in drawn], expected, rtol=0, atol=1e-9)
+    assert np.ptp(expected, axis=0).max() > 1e-3
+    assert [radii for _, radii in drawn][1] == [1.47, 0.07, None]  # an infinite radius draws no sphere

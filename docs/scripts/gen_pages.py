@@ -114,6 +114,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.figures.views.arm", "Figures", "a robot on its bus with a slider per joint"),
     ("spacearm.figures.views.replay", "Figures", "a recorded maneuver replayed frame by frame"),
     ("spacearm.figures.views.front", "Figures", "a Pareto front with the variables on hover and the picked robot"),
+    ("spacearm.figures.views.shells", "Figures", "a sweep's workspace shells about the system centroid, design by design"),
     ("spacearm.cli", "Command line", "the `spacearm` command: one module per subcommand"),
     ("spacearm.cli.validate", "Command line", "`spacearm validate`"),
     ("spacearm.cli.info", "Command line", "`spacearm info`"),

@@ -4,7 +4,8 @@
 - `page`: one page with plotly.js, the forward kinematics and the data inlined;
 - `arm`: a robot on its bus with a slider per joint (``spacearm view``);
 - `replay`: a recorded maneuver replayed (``spacearm reach --html``);
-- `front`: a Pareto front with the design variables on hover (``spacearm optimize``).
+- `front`: a Pareto front with the design variables on hover (``spacearm optimize``);
+- `shells`: a sweep's workspace shells, design by design (``spacearm sweep``).
 
 Library choice (measured on a UR5 scene, Plotly 7.1, meshcat 0.3.2, viser 1.1.1): Plotly
 inlines its 4.8 MB plotly.js and renders offline from ``file://`` in headless Chromium
@@ -22,3 +23,4 @@ from .page import (
     view_extra_available as view_extra_available,
 )
 from .replay import replay_from_npz as replay_from_npz, write_replay_view as write_replay_view
+from .shells import shells_view as shells_view, write_shells_view as write_shells_view

@@ -68,6 +68,34 @@
     document.body.dataset.spacearm = "ready";
     return;
   }
+  // A sphere of radius r about the origin as a mesh (rings x segments).
+  function sphere(r, color, name) {
+    var x = [], y = [], z = [], I = [], J = [], K = [], rings = 14, segs = 28;
+    for (var a = 0; a <= rings; a++) for (var b = 0; b < segs; b++) {
+      var t = Math.PI * a / rings, p = 2 * Math.PI * b / segs;
+      x.push(r * Math.sin(t) * Math.cos(p)); y.push(r * Math.sin(t) * Math.sin(p)); z.push(r * Math.cos(t));
+    }
+    for (a = 0; a < rings; a++) for (b = 0; b < segs; b++) {
+      var i0 = a * segs + b, i1 = a * segs + (b + 1) % segs, i2 = i0 + segs, i3 = i1 + segs;
+      I.push(i0, i1); J.push(i2, i2); K.push(i1, i3);
+    }
+    return {type: "mesh3d", x: x, y: y, z: z, i: I, j: J, k: K, color: color, opacity: 0.15, name: name,
+            showlegend: true, hoverinfo: "name"};
+  }
+  if (D.mode === "shells") {
+    var showDesign = function (k) {
+      var d = D.designs[k], traces = poseTraces(spacearmPose(d.model, d.posture, null), d.model).concat(fixedTraces());
+      d.shells.forEach(function (s) { if (s.radius !== null) traces.push(sphere(s.radius, s.color, s.name)); });
+      Plotly.react(plot, traces, {margin: {l: 0, r: 0, t: 30, b: 0}, legend: {x: 0, y: 1},
+        title: {text: D.title, font: {size: 14}}, scene: sceneLayout(D.extent, false), uirevision: "keep"}, CONFIG);
+      readout.textContent = "design " + (k + 1) + " of " + D.designs.length + "\n" + d.label + "\n" +
+        d.shells.map(function (s) { return s.name; }).join("\n");
+    };
+    slider("design", 0, D.designs.length - 1, 1, 0, "", function (v) { showDesign(v); });
+    showDesign(0);
+    document.body.dataset.spacearm = "ready";
+    return;
+  }
   var E = D.extent;
   var layout = {
     margin: {l: 0, r: 0, t: 30, b: 0}, legend: {x: 0, y: 1},

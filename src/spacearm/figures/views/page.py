@@ -40,7 +40,7 @@ body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0;
 .control { margin: 6px 0; }
 .control label { display: flex; justify-content: space-between; }
 .control input[type=range] { width: 100%; }
-#readout { font-family: ui-monospace, monospace; white-space: pre; background: #f6f6f6; padding: 6px; margin-top: 10px; }
+#readout { font-family: ui-monospace, monospace; white-space: pre-wrap; background: #f6f6f6; padding: 6px; margin-top: 10px; }
 button { margin: 4px 4px 4px 0; }
 """
 
