@@ -175,6 +175,9 @@ def test_view_without_plotly_names_the_extra(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "'view' extra" in err and '.[view]' in err
     assert not tmp_path.exists() or not list(tmp_path.iterdir())
+    assert main(["reach", str(ROOT / "configs" / "umetani1990.yaml"), "--from", "0,-60,120", "--to", "2,1",
+                 "--out", str(tmp_path / "reach"), "--html"]) == 2  # checked before planning: nothing written
+    assert "'view' extra" in capsys.readouterr().err and not (tmp_path / "reach").exists()
 
 
 # Headless Chromium ------------------------------------------------------------------------
