@@ -58,9 +58,13 @@ def run(args: argparse.Namespace) -> int:
     from ..figures.views.page import plotly_bundle
     from ..models import load_robot
     from ..models.planar import PlanarRobot
+    from ..models.spatial import SpatialRobot
 
     plotly_bundle()  # the extra is checked before any work (MissingViewExtra: exit 2)
     robot = load_robot(args.robot)
+    if not isinstance(robot, (PlanarRobot, SpatialRobot)):
+        raise ConfigError(f"{args.robot}: spacearm view draws planar and single-arm spatial robots, "
+                          f"not a {type(robot).__name__} yet")
     planar = isinstance(robot, PlanarRobot)
     count = robot.n_links + 1 if planar else robot.n_joints
     posture = None

@@ -103,13 +103,21 @@ def chain_model(robot) -> dict:
 
 
 def scene_extent(robot) -> float:
-    """A half width, m, of a cube about the system centroid that holds the bus and the arm
-    in every posture: the farthest bus corner plus the mount offset plus the arm's reach, +10 %."""
+    """A half width, m, of a cube about the system centroid that holds the bus and the arm in
+    every posture, +10 %: the farther of the bus corners and the arm's reach from the bus
+    centroid, plus the most the system centroid can stray from the bus centroid (the mass
+    fraction off the bus times that reach)."""
     corners, _ = bus_box(robot)
     if isinstance(robot, PlanarRobot):
-        reach = float(robot.base_attach) + float(np.sum(np.asarray(robot.link_a) + np.asarray(robot.link_b)))
-        return 1.1 * (float(np.max(np.linalg.norm(corners, axis=-1))) + reach)
-    com = np.asarray(robot.base_com, float)
-    bus = float(np.max(np.linalg.norm(corners - com, axis=-1)))
-    mount = float(np.linalg.norm(np.asarray(robot.mount_xyz, float) - com))
-    return 1.1 * (bus + mount + float(robot.reach))
+        masses = np.asarray(robot.link_mass, float)
+        arm = float(robot.base_attach) + float(np.sum(np.asarray(robot.link_a) + np.asarray(robot.link_b)))
+        bus = float(np.max(np.linalg.norm(corners, axis=-1)))
+        fraction = masses.sum() / (masses.sum() + float(robot.base_mass))
+    else:
+        com = np.asarray(robot.base_com, float)
+        bus = float(np.max(np.linalg.norm(corners - com, axis=-1)))
+        mount = float(np.linalg.norm(np.asarray(robot.mount_xyz, float) - com))
+        arm = mount + max(float(robot.reach), float(np.linalg.norm(robot.root_com)))
+        off_bus = float(robot.root_mass) + float(np.sum(robot.link_mass))
+        fraction = off_bus / (off_bus + float(robot.base_mass))
+    return 1.1 * (max(bus, arm) + fraction * arm)
