@@ -7,12 +7,13 @@
 - `front`: a Pareto front with the design variables on hover (``spacearm optimize``);
 - `shells`: a sweep's workspace shells, design by design (``spacearm sweep``).
 
-Library choice (measured on a UR5 scene, Plotly 7.1, meshcat 0.3.2, viser 1.1.1): Plotly
-inlines its 4.8 MB plotly.js and renders offline from ``file://`` in headless Chromium
-with hover, zoom and turn built in; meshcat's ``static_html`` is smaller (0.86 MB) but
-records only through a ZeroMQ server it starts on local ports and has no hover or
-custom controls; viser's recordings are loaded by its client over HTTP, so they need a
-server. See docs/guide/views.md.
+Library choice (measured on a UR5-sized scene, Plotly 7.1, meshcat 0.3.2, viser 1.1.1; every
+page opened from disk in headless Chromium with no network): Plotly inlines its 4.8 MB
+plotly.js and takes a page script that re-poses the arm (``Plotly.restyle``), with hover,
+zoom and turning built in. meshcat's ``static_html`` (0.86 MB) and viser's client with an
+embedded scene (0.82 MB) are smaller, but both record through a server they start on local
+ports, and their pages replay what was recorded (meshcat's has no custom controls, viser's
+call back into Python): no slider could re-pose the arm without Python. See docs/guide/views.md.
 """
 
 from .arm import write_arm_view as write_arm_view
