@@ -374,3 +374,12 @@ def test_shells_page_holds_each_designs_robot(shells_page):
     np.testing.assert_allclose([tip for tip, _ in drawn], expected, rtol=0, atol=1e-9)
     assert np.ptp(expected, axis=0).max() > 1e-3
     assert [radii for _, radii in drawn][1] == [1.47, 0.07, None]  # an infinite radius draws no sphere
+
+
+def test_replay_names_the_planar_phases(robots, tmp_path):
+    planar = robots["umetani1990.yaml"]
+    phi = np.radians([[0.0, 30.0, 60.0], [5.0, 40.0, 50.0], [6.0, 41.0, 49.0]])
+    page = write_replay_view(planar, tmp_path / "r.html", phi=phi, tip=np.asarray(sa.tip_position(planar, phi)),
+                             phase=np.array([0, 1, 2]))
+    data = json.loads(re.search(r"window\.SPACEARM = (\{.*?\});</script>", page.read_text()).group(1))
+    assert data["frames"]["phase"] == ["repositioning move", "reorientation loop", "straight tip path"]

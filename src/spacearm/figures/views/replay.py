@@ -31,7 +31,8 @@ def write_replay_view(robot, path: str | Path, *, joints=None, base_rotation=Non
         phi: planar robots: ``(k, n+1)`` postures [phi0, phi1..phin], rad.
         tip: ``(k, 2)`` or ``(k, 3)`` the tip about the system centroid, inertial axes, m.
         target: ``(2,)`` or ``(3,)`` the point reached, drawn when given.
-        phase: ``(k,)`` a label per frame (e.g. ``"loop"``, ``"straight"``), shown with the frame.
+        phase: ``(k,)`` a label per frame (e.g. ``"loop"``, ``"straight"``), shown with the frame; the
+            integer phases of a planar reach plan (0, 1, 2) are shown by name.
         seconds: the length of one playback.
 
     Raises:
@@ -58,7 +59,7 @@ def write_replay_view(robot, path: str | Path, *, joints=None, base_rotation=Non
             raise ValueError(f"base_rotation: expected shape ({len(q)}, 3, 3), got {R.shape}")
     if tip.ndim != 2 or tip.shape[0] != len(q):
         raise ValueError(f"tip: expected {len(q)} rows, got shape {tip.shape}")
-    frames = dict(q=q, R=R, tip=tip, phase=None if phase is None else [str(p) for p in np.asarray(phase).ravel()])
+    frames = dict(q=q, R=R, tip=tip, phase=None if phase is None else [_phase_name(p) for p in np.asarray(phase).ravel()])
     reach = float(np.max(np.linalg.norm(tip, axis=-1)))
     extent = max(scene_extent(robot), 1.1 * reach, 0.0 if target is None else 1.1 * float(np.linalg.norm(target)))
     data = dict(mode="replay", model=model, frames=frames, extent=extent, seconds=float(seconds),
@@ -67,6 +68,16 @@ def write_replay_view(robot, path: str | Path, *, joints=None, base_rotation=Non
     note = ("Press play or drag the frame slider. The arm is redrawn at every frame from the recorded joints and "
             "bus attitude; the red line is the recorded tip. Positions about the system centroid, inertial axes.")
     return write_page(path, title=f"spacearm replay: {model['name']}", note=note, data=data)
+
+
+# The integer phases of spacearm.planning.reach.ReachPlan.phase.
+_PHASES = {0: "repositioning move", 1: "reorientation loop", 2: "straight tip path"}
+
+
+def _phase_name(value) -> str:
+    if isinstance(value, (int, np.integer)) or (isinstance(value, (float, np.floating)) and float(value).is_integer()):
+        return _PHASES.get(int(value), str(value))
+    return str(value)
 
 
 def replay_from_npz(robot, npz_path: str | Path, path: str | Path, **options) -> Path:
