@@ -383,3 +383,23 @@ def test_replay_names_the_planar_phases(robots, tmp_path):
                              phase=np.array([0, 1, 2]))
     data = json.loads(re.search(r"window\.SPACEARM = (\{.*?\});</script>", page.read_text()).group(1))
     assert data["frames"]["phase"] == ["repositioning move", "reorientation loop", "straight tip path"]
+
+
+@needs_chromium
+@pytest.mark.slow
+def test_clicking_the_front_draws_that_design(front_pages, tmp_path):
+    """A click on a gradient-front point draws that design's robot beside the front (tip to 1e-9 m)."""
+    script = """
+    var T = window.SPACEARM.traces[0], j = 5;
+    document.getElementById("plot").emit("plotly_click", {points: [{customdata: T.customdata[j], text: T.text[j]}]});
+    var d = document.querySelector("#controls div").data[3];
+    document.body.dataset.result = JSON.stringify({x: T.x[j], tip: [d.x[d.x.length - 1], d.y[d.y.length - 1],
+        d.z[d.z.length - 1]], readout: document.getElementById("readout").textContent});"""
+    state = _drive(front_pages["spatial"], tmp_path, script)
+    assert state.get("spacearm") == "ready" and "error" not in state
+    result = json.loads(state["result"])
+    problem, designs, objectives = front_pages["problem"], front_pages["designs"], front_pages["objectives"]
+    row = int(np.argmin(np.abs(objectives[:, 0] - result["x"])))
+    robot = jax.tree_util.tree_map(np.asarray, problem.robot(designs[row]))
+    np.testing.assert_allclose(result["tip"], sa.tip_position(robot, np.zeros(robot.n_joints)), rtol=0, atol=1e-9)
+    assert f"{problem.variable_names[0]} = {designs[row, 0]:.6g}" in result["readout"]
