@@ -108,6 +108,13 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.figures.spatial_analysis", "Figures", "workspace shells and w* maps on joint slices of spatial arms"),
     ("spacearm.figures.sweep", "Figures", "a sweep's heat maps and metric plots"),
     ("spacearm.figures.design", "Figures", "Pareto fronts, convergence, the best designs"),
+    ("spacearm.figures.views", "Figures", "interactive offline HTML views (the `view` extra)"),
+    ("spacearm.figures.views.model", "Figures", "the kinematic model as JSON for the browser's forward kinematics"),
+    ("spacearm.figures.views.page", "Figures", "one self-contained page: plotly.js, fk.js and the data inlined"),
+    ("spacearm.figures.views.arm", "Figures", "a robot on its bus with a slider per joint"),
+    ("spacearm.figures.views.replay", "Figures", "a recorded maneuver replayed frame by frame"),
+    ("spacearm.figures.views.front", "Figures", "a Pareto front with the variables on hover and the picked robot"),
+    ("spacearm.figures.views.shells", "Figures", "a sweep's workspace shells about the system centroid, design by design"),
     ("spacearm.cli", "Command line", "the `spacearm` command: one module per subcommand"),
     ("spacearm.cli.validate", "Command line", "`spacearm validate`"),
     ("spacearm.cli.info", "Command line", "`spacearm info`"),
@@ -115,6 +122,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.cli.figures", "Command line", "`spacearm figures`"),
     ("spacearm.cli.reach", "Command line", "`spacearm reach`"),
     ("spacearm.cli.optimize", "Command line", "`spacearm optimize`"),
+    ("spacearm.cli.view", "Command line", "`spacearm view`"),
 ]
 
 CLI_WIDTH = "88"  # columns of the rendered --help text

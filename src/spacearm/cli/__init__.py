@@ -32,6 +32,7 @@ COMMANDS: tuple[tuple[str, str], ...] = (
     ("figures", "spacearm.cli.figures"),
     ("reach", "spacearm.cli.reach"),
     ("optimize", "spacearm.cli.optimize"),
+    ("view", "spacearm.cli.view"),
 )
 
 _FLOAT32_HELP = "compute in float32 (faster, less exact); default float64"

@@ -35,6 +35,17 @@ def run(args: argparse.Namespace) -> int:
     problem = load_design_problem(config, name=os.fspath(args.file),
                                   base_dir=os.path.dirname(os.path.abspath(args.file)))
     out_dir = Path(args.out) if args.out else Path("results") / problem.name
-    run_problem(problem, out_dir, baselines=not args.no_baselines, config=config, outputs=(plot_results,),
+    outputs = (plot_results, *_html_outputs())
+    run_problem(problem, out_dir, baselines=not args.no_baselines, config=config, outputs=outputs,
                 command=sys.argv, cost_ratio="measured" if args.cost_ratio else "search")
     return 0
+
+
+def _html_outputs() -> tuple:
+    """front.html (figures.views) with the 'view' extra; without it, a note and no page."""
+    from ..figures.views import VIEW_EXTRA_MESSAGE, front_view, view_extra_available
+
+    if view_extra_available():
+        return (front_view,)
+    print(f"front.html skipped: {VIEW_EXTRA_MESSAGE}", file=sys.stderr)
+    return ()

@@ -61,12 +61,18 @@ def register(subparsers) -> None:
     parser.add_argument("--radians", action="store_true", help="read --from in radians")
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
     parser.add_argument("--animate", action="store_true", help="also write reach.gif")
+    parser.add_argument("--html", action="store_true",
+                        help="also write reach.html: an interactive offline replay (needs the 'view' extra)")
 
 
 def run(args: argparse.Namespace) -> int:
     from ..models import load_robot
     from ..models.spatial import SpatialRobot
 
+    if args.html:  # the 'view' extra is checked before any work (exit 2 naming it)
+        from ..figures.views.page import plotly_bundle
+
+        plotly_bundle()
     robot = load_robot(args.robot)
     if isinstance(robot, SpatialRobot):
         return _run_spatial(args, robot)
@@ -108,6 +114,7 @@ def _run_planar(args: argparse.Namespace, robot) -> int:
         joint_waypoints_rad=plan.joint_waypoints,
         target_m=plan.target,
     )
+    _write_replay(args, robot, out, lines)
     print("\n".join(lines))
     return 0
 
@@ -156,5 +163,14 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
         start_joints=q,
         start_rotation=R0,
     )
+    _write_replay(args, robot, out, lines)
     print("\n".join(lines))
     return 0
+
+
+def _write_replay(args: argparse.Namespace, robot, out: Path, lines: list[str]) -> None:
+    """``--html``: reach.html, the replay of the history just written to reach.npz (figures.views)."""
+    if args.html:
+        from ..figures.views import replay_from_npz
+
+        lines.append(f"replay         {replay_from_npz(robot, out / 'reach.npz', out / 'reach.html')}")

@@ -90,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
     print(spec.summary(), file=sys.stderr)
     try:
         # The table, the grids and the report, then the figures (listed in the manifest).
-        result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv, outputs=(write_figures,))
+        result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv,
+                           outputs=(write_figures, _shells_view))
     except OSError as error:  # e.g. a read-only file system under --out
         raise ConfigError(f"--out {out_dir}: cannot write the results ({error.strerror or error})") from None
     if not result.manifest:  # a distributed sweep's other processes: process 0 wrote the results
@@ -100,3 +101,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {out_dir}/ ({len(result.files)} files; compile {timings['compile']:.1f} s, "
           f"run {timings['run']:.1f} s, wall {timings['wall']:.1f} s)")
     return 0
+
+
+def _shells_view(spec, out_dir: Path, table) -> list[Path]:
+    """shells.html (figures.views) where the sweep computes shell radii; needs the 'view' extra."""
+    from ..figures.views.shells import shells_view
+
+    return shells_view(spec, out_dir, table)
