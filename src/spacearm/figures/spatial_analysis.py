@@ -1,4 +1,4 @@
-"""Spatial workspace shells and w* maps on joint slices (issue 17, item 5).
+"""Spatial workspace shells and w* maps on joint slices.
 
 - ``spatial_shells``: for the example spatial robots, tips of joint-box postures (bus
   attitude fixed) in the meridian half-plane (rho = sqrt(x^2 + y^2), z) about the system
