@@ -202,3 +202,24 @@ def test_every_page_is_in_the_nav():
     pages = {str(p.relative_to(ROOT / "docs")) for p in (ROOT / "docs").rglob("*.md") if "scripts" not in p.parts}
     assert pages - listed == set(), "pages not in the nav"
     assert listed - pages <= {"reference/cli.md", "reference/layout.md", "reference/table2-report.md"}
+
+
+def _yaml_blocks(page: Path) -> list[str]:
+    return re.findall(r"```yaml\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
+
+
+def test_the_spatial_tutorial_shows_the_files_it_ships():
+    """The robot file, sweep and design problem of the spatial tutorial are the shipped ones
+    (configs/baxter-smallsat.yaml, sweeps/baxter-mount.yaml, sweeps/baxter-pareto.yaml), up to
+    the robot path, which is one folder shorter in the tutorial's working folder."""
+    yaml = pytest.importorskip("yaml")
+    blocks = [yaml.safe_load(block) for block in _yaml_blocks(ROOT / "docs" / "tutorials" / "spatial-arm.md")]
+    robot, as_written, locks, sweep, problem = blocks
+    shipped_robot = yaml.safe_load((ROOT / "configs" / "baxter-smallsat.yaml").read_text())
+    robot["arm"].update(as_written)  # the two fixes the tutorial adds, one at a time
+    robot["arm"].update(locks)
+    assert robot == shipped_robot
+    for block, name in ((sweep, "baxter-mount.yaml"), (problem, "baxter-pareto.yaml")):
+        shipped = yaml.safe_load((ROOT / "sweeps" / name).read_text())
+        assert shipped.pop("robot") == "../configs/baxter-smallsat.yaml" and block.pop("robot") == "baxter-smallsat.yaml"
+        assert block == shipped, name
