@@ -4,11 +4,24 @@ written through the one atomic writer (spacearm.io)."""
 import subprocess
 import sys
 import types
+from importlib import metadata
+from pathlib import Path
 
+import matplotlib
+import matplotlib.container
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
 import spacearm as sa
+from spacearm.cli.sweep import format_table
+from spacearm.figures import spatial
+from spacearm.figures import sweep as sweep_figures
+from spacearm.figures.sweep import COLUMN_LABELS, column_label
+from spacearm.studies import load_sweep
+from spacearm.studies.metrics import METRICS
+
+matplotlib.use("Agg")
 
 
 def test_figures_do_not_switch_float64_on(tmp_path):
@@ -50,3 +63,90 @@ def test_animate_reach_writes_atomically(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="disk full"):
         animate_reach(robot, plan, tmp_path / "again.gif", frames=3)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["reach.gif"]  # nothing half-written
+
+
+# --- Outputs a person reads: labels, error bars, equal 3-D scales, the printed table ----------
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "spacearm"
+
+
+def test_no_library_module_changes_a_global_jax_setting():
+    """Only `enable_x64` (the documented switch, in _core) and the command line may set JAX's config."""
+    allowed = {"_core/numeric.py", "cli"}
+    offenders = []
+    for path in sorted(SRC.rglob("*.py")):
+        rel = path.relative_to(SRC).as_posix()
+        if rel in allowed or rel.split("/")[0] in allowed:
+            continue
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            if "jax.config.update(" in line and not line.lstrip().startswith(("#", '"', "'")):
+                offenders.append(f"{rel}:{number}: {line.strip()}")
+    assert not offenders, "\n".join(offenders)
+
+
+def test_every_sweep_column_has_a_label_in_words():
+    for name, metric in METRICS.items():
+        for column in metric.columns({}):
+            if column.endswith("_error"):
+                continue
+            assert column in COLUMN_LABELS, f"metric {name}: column {column} has no label"
+            assert column_label(column) != column
+    assert column_label("w_avg_m3").endswith("m³") and column_label("C_w_avg").endswith("rad/rad")
+
+
+def test_sweep_plots_draw_errors_as_bars_not_as_panels(tmp_path, monkeypatch):
+    """A 1-D sweep with averages: one panel per metric, each with error bars (2 standard
+    errors) and its label in words; the `_error` columns get no panel of their own."""
+    try:
+        metadata.version("example-robot-data")
+    except metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    root = SRC.parents[1]
+    spec = load_sweep(root / "sweeps" / "ur5-mass-ratio.yaml")
+    n = len(spec.axes[0].values)
+    table = {"w_avg_m3": np.linspace(0.045, 0.016, n), "w_avg_m3_error": np.full(n, 1e-5),
+             "C_w_avg": np.linspace(0.01, 0.3, n), "C_w_avg_error": np.full(n, 2e-5),
+             "gci": np.linspace(0.265, 0.259, n), "gci_error": np.full(n, 2e-4)}
+    drawn = []
+    monkeypatch.setattr(sweep_figures, "save_figure", lambda fig, path, **kw: drawn.append(fig) or path)
+    sweep_figures.sweep_figures(spec, tmp_path, table)
+    (fig,) = drawn
+    axes = fig.axes
+    assert len(axes) == 3
+    for ax, column in zip(axes, ("w_avg_m3", "C_w_avg", "gci")):
+        bars = [c for c in ax.containers if isinstance(c, matplotlib.container.ErrorbarContainer)]
+        assert len(bars) == 1
+        segments = bars[0].lines[2][0].get_segments()
+        heights = [abs(s[1][1] - s[0][1]) for s in segments]
+        np.testing.assert_allclose(heights, 4 * table[f"{column}_error"], rtol=1e-9)  # +- 2 standard errors
+        assert ax.get_ylabel() == sweep_figures.column_label(column)
+    assert axes[0].get_xlabel() == "ratio = arm.mass_ratio"
+
+
+def test_3d_figures_have_equal_scales_and_keep_the_bus_inside():
+    rotation = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    chain = np.array([[0.2, 0.0, 0.3], [0.9, 0.1, 0.8], [1.6, 0.2, 0.4]])
+    bus = spatial.bus_corners(np.array([-0.3, 0.1, -0.2]), rotation)
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    spatial._equal(ax, np.vstack([chain, bus]))
+    limits = np.array([ax.get_xlim(), ax.get_ylim(), ax.get_zlim()])
+    np.testing.assert_allclose(np.diff(limits, axis=1), np.diff(limits[:1], axis=1).repeat(3, 0))  # equal spans
+    points = np.vstack([chain, bus])
+    assert np.all(points >= limits[:, 0]) and np.all(points <= limits[:, 1])
+    np.testing.assert_allclose(ax.get_box_aspect() / ax.get_box_aspect()[0], 1.0)
+    plt.close(fig)
+
+
+def test_sweep_prints_its_table_with_errors_and_summarizes_long_ones():
+    short = {"design": np.arange(3.0), "x": np.array([0.1, 0.2, 0.3]), "w_avg_m3": np.array([0.5, 0.25, 0.125]),
+             "w_avg_m3_error": np.array([1e-4, 2e-4, 3e-4])}
+    lines = format_table(short).splitlines()
+    assert lines[0].split() == ["design", "x", "w_avg_m3"]
+    assert lines[2].split() == ["1", "0.2", "0.25", "±", "0.0002"] and len(lines) == 4
+    n = 50
+    long = {"design": np.arange(float(n)), "S_G": np.linspace(1.0, 2.0, n)}
+    lines = format_table(long, max_rows=20).splitlines()
+    assert len(lines) == 1 + 20 + 1 + 3 + 1
+    assert lines[22].split() == ["min", "1"] and lines[23].split() == ["median", "1.5"]
+    assert lines[24].split() == ["max", "2"] and "50 rows" in lines[-1]

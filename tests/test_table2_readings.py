@@ -155,6 +155,24 @@ def test_no_cross_terms_is_the_posture_averaged_inertia(table1):
     np.testing.assert_allclose(i_m, np.broadcast_to(np.mean(ref_m, axis=0), i_m.shape), rtol=1e-12)
 
 
+def test_no_base_arm_cross_terms_is_the_faithful_inertia_averaged_over_phi1(table1):
+    # The base-arm terms are D01 cos phi1 and D02 cos(phi1 + phi2); the arm's own D12 cos phi2
+    # does not depend on phi1. Averaging the faithful I_S, I_M over phi1 (uniform periodic grid)
+    # removes exactly the base-arm terms and keeps D12's.
+    robot = with_b0(table1, 1.5)
+    grid = np.linspace(-math.pi, math.pi, 32, endpoint=False)
+    phi2 = np.array([0.3, 1.1, 2.0, 2.9])
+    p1, p2 = np.meshgrid(grid, phi2, indexing="ij")
+    phi = np.stack([np.zeros_like(p1), p1, p2], axis=-1)
+    i_s, i_m = tv.momentum_inertias(variant("no base-arm cross terms"), robot, phi)
+    ref_s, ref_m = kin.momentum_inertias(robot, phi)
+    np.testing.assert_allclose(i_s, np.broadcast_to(np.mean(ref_s, axis=0), i_s.shape), rtol=1e-12)
+    np.testing.assert_allclose(i_m, np.broadcast_to(np.mean(ref_m, axis=0), i_m.shape), rtol=1e-12)
+    # and it differs from dropping every cross term: D12 cos phi2 is still there
+    all_dropped, _ = tv.momentum_inertias(variant("no cross terms"), robot, phi)
+    assert np.ptp(np.asarray(i_s)[0]) > 1.0 and np.ptp(np.asarray(all_dropped)[0]) < 1e-9
+
+
 def test_link_rate_slip_reads_h_for_H(table1):
     # H_j = sum_{l>=j} h_l (faithful); the slip takes h_j: I_S = H0 - H1, I_M = (H1 - H2, H2).
     robot, phi = with_b0(table1, 1.0), postures()

@@ -4,7 +4,8 @@ Generates, on every ``mkdocs build`` / ``mkdocs serve``:
 
 * ``reference/cli.md``: the help of ``spacearm`` and of every subcommand, rendered from
   ``spacearm.cli.build_parser()``, so the page never goes stale;
-* ``reference/api/*.md`` and its ``SUMMARY.md`` (read by mkdocs-literate-nav): one
+* ``reference/api/*.md`` and its ``SUMMARY.md`` (read by mkdocs-literate-nav, then
+  dropped by ``docs/scripts/hooks.py`` so it is not built as a page): one
   mkdocstrings ``::: module`` page per entry of :data:`API_MODULES`;
 * ``reference/api/spacearm.md``: the top-level package with a table of every public
   name and the module that defines it (``spacearm/__init__.py`` resolves some names

@@ -4,7 +4,7 @@ Starts from Umetani & Yoshida, "Workspace and Manipulability Analysis of Space
 Manipulator", Trans. SICE 26(2), 1990. Importing the package changes no global JAX
 setting; call `enable_x64` once for float64 (the command line does).
 
-The names below are the public API (DESIGN.md, "Public API"). The kernels of the
+The names below are the public API. The kernels of the
 lower layers are imported at once; the higher layers (analysis, motion, planning,
 design, io) on first use, so ``import spacearm`` stays light.
 """

@@ -11,7 +11,7 @@ Generalized Jacobian (Umetani & Yoshida 1990, eq. 6, in any dimension):
     J* = J_M - J_S I_S^-1 I_M,
 
 the tip twist per joint rate at zero momentum. Spatial J* is expressed in inertial axes
-as blkdiag(R, R) J*_bus (SPATIAL.md).
+as blkdiag(R, R) J*_bus, R the bus attitude.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def _rotate_vector(family: RobotFamily, value, base_rotation):
 
 
 def _rotate_twist_rows(family: RobotFamily, J, base_rotation):
-    """blkdiag(R, R) J for spatial twists [v; w] (SPATIAL.md: J*_inertial = blkdiag(R, R) J*_bus)."""
+    """blkdiag(R, R) J for spatial twists [v; w] (J*_inertial = blkdiag(R, R) J*_bus)."""
     if base_rotation is None:
         return J
     if not family.rotates_with_base:

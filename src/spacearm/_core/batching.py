@@ -24,7 +24,7 @@ def bucket_size(count: int, minimum: int = 1) -> int:
 
     A compiled program is specialized to its shapes, so a kernel that took every batch
     size as it comes would compile once per size. Padding to a few bucket sizes (and
-    masking the padding) keeps one program per bucket (DESIGN.md, "Scale").
+    masking the padding) keeps one program per bucket.
     """
     return max(int(minimum), 1 << max(int(count) - 1, 0).bit_length())
 

@@ -1,4 +1,4 @@
-"""Averages of posture metrics over the joint box, with error estimates (issue 17, item 2).
+"""Averages of posture metrics over the joint box, with error estimates.
 
 Each average is the mean of a per-posture metric under the uniform measure on the joint
 box (`joint_box`: limits where given, one turn for a continuous joint):

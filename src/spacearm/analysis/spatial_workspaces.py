@@ -1,4 +1,4 @@
-"""Workspaces of any robot family by search over the joint box (issue 17, item 1).
+"""Workspaces of any robot family by search over the joint box.
 
 The paper's workspaces in 3-D (Umetani & Yoshida 1990, sec. 3, and Papadopoulos &
 Dubowsky 1993). All radii are tip distances from the system centroid, which zero

@@ -7,8 +7,12 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .._core.errors import ConfigError
 from ._help import LazyEpilogHelp
+
+ROWS_SHOWN = 20  # a longer table prints its first rows and a summary of every column
 
 
 def _epilog() -> str:
@@ -97,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
     if not result.manifest:  # a distributed sweep's other processes: process 0 wrote the results
         print(f"process {args.process_id} of {args.num_processes}: done; process 0 wrote {out_dir}/")
         return 0
+    print(format_table(result.table))
     timings = result.manifest["timings_s"]
     print(f"wrote {out_dir}/ ({len(result.files)} files; compile {timings['compile']:.1f} s, "
           f"run {timings['run']:.1f} s, wall {timings['wall']:.1f} s)")
@@ -108,3 +113,40 @@ def _shells_view(spec, out_dir: Path, table) -> list[Path]:
     from ..figures.views.shells import shells_view
 
     return shells_view(spec, out_dir, table)
+
+
+def _cell(value: float) -> str:
+    return f"{value:.6g}" if np.isfinite(value) else str(value)
+
+
+def format_table(table: dict[str, np.ndarray], max_rows: int = ROWS_SHOWN) -> str:
+    """The sweep's table as aligned text: a value and its ``_error`` column as ``v ± e``.
+
+    A table longer than ``max_rows`` shows its first rows, then the minimum, median and
+    maximum of every column over all rows, so a large sweep still ends on one screen.
+    """
+    names = [n for n in table if not (n.endswith("_error") and n[: -len("_error")] in table)]
+    rows = len(table["design"]) if "design" in table else len(next(iter(table.values())))
+
+    def cell(name: str, value: float, error: float | None) -> str:
+        return _cell(value) if error is None else f"{_cell(value)} ± {error:.2g}"
+
+    def line(i: int) -> list[str]:
+        out = []
+        for name in names:
+            error = table.get(name + "_error")
+            out.append(cell(name, float(table[name][i]), None if error is None else float(error[i])))
+        return out
+
+    body = [line(i) for i in range(min(rows, max_rows))]
+    if rows > max_rows:
+        body.append(["..."] * len(names))
+        for label, reduce in (("min", np.nanmin), ("median", np.nanmedian), ("max", np.nanmax)):
+            body.append([label if name == "design" else _cell(float(reduce(np.asarray(table[name], float))))
+                         for name in names])
+    widths = [max(len(name), *(len(row[j]) for row in body)) for j, name in enumerate(names)]
+    text = ["  ".join(name.rjust(w) for name, w in zip(names, widths, strict=True))]
+    text += ["  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)) for row in body]
+    if rows > max_rows:
+        text.append(f"({rows} rows; the first {max_rows} shown, then min, median and max over all rows)")
+    return "\n".join(text)

@@ -51,8 +51,8 @@ def contour_map(ax, robot, *, ground: bool = False, n_cells: int = 241, elbow: s
     filled = ax.contourf(x, y, w, levels=np.arange(0, 11), cmap="viridis", extend="max")
     lines = ax.contour(x, y, w, levels=CONTOUR_LEVELS_X40, colors="k", linewidths=0.6)
     ax.clabel(lines, fmt="%d", fontsize=7)
-    ax.add_patch(_plt().Circle((0, 0), reach, fill=False, color="0.4", lw=0.8))
-    ax.plot(0, 0, "k+", ms=8)
+    ax.add_patch(_plt().Circle((0, 0), reach, fill=False, color="0.4", lw=0.8, label="reach |x| = L"))
+    ax.plot(0, 0, "k+", ms=8, ls="none", label="joint 1 (robot-frame origin)")
     ax.set_aspect("equal")
     ax.set_xlim(-1.05 * reach, 1.05 * reach)
     ax.set_ylim(-1.05 * reach, 1.05 * reach)
@@ -80,14 +80,16 @@ def _draw_arm(ax, robot, phi_arm, color="k"):
     for length, angle in zip(lengths, theta):
         points.append(points[-1] + length * np.array([np.cos(angle), np.sin(angle)]))
     points = np.array(points)
-    ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2, ms=4)
+    ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2, ms=4, label="arm (dots: joints and tip)")
 
 
 def _draw_base(ax, robot, color="0.5"):
-    """The base as a box around its centroid at (-b0, 0) in the robot frame (Table 1: 2.6 m wide)."""
+    """The base as a box around its centroid at (-b0, 0) in the robot frame (Table 1: 2.6 m wide),
+    labelled for a legend."""
     b0 = float(robot.base_attach)
-    ax.add_patch(_plt().Rectangle((-b0 - 1.2, -1.2), 2.4 + 0.2, 2.4, fill=True, alpha=0.25, color=color))
-    ax.plot(-b0, 0, "kx", ms=6)
+    ax.add_patch(_plt().Rectangle((-b0 - 1.2, -1.2), 2.4 + 0.2, 2.4, fill=True, alpha=0.25, color=color,
+                                  label="base (drawn as a 2.6 m box)"))
+    ax.plot(-b0, 0, "kx", ms=6, ls="none", label="base centroid")
 
 
 @figure("fig6")
@@ -127,6 +129,7 @@ def fig7(out_dir: Path) -> list[Path]:
     filled = contour_map(axes[0], robot, title="(a) space robot, w*/L^2 x 40 (elbow-down)")
     contour_map(axes[1], robot, ground=True, title="(b) ground robot, w/L^2 x 40")
     _draw_base(axes[0], robot)
+    axes[0].legend(loc="lower left", fontsize=7, framealpha=0.9)
     fig.colorbar(filled, ax=axes, shrink=0.8, label="w/L^2 x 40")
     return [_save(fig, Path(out_dir) / "fig7.png")]
 
@@ -156,6 +159,8 @@ def fig8(out_dir: Path) -> list[Path]:
         ax.set_xlabel("x_R [m]")
         ax.set_ylabel("y_R [m]")
         ax.grid(alpha=0.3)
+        ax.plot([], [], color="C3", label="manipulability ellipse (x 0.6 m per m/rad)")
+        ax.legend(loc="lower left", fontsize=7, framealpha=0.9)
     return [_save(fig, Path(out_dir) / "fig8.png")]
 
 
@@ -179,7 +184,7 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
         # Fixed-Vehicle workspace drawn as in the paper's Fig. 4: radius L about the origin
         # (that placement gives eq. 9's condition for Area 3 to contain Area 1).
         ax.add_patch(plt.Circle((0, 0), reach, fill=False, color="0.5", ls="--", lw=1.0, label="Fixed Vehicle (radius L)"))
-        ax.plot(0, 0, "k+", ms=8)
+        ax.plot(0, 0, "k+", ms=8, ls="none", label="system centroid (origin)")
         limit = 6.8
         ax.set_xlim(-limit, limit)
         ax.set_ylim(-limit, limit)
@@ -191,6 +196,8 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
             ax.legend(loc="lower left", fontsize=7)
         filled = contour_map(axes[1, column], robot, title=f"{label}: w*/L^2 x 40 (robot frame)")
         _draw_base(axes[1, column], robot)
+        if column == 0:
+            axes[1, column].legend(loc="lower left", fontsize=6, framealpha=0.9)
     fig.subplots_adjust(wspace=0.4, hspace=0.3)
     fig.colorbar(filled, ax=axes[1, :].tolist(), shrink=0.8, label="w*/L^2 x 40")
     return _save(fig, Path(path))

@@ -48,9 +48,17 @@ def arm_points(robot, q, rotation) -> tuple[np.ndarray, np.ndarray]:
     return (chain - centroid) @ R.T, R @ (bus - centroid)
 
 
-def _bus_box(ax, centre, rotation, half, color, alpha):
+BUS_HALF = 0.35  # m, half the edge of the cube drawn for the bus (a marker, not its shape)
+
+
+def bus_corners(centre, rotation, half: float = BUS_HALF) -> np.ndarray:
+    """``(8, 3)`` corners of the cube drawn for the bus, inertial axes."""
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
-    points = centre + corners @ np.asarray(rotation).T
+    return np.asarray(centre) + corners @ np.asarray(rotation).T
+
+
+def _bus_box(ax, centre, rotation, half, color, alpha):
+    points = bus_corners(centre, rotation, half)
     edges = [(0, 1), (0, 2), (0, 4), (1, 3), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 6), (5, 7), (6, 7)]
     for a, b in edges:
         ax.plot(*points[[a, b]].T, color=color, lw=0.8, alpha=alpha)
@@ -58,16 +66,18 @@ def _bus_box(ax, centre, rotation, half, color, alpha):
 
 def _draw(ax, robot, q, R, color, alpha=1.0, label=None):
     chain, bus = arm_points(robot, q, R)
-    _bus_box(ax, bus, R, 0.35, color, 0.6 * alpha)
+    _bus_box(ax, bus, R, BUS_HALF, color, 0.6 * alpha)
     ax.plot(*np.vstack([bus, chain]).T, "-o", color=color, lw=1.6, ms=2.5, alpha=alpha, label=label)
 
 
 def _equal(ax, points):
+    """Equal scales on the three axes, a cube that holds every point (with a 5 % margin)."""
     lo, hi = points.min(axis=0), points.max(axis=0)
-    centre, half = (lo + hi) / 2, max(float(np.max(hi - lo)) / 2, 0.1)
+    centre, half = (lo + hi) / 2, 1.05 * max(float(np.max(hi - lo)) / 2, 0.1)
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1.0, 1.0, 1.0))
     ax.set_xlabel("x, m")
     ax.set_ylabel("y, m")
     ax.set_zlabel("z, m")
@@ -105,12 +115,14 @@ def fig_spatial_loop(out_dir: Path) -> list[Path]:
         _draw(ax, robot, q[k], R[k], color, alpha=0.9 if k in (0, len(q) - 1) else 0.45,
               label="start" if k == 0 else ("end (joints back, bus turned)" if k == len(q) - 1 else None))
         chain, bus = arm_points(robot, q[k], R[k])
-        everything.append(np.vstack([chain, bus]))
+        everything.append(np.vstack([chain, bus_corners(bus, R[k])]))
     tips = np.array([arm_points(robot, qk, Rk)[0][-1] for qk, Rk in zip(q, R)])
     ax.plot(*tips.T, color="C3", lw=1.0, label="tip")
     angle = float(np.linalg.norm(np.asarray(log(jnp.asarray(R[0].T @ R[-1])))))
     ax.set_title(f"UR5 on a 500 kg bus: closed joint loop turns the bus by {np.degrees(angle):.2f} deg")
     _equal(ax, np.vstack(everything + [tips]))
+    ax.plot([], [], "-o", color=cmap(0.5), lw=1.6, ms=2.5, alpha=0.45, label="along the loop (colour: start to end)")
+    ax.plot([], [], color="0.4", lw=0.8, label="bus (a 0.7 m cube about its centroid)")
     ax.legend(loc="upper left", fontsize=8)
     path = save_figure(fig, Path(out_dir) / "spatial_loop.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
@@ -156,10 +168,12 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     _draw(ax, robot, q[0], R[0], "C0", label="start")
     _draw(ax, robot, q[-1], R[-1], "C3", label="end")
     ax.plot(*tips.T, "k-", lw=1.5, label="tip path")
-    ends = [np.vstack(arm_points(robot, q[k], R[k])) for k in (0, -1)]
+    ends = [np.vstack([arm_points(robot, q[k], R[k])[0], bus_corners(arm_points(robot, q[k], R[k])[1], R[k])])
+            for k in (0, -1)]
     _equal(ax, np.vstack(ends + [tips]))
     reason = {0: "J*_v loses rank", 1: "0.6 m reached", 2: "joint limit", 3: "approaching rank loss"}[int(end.reason)]
     ax.set_title(f"straight tip path, {float(end.length):.3f} m ({reason})", fontsize=10)
+    ax.plot([], [], color="0.4", lw=0.8, label="bus (a 0.7 m cube about its centroid)")
     ax.legend(fontsize=8)
     right = fig.add_subplot(1, 2, 2)
     vectors = np.asarray(log(jnp.asarray(np.swapaxes(R[:1], -1, -2) @ R)))

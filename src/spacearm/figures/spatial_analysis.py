@@ -1,4 +1,4 @@
-"""Spatial workspace shells and w* maps on joint slices (issue 17, item 5).
+"""Spatial workspace shells and w* maps on joint slices.
 
 - ``spatial_shells``: for the example spatial robots, tips of joint-box postures (bus
   attitude fixed) in the meridian half-plane (rho = sqrt(x^2 + y^2), z) about the system
@@ -8,13 +8,15 @@
   motion turns the bus by any rotation about the centroid.
 - ``spatial_wstar_slices``: w* (m^3) over a slice of two joints (the others at 0), with
   the dynamic singular curves (det J*_v = 0, or the smallest |s| cells for redundant arms).
+
+Both compute in the precision the caller chose (``spacearm figures`` turns float64 on
+unless ``--float32``): a figure changes no global JAX setting.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
@@ -50,7 +52,6 @@ def _shell(ax, radius, **style):
 
 @figure("spatial_shells")
 def spatial_shells(out_dir: Path) -> list[Path]:
-    jax.config.update("jax_enable_x64", True)
     fig = Figure(figsize=(11, 5), layout="constrained")
     axes = fig.subplots(1, len(ROBOTS))
     for ax, (config, label, _) in zip(np.atleast_1d(axes), ROBOTS):
@@ -83,7 +84,6 @@ def spatial_shells(out_dir: Path) -> list[Path]:
 
 @figure("spatial_wstar_slices")
 def spatial_wstar_slices(out_dir: Path) -> list[Path]:
-    jax.config.update("jax_enable_x64", True)
     fig = Figure(figsize=(12, 4.5), layout="constrained")
     axes = fig.subplots(1, len(ROBOTS))
     for ax, (config, label, (i, j)) in zip(np.atleast_1d(axes), ROBOTS):

@@ -78,7 +78,7 @@ def fig3(out_dir: Path) -> list[Path]:
     _circle(ax, (0, 0), float(ws.guaranteed_radius(robot)), color="tab:green", ls="--", lw=1, label="eq. (8) radius")
     _draw_robot(ax, robot, phi, color="0.3")
     ax.plot(*start, "ko", ms=5, label="start tip")
-    ax.plot(0, 0, "k*", ms=8)
+    ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ax.set_title("(b) Straight-Path Workspace from $\\phi$ = (0, -60, 120) deg")
     ax.legend(loc="lower left", fontsize=8)
     for ax in axes:
@@ -103,7 +103,7 @@ def _fig4_panel(ax, robot, title):
     _circle(ax, (0, 0), r3, color="k", lw=2, label=f"Area 3 Maximum Reachable, {r3:.2f} m")
     _circle(ax, (0, 0), r5, color="tab:green", lw=2, label=f"Area 5 Guaranteed (eq. 8), {r5:.2f} m")
     _draw_robot(ax, robot, np.zeros(robot.n_links + 1), color="0.4")
-    ax.plot(0, 0, "k*", ms=8)
+    ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ok = bool(ws.attachment_condition(robot))
     bound = float(robot.total_mass / robot.base_mass * (robot.reach - K[1:].sum()))
     ax.set_title(f"{title}\nb0 = {float(robot.base_attach):.2f} m; eq. (9) needs b0 >= {bound:.2f} m: {'holds' if ok else 'fails'}")
@@ -183,7 +183,7 @@ def fig5(out_dir: Path) -> list[Path]:
     for name, point, color in (("A", A, "tab:red"), ("B", B, "tab:blue")):
         ax.plot(*point, "o", color=color, ms=8)
         ax.annotate(name, point, xytext=(6, 6), textcoords="offset points", fontsize=12)
-    ax.plot(0, 0, "k*", ms=8)
+    ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ax.text(
         0.01,
         0.01,
@@ -233,7 +233,7 @@ def singularities(out_dir: Path) -> list[Path]:
     ax.set_xlabel("$\\phi_1$ [deg]")
     ax.set_ylabel("$\\phi_2$ [deg]")
     ax.set_title("(a) joint space (det J* does not depend on $\\phi_0$)")
-    ax.legend(loc="upper left", fontsize=7)
+    ax.legend(loc="upper left", fontsize=7, markerscale=4)
 
     ax = axes[0, 1]
     tr = np.asarray(s.tip_robot)
@@ -246,7 +246,7 @@ def singularities(out_dir: Path) -> list[Path]:
     ax.set_xlabel("$X_R$ [m]")
     ax.set_ylabel("$Y_R$ [m]")
     ax.set_title("(b) robot frame $\\Sigma_R$ (origin at joint 1)")
-    ax.legend(loc="lower left", fontsize=7)
+    ax.legend(loc="lower left", fontsize=7, markerscale=4)
 
     ax = axes[1, 0]
     ax.plot(phi1[found & ~folded], radius[found & ~folded], "k.", ms=1.5, label="stretched branch")
@@ -259,7 +259,7 @@ def singularities(out_dir: Path) -> list[Path]:
     ax.set_xlabel("$\\phi_1$ [deg]")
     ax.set_ylabel("distance of the tip from the system centroid [m]")
     ax.set_title("(c) inertial radius of the singular postures")
-    ax.legend(loc="upper left", fontsize=7)
+    ax.legend(loc="upper left", fontsize=7, markerscale=4)
 
     ax = axes[1, 1]
     bands = [(np.nanmin(radius[folded]), np.nanmax(radius[folded]), "tab:purple"), (np.nanmin(radius[found & ~folded]), np.nanmax(radius[found & ~folded]), "0.5")]
@@ -271,7 +271,7 @@ def singularities(out_dir: Path) -> list[Path]:
     _circle(ax, (0, 0), r5, color="tab:green", ls="--", lw=2, label=f"Guaranteed, eq. (8): {r5:.2f} m")
     _circle(ax, (0, 0), r_piw, color="tab:red", lw=2, label=f"path-independent disk: {r_piw:.2f} m")
     _circle(ax, (0, 0), r3, color="k", lw=1, label=f"Area 3: {r3:.2f} m")
-    ax.plot(0, 0, "k*", ms=8)
+    ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ax.set_aspect("equal")
     ax.set_xlabel("$X_A$ [m]")
     ax.set_ylabel("$Y_A$ [m]")

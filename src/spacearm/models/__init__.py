@@ -1,7 +1,8 @@
 """The robot families and the robot file: ``load_robot`` returns the right family.
 
-A robot file with an ``arm:`` key is a spatial arm from a URDF (DESIGN.md, "Spatial robot
-file"); one with ``base`` and ``links`` is a planar arm ("Planar robot file").
+A robot file with an ``arm:`` key is a spatial arm from a URDF
+(`spacearm.models.spatial.schema`); one with ``base`` and ``links`` is a planar arm
+(`spacearm.models.planar.schema`).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """Straight tip paths and go-and-back motions of a spatial arm on a free-floating bus.
 
 The tip translates along a fixed inertial direction d (its orientation is free). The
-translational Generalized Jacobian in inertial axes is R J*_v(q) (J*_v in bus axes,
-SPATIAL.md), so the joint rates depend on the bus attitude and the bus attitude on
+translational Generalized Jacobian in inertial axes is R J*_v(q) (J*_v in bus axes),
+so the joint rates depend on the bus attitude and the bus attitude on
 the joint rates: the state (q, R) is integrated together,
 
     q' = regularized rates of J*_v(q) for the bus-frame direction R^T d,

@@ -12,7 +12,7 @@
    then the straight path runs from the attitude actually reached.
 
 The target is about the system centroid, inertial axes (zero momentum fixes the
-centroid, SPATIAL.md).
+centroid: with no external force the system centroid does not move).
 """
 
 from __future__ import annotations

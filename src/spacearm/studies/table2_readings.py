@@ -82,7 +82,10 @@ class Derivation:
             or "zero" (the base a point mass).
         link_inertia: I_i about "centroid" (Table 1), about "joint" (I_i + m_i a_i^2)
             or "zero" (point-mass links).
-        cross_terms: keep the posture-dependent terms W_kl cos(theta_k - theta_l), k != l.
+        cross_terms: keep the posture-dependent terms W_kl cos(theta_k - theta_l), k != l
+            (True), drop them all (False), or "arm": drop only the base-arm ones (k or l
+            = 0: D01 cos phi1 and D02 cos(phi1 + phi2) for n = 2) and keep the arm's own
+            (D12 cos phi2).
         link_rates: read L = sum h_l dtheta_l (absolute link rates) as if its
             coefficients multiplied the joint rates: I_S = h_0, I_M = (h_1..h_n).
         sign: +1 for J* = J_M - J_S I_M / I_S (eq. 6), -1 for the slipped sign.
@@ -104,6 +107,7 @@ class Derivation:
             ("base_inertia", ("centroid", "joint1", "zero")),
             ("link_inertia", ("centroid", "joint", "zero")),
             ("sign", (1, -1)),
+            ("cross_terms", (True, False, "arm")),
         ):
             if getattr(self, field) not in allowed:
                 raise ValueError(f"{field}: must be one of {allowed}, got {getattr(self, field)!r}")
@@ -150,6 +154,11 @@ DEPARTURES: dict[str, tuple[dict, str]] = {
     "no cross terms": (
         {"cross_terms": False},
         "the cos(theta_k - theta_l) terms of I_S, I_M dropped: inertias averaged over the posture, constant",
+    ),
+    "no base-arm cross terms": (
+        {"cross_terms": "arm"},
+        "D01 cos phi1 and D02 cos(phi1 + phi2) dropped, the arm's own D12 cos phi2 kept: the base's share of "
+        "the momentum a constant inertia that grows with b0 ('the moment of inertia of the base increases')",
     ),
     "link-rate slip": (
         {"link_rates": True},
@@ -217,8 +226,10 @@ def derivation_coefficients(derivation: Derivation, robot: PlanarRobot) -> Desig
     tip = spans - origin(derivation.tip_origin)
     weights = masses if derivation.base_orbital else masses * (k > 0)
     coupling = jnp.einsum("...i,...ik,...il->...kl", weights, centroids, centroids)
-    if not derivation.cross_terms:
+    if derivation.cross_terms is False:
         coupling = coupling * jnp.eye(n1, dtype=spans.dtype)
+    elif derivation.cross_terms == "arm":  # zero W_0l and W_k0 off the diagonal: the base-arm terms
+        coupling = coupling * (1.0 - ((k[:, None] == 0) != (k[None, :] == 0)).astype(spans.dtype))
     base_inertia = jnp.asarray(robot.base_inertia, spans.dtype)
     if derivation.base_inertia == "joint1":
         base_inertia = base_inertia + robot.base_mass * robot.base_attach**2

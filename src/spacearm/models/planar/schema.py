@@ -1,4 +1,4 @@
-"""The planar robot file (DESIGN.md, "Planar robot file"): mapping <-> `PlanarRobot`."""
+"""The planar robot file (``base`` and ``links``): mapping <-> `PlanarRobot`."""
 
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ def _limits(where: str, link: Mapping) -> tuple[float, float]:
 
 
 def robot_from_mapping(config: Mapping[str, Any], *, source: str = "robot") -> PlanarRobot:
-    """Build a validated `PlanarRobot` from the YAML schema of DESIGN.md.
+    """Build a validated `PlanarRobot` from the planar robot file's mapping.
 
     Args:
         config: the parsed mapping (``name``, ``base: {mass, inertia, attach}``,

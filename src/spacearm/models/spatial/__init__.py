@@ -1,4 +1,4 @@
-"""The spatial family: URDF arms on a free-floating bus (issue 14).
+"""The spatial family: URDF arms on a free-floating bus.
 
 - `urdf`: the stdlib-XML URDF reader (fixed and locked joints merged);
 - `robot`: the `SpatialRobot` pytree and its validation;

@@ -1,4 +1,4 @@
-"""The spatial robot file: a bus, a mount pose and a URDF arm (DESIGN.md, "Spatial robot file").
+"""The spatial robot file: a bus, a mount pose and a URDF arm (the ``arm:`` key).
 
 ```yaml
 name: ur5-smallsat

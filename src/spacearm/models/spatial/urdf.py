@@ -238,12 +238,18 @@ def _read_link(source: str, element, inertia_as_written: bool) -> _Link:
             ]
         )
     # Zero mass: taken as written (inertia included), as Pinocchio does.
-    check_inertia(
-        f"{where}inertial inertia",
-        tensor,
-        positive=mass > 0 and not inertia_as_written,
-        triangle=not inertia_as_written,
-    )
+    try:
+        check_inertia(
+            f"{where}inertial inertia",
+            tensor,
+            positive=mass > 0 and not inertia_as_written,
+            triangle=not inertia_as_written,
+        )
+    except ConfigError as error:
+        if inertia_as_written or "semidefinite" in str(error):
+            raise
+        # A vendor file's zero or unphysical inertia: name the switch that takes it as written.
+        raise ConfigError(f"{error} (arm.inertia_as_written: true takes it as written)") from None
     return _Link(name, mass, com, rotation @ tensor @ rotation.T)
 
 

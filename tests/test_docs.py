@@ -1,0 +1,225 @@
+"""The documentation site: it builds strictly, every link and image resolves, every formula renders.
+
+The site is built once per session into a scratch folder (``mkdocs build --strict``, the
+command CI runs); the checks then read the built HTML. Building takes ~15 s on a loaded
+2-core machine (~7 s of CPU: the API reference renders every docstring), hence ``slow``.
+The text checks (no citation of notes that are not shipped) and the formula hook's own
+checks are fast.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+from urllib.parse import unquote, urlsplit
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# Notes that live outside the repository: a page or docstring citing them leaves the
+# reader with a dead reference.
+UNSHIPPED = re.compile(r"DESIGN\.md|SPATIAL\.md|STYLE\.md|\bissue #?\d+|the issue's")
+
+
+def _load_hooks():
+    pytest.importorskip("latex2mathml")
+    pytest.importorskip("mkdocs")
+    spec = importlib.util.spec_from_file_location("docs_hooks", ROOT / "docs" / "scripts" / "hooks.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+class _Page(HTMLParser):
+    """Links, image sources, element ids and the text outside code of one HTML page."""
+
+    def __init__(self):
+        super().__init__()
+        self.links: list[str] = []
+        self.images: list[str] = []
+        self.ids: set[str] = set()
+        self.text: list[str] = []
+        self.maths = 0
+        self._code = 0
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if "id" in attrs:
+            self.ids.add(attrs["id"])
+        if tag == "a" and attrs.get("href"):
+            self.links.append(attrs["href"])
+        if tag == "img" and attrs.get("src"):
+            self.images.append(attrs["src"])
+        if tag in ("code", "pre", "script", "style"):
+            self._code += 1
+        if tag == "math":
+            self.maths += 1
+
+    def handle_endtag(self, tag):
+        if tag in ("code", "pre", "script", "style"):
+            self._code -= 1
+
+    def handle_data(self, data):
+        if self._code == 0:
+            self.text.append(data)
+
+
+@pytest.fixture(scope="session")
+def site(tmp_path_factory) -> dict[Path, _Page]:
+    """The site built strictly into a scratch folder, each page parsed."""
+    _load_hooks()
+    out = tmp_path_factory.mktemp("site")
+    env = dict(os.environ, DISABLE_MKDOCS_2_WARNING="true", NO_MKDOCS_2_WARNING="1")
+    run = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-4000:]
+    pages = {}
+    for path in sorted(out.rglob("*.html")):
+        parser = _Page()
+        parser.feed(path.read_text(encoding="utf-8"))
+        pages[path] = parser
+    pages["root"] = out
+    return pages
+
+
+def _pages(site):
+    """Every page but 404.html, whose links are absolute (it is served from any depth)."""
+    return {path: page for path, page in site.items() if path != "root" and path.name != "404.html"}
+
+
+def _target(page_path: Path, url: str) -> tuple[Path, str] | None:
+    parts = urlsplit(url)
+    if parts.scheme or parts.netloc or url.startswith(("mailto:", "javascript:")):
+        return None
+    path = unquote(parts.path)
+    target = page_path if not path else (page_path.parent / path).resolve()
+    if target.is_dir():
+        target = target / "index.html"
+    return target, parts.fragment
+
+
+@pytest.mark.slow
+def test_site_has_no_broken_link_and_no_missing_image(site):
+    broken = []
+    for path, page in _pages(site).items():
+        for url in page.links + page.images:
+            found = _target(path, url)
+            if found is None:
+                continue
+            target, fragment = found
+            if not target.exists():
+                broken.append(f"{path.relative_to(site['root'])}: {url} (no file)")
+            elif fragment and target.suffix == ".html":
+                ids = site[target].ids if target in site else set()
+                if fragment not in ids:
+                    broken.append(f"{path.relative_to(site['root'])}: {url} (no anchor)")
+    assert not broken, "\n".join(broken[:40])
+    images = [url for page in _pages(site).values() for url in page.images]
+    assert len(images) >= 10, "the pages show the figures of results/"
+
+
+@pytest.mark.slow
+def test_every_formula_is_rendered_as_mathml(site):
+    leftovers = []
+    for path, page in _pages(site).items():
+        raw = path.read_text(encoding="utf-8")
+        # J* and w* whose asterisks Markdown paired into emphasis: <em>_v (H</em>, <em>w</em>*
+        for em in re.findall(r"<em>(.*?)</em>", raw, flags=re.S):
+            if re.search(r"[=^]|^[_)]|\bJ$|<em>", em):
+                leftovers.append(f"{path.relative_to(site['root'])}: emphasis made of formula asterisks: {em!r}")
+        if 'class="arithmatex"' in raw:
+            leftovers.append(f"{path.relative_to(site['root'])}: a formula left to a script")
+        text = "".join(page.text)
+        patterns = [r"\$\$", r"\\\(", r"\\\[", r"\\frac", r"\\sqrt", r"\\bar", r"\\phi"]
+        if "reference" not in path.parts:  # docstrings are plain text (read in terminals too)
+            patterns += [r"\^\{", r"_\{"]
+        for pattern in patterns:
+            if re.search(pattern, text):
+                leftovers.append(f"{path.relative_to(site['root'])}: raw TeX {pattern!r} in the text")
+    assert not leftovers, "\n".join(leftovers[:40])
+    root = site["root"]
+    for page, at_least in (("explanation/model/index.html", 10), ("tutorials/spatial-arm/index.html", 3),
+                           ("guide/spatial-robots/index.html", 2), ("explanation/wbar-quadrature/index.html", 3)):
+        assert site[root / page].maths >= at_least, page
+
+
+@pytest.mark.slow
+def test_site_builds_no_stray_pages_and_loads_nothing_from_the_network(site):
+    root = site["root"]
+    assert not list(root.rglob("SUMMARY*")), "the literate-nav file is built as a page"
+    for path in _pages(site):
+        raw = path.read_text(encoding="utf-8")
+        for tag in re.findall(r"<(?:script|link|img)\b[^>]*>", raw):
+            assert not re.search(r"""(?:src|href)=["']?(?:https?:)?//""", tag), f"{path}: {tag}"
+
+
+def test_formula_hook_renders_tex_and_refuses_a_bad_formula():
+    hooks = _load_hooks()
+    html = ('<p>inline <span class="arithmatex">\\(w^* = \\sqrt{\\det(J^* J^{*T})}\\)</span></p>'
+            '<div class="arithmatex">\\[J^* = J_M - J_S I_S^{-1} I_M\\]</div>')
+    out = hooks.render_math(html, "page.md")
+    assert out.count("<math") == 2 and 'display="block"' in out and 'display="inline"' in out
+    assert "<msqrt>" in out and "arithmatex" not in out
+    assert "<mo>&#x02212;</mo><mn>1</mn>" in out  # the exponent -1 as MathML, not text
+    bad = '<span class="arithmatex">\\(\\frac{1}{\\)</span>'
+    with pytest.raises(Exception, match=r"page\.md: cannot render the formula"):
+        hooks.render_math(bad, "page.md")
+
+
+def test_pages_and_docstrings_cite_no_unshipped_notes():
+    found = []
+    for folder, suffix in ((ROOT / "docs", ".md"), (ROOT / "src", ".py")):
+        for path in sorted(folder.rglob(f"*{suffix}")):
+            for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                if UNSHIPPED.search(line):
+                    found.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    assert not found, "\n".join(found)
+
+
+def test_every_page_is_in_the_nav():
+    yaml = pytest.importorskip("yaml")
+    text = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    # mkdocs.yml has python tags in other setups; this one is plain YAML
+    config = yaml.safe_load(text)
+
+    def walk(node):
+        if isinstance(node, str):
+            yield node
+        elif isinstance(node, list):
+            for item in node:
+                yield from walk(item)
+        elif isinstance(node, dict):
+            for value in node.values():
+                yield from walk(value)
+
+    listed = {entry for entry in walk(config["nav"]) if entry.endswith(".md")}
+    pages = {str(p.relative_to(ROOT / "docs")) for p in (ROOT / "docs").rglob("*.md") if "scripts" not in p.parts}
+    assert pages - listed == set(), "pages not in the nav"
+    assert listed - pages <= {"reference/cli.md", "reference/layout.md", "reference/table2-report.md"}
+
+
+def _yaml_blocks(page: Path) -> list[str]:
+    return re.findall(r"```yaml\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
+
+
+def test_the_spatial_tutorial_shows_the_files_it_ships():
+    """The robot file, sweep and design problem of the spatial tutorial are the shipped ones
+    (configs/baxter-smallsat.yaml, sweeps/baxter-mount.yaml, sweeps/baxter-pareto.yaml), up to
+    the robot path, which is one folder shorter in the tutorial's working folder."""
+    yaml = pytest.importorskip("yaml")
+    blocks = [yaml.safe_load(block) for block in _yaml_blocks(ROOT / "docs" / "tutorials" / "spatial-arm.md")]
+    robot, as_written, locks, sweep, problem = blocks
+    shipped_robot = yaml.safe_load((ROOT / "configs" / "baxter-smallsat.yaml").read_text())
+    robot["arm"].update(as_written)  # the two fixes the tutorial adds, one at a time
+    robot["arm"].update(locks)
+    assert robot == shipped_robot
+    for block, name in ((sweep, "baxter-mount.yaml"), (problem, "baxter-pareto.yaml")):
+        shipped = yaml.safe_load((ROOT / "sweeps" / name).read_text())
+        assert shipped.pop("robot") == "../configs/baxter-smallsat.yaml" and block.pop("robot") == "baxter-smallsat.yaml"
+        assert block == shipped, name
