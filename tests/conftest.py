@@ -2,12 +2,21 @@
 
 Compiled programs are shared across the session: fixtures that build robots are
 session-scoped (their pytrees have the same shapes, so every test hits the same jitted
-entry points), and a persistent compilation cache in a temporary folder lets programs
-that are traced again from new closures (e.g. each DesignProblem's objective, each
-command-line run) load instead of compiling. The folder is new per session, so a
-recompilation bug cannot hide behind a cache filled by an earlier run; the
-no-recompilation tests count compilations in memory (``_cache_size`` and
-:func:`count_compiles`), which the persistent cache does not change.
+entry points). They are also shared across sessions: a persistent compilation cache,
+kept between runs, lets programs traced again from new closures (each DesignProblem's
+objective), in a new process (each command-line subprocess) or in the next run load
+instead of compiling. The folder is ``$SPACEARM_TEST_CACHE``, else
+``$XDG_CACHE_HOME/spacearm-tests`` (``~/.cache/spacearm-tests``); ``--fresh-cache`` or
+``SPACEARM_FRESH_CACHE=1`` uses a new empty folder instead, deleted at the end (what a
+first run on a clean machine costs). The command-line tests call spacearm.cli.main,
+which enables the cache at ``$SPACEARM_CACHE_DIR``: it is set to the same folder, so they
+never write into the user's ``~/.cache/spacearm``.
+
+A warm cache cannot hide a recompilation bug: the no-recompilation tests count
+compilations in memory (``_cache_size``, and :func:`count_compiles`, which also counts a
+program loaded from disk, since it missed its jitted function's in-memory cache), and
+neither depends on the persistent cache. JAX keys each entry by the program, its
+compile options and the JAX version, so an edited kernel never loads a stale program.
 """
 
 import collections
@@ -23,21 +32,56 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-# Before any test compiles: the command-line tests call spacearm.cli.main, which enables
-# the cache at $SPACEARM_CACHE_DIR, so they share this folder too (and never write into
-# the user's ~/.cache).
-_CACHE_DIR = tempfile.mkdtemp(prefix="spacearm-test-jax-cache-")
-os.environ["SPACEARM_CACHE_DIR"] = _CACHE_DIR
-jax.config.update("jax_compilation_cache_dir", _CACHE_DIR)
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
-
 import spacearm as sa  # noqa: E402
 
-_BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
+_FRESH_DIR_VARIABLE = "SPACEARM_TEST_FRESH_CACHE_DIR"  # set by the controller for pytest-xdist workers
+_fresh_dir: str | None = None
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        "--fresh-cache", action="store_true", default=False,
+        help="compile into a new, empty JAX cache folder (deleted at the end) instead of the kept one "
+             "(also SPACEARM_FRESH_CACHE=1)",
+    )
+
+
+def suite_cache_dir(fresh: bool) -> str:
+    """The test suite's compilation cache folder (module docstring); a new temporary one when ``fresh``."""
+    global _fresh_dir
+    if fresh:
+        inherited = os.environ.get(_FRESH_DIR_VARIABLE)
+        if inherited:  # a pytest-xdist worker shares its controller's fresh folder
+            return inherited
+        _fresh_dir = tempfile.mkdtemp(prefix="spacearm-test-jax-cache-")
+        os.environ[_FRESH_DIR_VARIABLE] = _fresh_dir
+        return _fresh_dir
+    folder = os.environ.get("SPACEARM_TEST_CACHE")
+    if not folder:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        folder = os.path.join(base, "spacearm-tests")
+    return folder
+
+
+def pytest_configure(config):
+    """Before any test compiles: one cache folder for the session, its subprocesses and its CLI runs."""
+    fresh = config.getoption("--fresh-cache") or os.environ.get("SPACEARM_FRESH_CACHE", "") not in ("", "0")
+    folder = suite_cache_dir(fresh)
+    os.environ["SPACEARM_CACHE_DIR"] = folder
+    if sa.enable_compilation_cache(folder) is None:
+        raise pytest.UsageError(f"cannot create the test compilation cache folder {folder}")
+
+
+def pytest_report_header(config):
+    return f"spacearm: JAX compilation cache {os.environ.get('SPACEARM_CACHE_DIR')}"
 
 
 def pytest_sessionfinish(session, exitstatus):
-    shutil.rmtree(_CACHE_DIR, ignore_errors=True)
+    if _fresh_dir is not None:  # only the process that created it (the controller under xdist)
+        shutil.rmtree(_fresh_dir, ignore_errors=True)
+
+
+_BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
 
 
 @contextlib.contextmanager
