@@ -17,10 +17,16 @@ compilations in memory (``_cache_size``, and :func:`count_compiles`, which also 
 program loaded from disk, since it missed its jitted function's in-memory cache), and
 neither depends on the persistent cache. JAX keys each entry by the program, its
 compile options and the JAX version, so an edited kernel never loads a stale program.
+
+The same kept folder records each test's CPU seconds in its last run
+(``test-cpu-seconds.json``); ``--fast`` leaves out the tests marked ``slow`` and those
+that took more than ``--fast-limit`` (5 s) there, for the edit-test loop. CI runs all.
 """
 
 import collections
 import contextlib
+import glob
+import json
 import os
 import shutil
 import tempfile
@@ -36,6 +42,8 @@ import spacearm as sa  # noqa: E402
 
 _FRESH_DIR_VARIABLE = "SPACEARM_TEST_FRESH_CACHE_DIR"  # set by the controller for pytest-xdist workers
 _fresh_dir: str | None = None
+_CPU_RECORD = "test-cpu-seconds.json"  # in the kept cache folder: each test's CPU seconds in its last run
+_cpu_seconds: dict[str, float] = {}
 
 
 def pytest_addoption(parser):
@@ -44,6 +52,12 @@ def pytest_addoption(parser):
         help="compile into a new, empty JAX cache folder (deleted at the end) instead of the kept one "
              "(also SPACEARM_FRESH_CACHE=1)",
     )
+    parser.addoption(
+        "--fast", action="store_true", default=False,
+        help="the edit-test loop: leave out tests marked slow and those that took more than --fast-limit "
+             "CPU seconds when they last ran (recorded in the kept cache folder)",
+    )
+    parser.addoption("--fast-limit", type=float, default=5.0, help="CPU seconds for --fast (default 5)")
 
 
 def suite_cache_dir(fresh: bool) -> str:
@@ -76,7 +90,74 @@ def pytest_report_header(config):
     return f"spacearm: JAX compilation cache {os.environ.get('SPACEARM_CACHE_DIR')}"
 
 
+def _record_path(config) -> str | None:
+    """Where each test's CPU seconds are kept; None for a fresh cache (cold numbers, not kept)."""
+    if config.getoption("--fresh-cache") or os.environ.get(_FRESH_DIR_VARIABLE):
+        return None
+    return os.path.join(os.environ["SPACEARM_CACHE_DIR"], _CPU_RECORD)
+
+
+def _read_record(path: str) -> dict[str, float]:
+    try:
+        with open(path) as file:
+            return {str(k): float(v) for k, v in json.load(file).items()}
+    except (OSError, ValueError, AttributeError):
+        return {}
+
+
+def _write_record(path: str, record: dict[str, float]) -> None:
+    scratch = f"{path}.{os.getpid()}.tmp"
+    with open(scratch, "w") as file:
+        json.dump(record, file, indent=0, sort_keys=True)
+    os.replace(scratch, path)
+
+
+def pytest_collection_modifyitems(config, items):
+    """``--fast``: deselect the slow-marked tests and those over ``--fast-limit`` CPU seconds last time."""
+    if not config.getoption("--fast"):
+        return
+    path = _record_path(config)
+    record = _read_record(path) if path else {}
+    limit = config.getoption("--fast-limit")
+    keep, drop = [], []
+    for item in items:
+        slow = item.get_closest_marker("slow") is not None or record.get(item.nodeid, 0.0) > limit
+        (drop if slow else keep).append(item)
+    if drop:
+        config.hook.pytest_deselected(items=drop)
+        items[:] = keep
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """Each test's CPU seconds (set-up, call and tear-down; this process, its threads and the
+    subprocesses it waited for)."""
+    start = _cpu_now()
+    yield
+    _cpu_seconds[item.nodeid] = _cpu_now() - start
+
+
+def _cpu_now() -> float:
+    times = os.times()
+    return times.user + times.system + times.children_user + times.children_system
+
+
 def pytest_sessionfinish(session, exitstatus):
+    path = _record_path(session.config)
+    if path and _cpu_seconds:
+        worker = os.environ.get("PYTEST_XDIST_WORKER")
+        if worker:  # the controller merges the workers' parts
+            _write_record(f"{path}.{worker}", _cpu_seconds)
+        else:
+            _write_record(path, {**_read_record(path), **_cpu_seconds})
+    if path and not os.environ.get("PYTEST_XDIST_WORKER"):
+        parts = glob.glob(f"{glob.escape(path)}.gw*")
+        if parts:
+            record = _read_record(path)
+            for part in parts:
+                record.update(_read_record(part))
+                os.remove(part)
+            _write_record(path, record)
     if _fresh_dir is not None:  # only the process that created it (the controller under xdist)
         shutil.rmtree(_fresh_dir, ignore_errors=True)
 
