@@ -2,16 +2,31 @@
 
 Compiled programs are shared across the session: fixtures that build robots are
 session-scoped (their pytrees have the same shapes, so every test hits the same jitted
-entry points), and a persistent compilation cache in a temporary folder lets programs
-that are traced again from new closures (e.g. each DesignProblem's objective, each
-command-line run) load instead of compiling. The folder is new per session, so a
-recompilation bug cannot hide behind a cache filled by an earlier run; the
-no-recompilation tests count compilations in memory (``_cache_size`` and
-:func:`count_compiles`), which the persistent cache does not change.
+entry points). They are also shared across sessions: a persistent compilation cache,
+kept between runs, lets programs traced again from new closures (each DesignProblem's
+objective), in a new process (each command-line subprocess) or in the next run load
+instead of compiling. The folder is ``$SPACEARM_TEST_CACHE``, else
+``$XDG_CACHE_HOME/spacearm-tests`` (``~/.cache/spacearm-tests``); ``--fresh-cache`` or
+``SPACEARM_FRESH_CACHE=1`` uses a new empty folder instead, deleted at the end (what a
+first run on a clean machine costs). The command-line tests call spacearm.cli.main,
+which enables the cache at ``$SPACEARM_CACHE_DIR``: it is set to the same folder, so they
+never write into the user's ``~/.cache/spacearm``.
+
+A warm cache cannot hide a recompilation bug: the no-recompilation tests count
+compilations in memory (``_cache_size``, and :func:`count_compiles`, which also counts a
+program loaded from disk, since it missed its jitted function's in-memory cache), and
+neither depends on the persistent cache. JAX keys each entry by the program, its
+compile options and the JAX version, so an edited kernel never loads a stale program.
+
+The same kept folder records each test's CPU seconds in its last run
+(``test-cpu-seconds.json``); ``--fast`` leaves out the tests marked ``slow`` and those
+that took more than ``--fast-limit`` (5 s) there, for the edit-test loop. CI runs all.
 """
 
 import collections
 import contextlib
+import glob
+import json
 import os
 import shutil
 import tempfile
@@ -23,21 +38,131 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-# Before any test compiles: the command-line tests call spacearm.cli.main, which enables
-# the cache at $SPACEARM_CACHE_DIR, so they share this folder too (and never write into
-# the user's ~/.cache).
-_CACHE_DIR = tempfile.mkdtemp(prefix="spacearm-test-jax-cache-")
-os.environ["SPACEARM_CACHE_DIR"] = _CACHE_DIR
-jax.config.update("jax_compilation_cache_dir", _CACHE_DIR)
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
-
 import spacearm as sa  # noqa: E402
 
-_BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
+_FRESH_DIR_VARIABLE = "SPACEARM_TEST_FRESH_CACHE_DIR"  # set by the controller for pytest-xdist workers
+_fresh_dir: str | None = None
+_CPU_RECORD = "test-cpu-seconds.json"  # in the kept cache folder: each test's CPU seconds in its last run
+_cpu_seconds: dict[str, float] = {}
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        "--fresh-cache", action="store_true", default=False,
+        help="compile into a new, empty JAX cache folder (deleted at the end) instead of the kept one "
+             "(also SPACEARM_FRESH_CACHE=1)",
+    )
+    parser.addoption(
+        "--fast", action="store_true", default=False,
+        help="the edit-test loop: leave out tests marked slow and those that took more than --fast-limit "
+             "CPU seconds when they last ran (recorded in the kept cache folder)",
+    )
+    parser.addoption("--fast-limit", type=float, default=5.0, help="CPU seconds for --fast (default 5)")
+
+
+def suite_cache_dir(fresh: bool) -> str:
+    """The test suite's compilation cache folder (module docstring); a new temporary one when ``fresh``."""
+    global _fresh_dir
+    if fresh:
+        inherited = os.environ.get(_FRESH_DIR_VARIABLE)
+        if inherited:  # a pytest-xdist worker shares its controller's fresh folder
+            return inherited
+        _fresh_dir = tempfile.mkdtemp(prefix="spacearm-test-jax-cache-")
+        os.environ[_FRESH_DIR_VARIABLE] = _fresh_dir
+        return _fresh_dir
+    folder = os.environ.get("SPACEARM_TEST_CACHE")
+    if not folder:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        folder = os.path.join(base, "spacearm-tests")
+    return folder
+
+
+def pytest_configure(config):
+    """Before any test compiles: one cache folder for the session, its subprocesses and its CLI runs."""
+    fresh = config.getoption("--fresh-cache") or os.environ.get("SPACEARM_FRESH_CACHE", "") not in ("", "0")
+    folder = suite_cache_dir(fresh)
+    os.environ["SPACEARM_CACHE_DIR"] = folder
+    if sa.enable_compilation_cache(folder) is None:
+        raise pytest.UsageError(f"cannot create the test compilation cache folder {folder}")
+
+
+def pytest_report_header(config):
+    return f"spacearm: JAX compilation cache {os.environ.get('SPACEARM_CACHE_DIR')}"
+
+
+def _record_path(config) -> str | None:
+    """Where each test's CPU seconds are kept; None for a fresh cache (cold numbers, not kept)."""
+    if config.getoption("--fresh-cache") or os.environ.get(_FRESH_DIR_VARIABLE):
+        return None
+    return os.path.join(os.environ["SPACEARM_CACHE_DIR"], _CPU_RECORD)
+
+
+def _read_record(path: str) -> dict[str, float]:
+    try:
+        with open(path) as file:
+            return {str(k): float(v) for k, v in json.load(file).items()}
+    except (OSError, ValueError, AttributeError):
+        return {}
+
+
+def _write_record(path: str, record: dict[str, float]) -> None:
+    scratch = f"{path}.{os.getpid()}.tmp"
+    with open(scratch, "w") as file:
+        json.dump(record, file, indent=0, sort_keys=True)
+    os.replace(scratch, path)
+
+
+def pytest_collection_modifyitems(config, items):
+    """``--fast``: deselect the slow-marked tests and those over ``--fast-limit`` CPU seconds last time."""
+    if not config.getoption("--fast"):
+        return
+    path = _record_path(config)
+    record = _read_record(path) if path else {}
+    limit = config.getoption("--fast-limit")
+    keep, drop = [], []
+    for item in items:
+        slow = item.get_closest_marker("slow") is not None or record.get(item.nodeid, 0.0) > limit
+        (drop if slow else keep).append(item)
+    if drop:
+        config.hook.pytest_deselected(items=drop)
+        items[:] = keep
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """Each test's CPU seconds (set-up, call and tear-down; this process, its threads and the
+    subprocesses it waited for)."""
+    start = _cpu_now()
+    yield
+    _cpu_seconds[item.nodeid] = _cpu_now() - start
+
+
+def _cpu_now() -> float:
+    times = os.times()
+    return times.user + times.system + times.children_user + times.children_system
 
 
 def pytest_sessionfinish(session, exitstatus):
-    shutil.rmtree(_CACHE_DIR, ignore_errors=True)
+    path = _record_path(session.config)
+    if path and _cpu_seconds:
+        worker = os.environ.get("PYTEST_XDIST_WORKER")
+        if worker:  # the controller merges the workers' parts
+            _write_record(f"{path}.{worker}", _cpu_seconds)
+        else:
+            _write_record(path, {**_read_record(path), **_cpu_seconds})
+    if path and not os.environ.get("PYTEST_XDIST_WORKER"):
+        parts = glob.glob(f"{glob.escape(path)}.gw*")
+        if parts:
+            record = _read_record(path)
+            for part in parts:
+                record.update(_read_record(part))
+                os.remove(part)
+            _write_record(path, record)
+    if _fresh_dir is not None:  # only the process that created it (the controller under xdist)
+        shutil.rmtree(_fresh_dir, ignore_errors=True)
+
+
+_BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
 
 
 @contextlib.contextmanager

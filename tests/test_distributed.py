@@ -19,6 +19,8 @@ import numpy as np
 import pytest
 import yaml
 
+from spacearm.cli import main
+
 ROBOT = str(Path("configs/umetani1990.yaml").resolve())
 TIMEOUT_S = 120
 
@@ -101,10 +103,11 @@ def test_two_processes_write_the_same_table_as_one(tmp_path):
     assert not list(two.glob(".partial-*"))  # finished: the chunks were cleaned up
 
 
-def test_partial_distributed_options_are_refused(tmp_path):
+def test_partial_distributed_options_are_refused(tmp_path, monkeypatch, capsys):
+    """In this process (the options are checked before any process would join)."""
     sweep = _sweep(tmp_path)
-    result = subprocess.run([sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--out", str(tmp_path / "x")],
-                            env=_env(1, SPACEARM_COORDINATOR="127.0.0.1:1"), capture_output=True, text=True,
-                            timeout=TIMEOUT_S)
-    assert result.returncode == 2
-    assert "needs all three" in result.stderr and "Traceback" not in result.stderr
+    monkeypatch.setenv("SPACEARM_COORDINATOR", "127.0.0.1:1")  # read as the option's default
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert "needs all three" in err and "Traceback" not in err
+    assert not (tmp_path / "x").exists()

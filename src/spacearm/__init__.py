@@ -2,7 +2,8 @@
 
 Starts from Umetani & Yoshida, "Workspace and Manipulability Analysis of Space
 Manipulator", Trans. SICE 26(2), 1990. Importing the package changes no global JAX
-setting; call `enable_x64` once for float64 (the command line does).
+setting; call `enable_x64` once for float64, and `enable_compilation_cache` to keep
+compiled programs on disk across processes (the command line does both).
 
 The names below are the public API. The kernels of the
 lower layers are imported at once; the higher layers (analysis, motion, planning,
@@ -13,7 +14,7 @@ import importlib
 from typing import TYPE_CHECKING
 
 from ._core.errors import ConfigError as ConfigError
-from ._core.numeric import enable_x64 as enable_x64
+from ._core.numeric import enable_compilation_cache as enable_compilation_cache, enable_x64 as enable_x64
 from ._version import __version__ as __version__
 from .kinematics import (
     base_rate as base_rate,

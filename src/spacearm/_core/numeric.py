@@ -17,25 +17,53 @@ def x64_enabled() -> bool:
     return bool(jax.config.jax_enable_x64)
 
 
-def enable_compilation_cache(path: str | None = None) -> str | None:
-    """Keep compiled XLA programs on disk so a second command-line run skips compilation.
+def compilation_cache_dir(path: str | os.PathLike | None = None) -> str | None:
+    """The folder `enable_compilation_cache` would use, or None when the cache is off.
 
-    The folder is ``$SPACEARM_CACHE_DIR``, else ``$XDG_CACHE_HOME/spacearm/jax`` (or
-    ``~/.cache/spacearm/jax``); ``SPACEARM_CACHE_DIR=off`` disables it. Returns the folder.
+    ``SPACEARM_CACHE_DIR=off`` turns it off whatever the caller asks; otherwise ``path``,
+    else ``$SPACEARM_CACHE_DIR``, else ``$XDG_CACHE_HOME/spacearm/jax`` (``~/.cache/spacearm/jax``).
     """
-    path = path or os.environ.get("SPACEARM_CACHE_DIR")
-    if path == "off":
+    env = os.environ.get("SPACEARM_CACHE_DIR")
+    if env == "off" or (path is not None and os.fspath(path) == "off"):
         return None
-    if not path:
-        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-        path = os.path.join(base, "spacearm", "jax")
+    if path is not None:
+        return os.fspath(path)
+    if env:
+        return env
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "spacearm", "jax")
+
+
+def enable_compilation_cache(path: str | os.PathLike | None = None, *, min_compile_seconds: float = 0.1) -> str | None:
+    """Keep compiled XLA programs on disk, so the next process loads them instead of compiling.
+
+    Importing spacearm changes no JAX setting; this call does (the command line makes it
+    for every command): it sets JAX's persistent compilation cache folder and its
+    threshold (``jax_compilation_cache_dir``, ``jax_persistent_cache_min_compile_time_secs``).
+    Call it once, before the first computation: programs compiled earlier are not kept,
+    and JAX keeps the first folder it opened.
+
+    Args:
+        path: the folder; default ``$SPACEARM_CACHE_DIR``, else
+            ``$XDG_CACHE_HOME/spacearm/jax`` (or ``~/.cache/spacearm/jax``).
+            ``SPACEARM_CACHE_DIR=off`` (or ``path="off"``) leaves the cache off.
+        min_compile_seconds: programs that compile faster are not written (reading a
+            file costs about as much as compiling a tiny program).
+
+    Returns:
+        The folder, or None when the cache stays off (``off``, or a folder that cannot
+        be created).
+    """
+    folder = compilation_cache_dir(path)
+    if folder is None:
+        return None
     try:
-        os.makedirs(path, exist_ok=True)
+        os.makedirs(folder, exist_ok=True)
     except OSError:
         return None
-    jax.config.update("jax_compilation_cache_dir", path)
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.1)
-    return path
+    jax.config.update("jax_compilation_cache_dir", folder)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", float(min_compile_seconds))
+    return folder
 
 
 def join_processes(coordinator: str, num_processes: int, process_id: int) -> None:

@@ -193,9 +193,16 @@ AVERAGES: dict[str, str] = {
 }
 
 
-def _spans(robot: PlanarRobot) -> jax.Array:
+def _array_module(robot: PlanarRobot):
+    """NumPy for a concrete design (no XLA program for host-side arithmetic), else jax.numpy."""
+    traced = any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(robot))
+    return jnp if traced else np
+
+
+def _spans(robot: PlanarRobot, xp=jnp) -> jax.Array:
     """``(..., n+1)``: b0, l1..ln, the lengths passed along u(theta_k) on the way out."""
-    return jnp.concatenate([jnp.asarray(robot.base_attach)[..., None], robot.link_length], axis=-1)
+    length = xp.asarray(robot.link_a) + xp.asarray(robot.link_b)
+    return xp.concatenate([xp.asarray(robot.base_attach)[..., None], length], axis=-1)
 
 
 def derivation_coefficients(derivation: Derivation, robot: PlanarRobot) -> DesignCoefficients:
@@ -204,43 +211,47 @@ def derivation_coefficients(derivation: Derivation, robot: PlanarRobot) -> Desig
     Body centroids from the base centroid: body i = sum_{k<i} s_k u_k + a_i u_i with
     s = (b0, l1..ln) (a_0 = 0); the tip = sum_k s_k u_k. The momentum and tip origins
     are subtracted as coefficient rows (the system centroid is the mass-weighted mean).
-    Works on batched designs and inside jit (the derivation is static data).
+    Works on batched designs and inside jit (the derivation is static data); a concrete
+    design is computed in NumPy on the host, so it compiles nothing.
     """
-    spans = _spans(robot)
+    xp = _array_module(robot)
+    if xp is np:
+        robot = jax.tree_util.tree_map(np.asarray, robot)
+    spans = _spans(robot, xp)
     n1 = spans.shape[-1]
-    k = jnp.arange(n1)
+    k = xp.arange(n1)
     before = (k[None, :] < k[:, None]).astype(spans.dtype)  # [i, k]: k < i
-    own = jnp.concatenate([jnp.zeros_like(spans[..., :1]), robot.link_a], axis=-1)
-    rows = spans[..., None, :] * before + jnp.eye(n1, dtype=spans.dtype) * own[..., None, :]
-    masses = jnp.concatenate([jnp.asarray(robot.base_mass)[..., None], robot.link_mass], axis=-1)
+    own = xp.concatenate([xp.zeros_like(spans[..., :1]), xp.asarray(robot.link_a)], axis=-1)
+    rows = spans[..., None, :] * before + xp.eye(n1, dtype=spans.dtype) * own[..., None, :]
+    masses = xp.concatenate([xp.asarray(robot.base_mass)[..., None], xp.asarray(robot.link_mass)], axis=-1)
     joint1 = spans * (k == 0)
 
     def origin(which):
         if which == "system":
-            return jnp.einsum("...i,...ik->...k", masses, rows) / jnp.sum(masses, axis=-1)[..., None]
+            return xp.einsum("...i,...ik->...k", masses, rows) / xp.sum(masses, axis=-1)[..., None]
         if which == "base":
-            return jnp.zeros_like(spans)
+            return xp.zeros_like(spans)
         return joint1
 
     centroids = rows - origin(derivation.momentum_origin)[..., None, :]
     tip = spans - origin(derivation.tip_origin)
     weights = masses if derivation.base_orbital else masses * (k > 0)
-    coupling = jnp.einsum("...i,...ik,...il->...kl", weights, centroids, centroids)
+    coupling = xp.einsum("...i,...ik,...il->...kl", weights, centroids, centroids)
     if derivation.cross_terms is False:
-        coupling = coupling * jnp.eye(n1, dtype=spans.dtype)
+        coupling = coupling * xp.eye(n1, dtype=spans.dtype)
     elif derivation.cross_terms == "arm":  # zero W_0l and W_k0 off the diagonal: the base-arm terms
         coupling = coupling * (1.0 - ((k[:, None] == 0) != (k[None, :] == 0)).astype(spans.dtype))
-    base_inertia = jnp.asarray(robot.base_inertia, spans.dtype)
+    base_inertia = xp.asarray(robot.base_inertia, spans.dtype)
     if derivation.base_inertia == "joint1":
         base_inertia = base_inertia + robot.base_mass * robot.base_attach**2
     elif derivation.base_inertia == "zero":
-        base_inertia = jnp.zeros_like(base_inertia)
+        base_inertia = xp.zeros_like(base_inertia)
     link_inertia = robot.link_inertia
     if derivation.link_inertia == "joint":
         link_inertia = link_inertia + robot.link_mass * robot.link_a**2
     elif derivation.link_inertia == "zero":
-        link_inertia = jnp.zeros_like(link_inertia)
-    inertia = jnp.concatenate([base_inertia[..., None], link_inertia], axis=-1)
+        link_inertia = xp.zeros_like(link_inertia)
+    inertia = xp.concatenate([base_inertia[..., None], link_inertia], axis=-1)
     return DesignCoefficients(tip=tip, centroids=centroids, inertia_coupling=coupling, inertia=inertia)
 
 
@@ -353,13 +364,15 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
     if robots.n_links != 2 or len(robots.batch_shape) != 1:
         raise ValueError("grid_averages takes a one-axis batch of n = 2 designs")
     designs = robots.batch_shape[0]
+    # Host-side set-up in NumPy (eager jax.numpy would compile a program per operation and shape).
+    robots = jax.tree_util.tree_map(np.asarray, robots)
     parts = [derivation_coefficients(d, robots) for d in derivations]
-    coeffs = jax.tree_util.tree_map(lambda *xs: jnp.concatenate(xs, axis=0), *parts)
-    repeat = lambda x: jnp.tile(jnp.asarray(x), len(derivations))
-    link_rates = jnp.repeat(jnp.asarray([d.link_rates for d in derivations]), designs)
-    sign = jnp.repeat(jnp.asarray([float(d.sign) for d in derivations]), designs)
-    lengths = robots.link_length
-    args = (coeffs, link_rates, sign, repeat(robots.reach), repeat(lengths[:, 0] * lengths[:, 1]),
+    coeffs = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs, axis=0), *parts)
+    repeat = lambda x: np.tile(np.asarray(x), len(derivations))
+    link_rates = np.repeat(np.asarray([d.link_rates for d in derivations]), designs)
+    sign = np.repeat(np.asarray([float(d.sign) for d in derivations]), designs)
+    lengths = robots.link_a + robots.link_b
+    args = (coeffs, link_rates, sign, repeat(np.sum(lengths, axis=-1)), repeat(lengths[:, 0] * lengths[:, 1]),
             repeat(robots.base_attach))
     # Fixed chunks of GRID_CHUNK pairs, the last padded (lax.map runs the pairs one by one
     # anyway): one compiled program for any number of pairs, instead of one per count.
