@@ -12,6 +12,7 @@ an empty `SweepResult`.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import json
@@ -29,16 +30,17 @@ import numpy as np
 from jax.experimental import multihost_utils
 from tqdm.auto import tqdm
 
-from .._core.errors import ConfigError
+from .._core.errors import ConfigError, RunError
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
+from ..io.folders import lock_folder, stage_folder, swap_in
 from ..io import manifest as provenance
 from .designs import build_designs, design_columns
 from .metrics import METRICS, design_function, metric_columns
 from .spec import SweepSpec
 from .table2 import REPORTS
 
-__all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP"]
+__all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP", "NonFiniteResult", "check_finite"]
 
 # Designs vmapped together inside a chunk (see run_sweep): small enough for the cache.
 DESIGNS_PER_STEP = 32
@@ -117,6 +119,17 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)
     _check_output_dir(out_dir)
+    with contextlib.ExitStack() as stack:
+        if jax.process_index() == 0:  # the one writer: refuse a second one before computing
+            stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
+        return _run_locked(spec, out_dir, wall_start, progress=progress, command=command,
+                           stop_after_chunks=stop_after_chunks, outputs=outputs)
+
+
+def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: bool,
+                command: Sequence[str] | None, stop_after_chunks: int | None,
+                outputs: Sequence[SweepOutput]) -> SweepResult:
+    """`run_sweep` once this process may write ``out_dir``."""
     code_state = provenance.git_state()  # before this run changes any tracked result file
     robot, points = build_designs(spec)
     total = spec.n_designs
@@ -201,39 +214,71 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     if jax.process_index() != 0:  # multi-host: the first process writes the results
         return SweepResult(out_dir, {}, {}, [])
     metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
+    check_finite(spec, metric_values, points)
     table: dict[str, np.ndarray] = {"design": np.arange(total)}
     table.update(points)
     table.update(design_columns(robot, spec.axes))
     table.update(metric_values)
-    files = [write_csv(out_dir / "table.csv", table)]
-    grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
-    grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
-    grid_arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
-    files.append(write_npz(out_dir / "grids.npz", **grid_arrays))
-    if spec.report:
-        rows = [{k: float(v[i]) for k, v in table.items()} for i in range(total)]
-        files.extend(REPORTS[spec.report](out_dir, rows, spec))
-    for output in outputs:
-        files.extend(output(spec, out_dir, table))
-    timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
-    data = build_manifest(
-        spec.config, command=command, timings=timings, git=code_state,
-        extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk, "resumed_chunks": len(spans) - len(todo),
-               "files": sorted(str(p.relative_to(out_dir)) for p in files)},
-    )
+    # Every result is written into a staging folder beside out_dir, which then replaces
+    # out_dir in one step: a reader never sees files of two runs, and a run that dies
+    # before the swap leaves the old folder as it was.
     previous = _previous_files(out_dir)
-    files.append(write_json(out_dir / "manifest.json", data))
+    staging = stage_folder(out_dir, keep=lambda name: name not in previous and name != partial.name)
+    try:
+        files = [write_csv(staging / "table.csv", table)]
+        grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
+        grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
+        grid_arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
+        files.append(write_npz(staging / "grids.npz", **grid_arrays))
+        if spec.report:
+            rows = [{k: float(v[i]) for k, v in table.items()} for i in range(total)]
+            files.extend(REPORTS[spec.report](staging, rows, spec))
+        for output in outputs:
+            files.extend(output(spec, staging, table))
+        timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
+        data = build_manifest(
+            spec.config, command=command, timings=timings, git=code_state,
+            extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk,
+                   "resumed_chunks": len(spans) - len(todo),
+                   "files": sorted(str(p.relative_to(staging)) for p in files)},
+        )
+        files.append(write_json(staging / "manifest.json", data))
+        if _BEFORE_SWAP is not None:
+            _BEFORE_SWAP(staging)
+        swap_in(staging, out_dir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    files = [out_dir / p.relative_to(staging) for p in files]
     shutil.rmtree(partial, ignore_errors=True)
-    for name in previous - {str(p.relative_to(out_dir)) for p in files}:
-        try:
-            (out_dir / name).unlink(missing_ok=True)  # an earlier sweep's figure this run did not draw
-        except OSError:
-            pass
     others = sorted(p.name for p in out_dir.glob(".partial-*") if p.is_dir())
     if others:
         print(f"note: {out_dir} also holds {', '.join(others)} (chunks of another sweep run into this folder; "
               "delete them if no run needs them)", file=sys.stderr)
     return SweepResult(out_dir, table, data, files)
+
+
+# A hook for tests: called with the staging folder just before it is swapped in.
+_BEFORE_SWAP: Callable[[Path], None] | None = None
+
+
+def check_finite(spec: SweepSpec, metric_values: Mapping[str, np.ndarray], points: Mapping[str, np.ndarray]) -> None:
+    """Refuse a result that came out non-finite (NaN or inf): `NonFiniteResult` naming the
+    metric column and the first such design, instead of a silent NaN column."""
+    for column, values in metric_values.items():
+        bad = np.flatnonzero(~np.isfinite(np.asarray(values, dtype=float)))
+        if bad.size:
+            first = int(bad[0])
+            where = ", ".join(f"{name} = {float(np.asarray(v)[first]):g}" for name, v in points.items())
+            raise NonFiniteResult(
+                f"{spec.source}: metric column '{column}' is {float(values[first])} for design {first} ({where})"
+                f" and {bad.size - 1} more of {len(values)}; nothing was written (check the design's numbers"
+                + (", or drop --float32" if not jax.config.jax_enable_x64 else "") + ")"
+            )
+
+
+class NonFiniteResult(RunError):
+    """A sweep's metric came out NaN or infinite (exit status 1 on the command line)."""
 
 
 # The names a sweep writes (see run_sweep, the reports and spacearm.figures.sweep): only these
