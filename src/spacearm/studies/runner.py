@@ -258,6 +258,9 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
     return SweepResult(out_dir, table, data, files)
 
 
+# Columns where +inf is a documented value, not a failure ("none found").
+INFINITE_MEANS_NONE = frozenset({"R_path_independent_m"})
+
 # A hook for tests: called with the staging folder just before it is swapped in.
 _BEFORE_SWAP: Callable[[Path], None] | None = None
 
@@ -266,7 +269,9 @@ def check_finite(spec: SweepSpec, metric_values: Mapping[str, np.ndarray], point
     """Refuse a result that came out non-finite (NaN or inf): `NonFiniteResult` naming the
     metric column and the first such design, instead of a silent NaN column."""
     for column, values in metric_values.items():
-        bad = np.flatnonzero(~np.isfinite(np.asarray(values, dtype=float)))
+        values = np.asarray(values, dtype=float)
+        bad = np.isnan(values) if column in INFINITE_MEANS_NONE else ~np.isfinite(values)
+        bad = np.flatnonzero(bad | (np.isneginf(values) if column in INFINITE_MEANS_NONE else False))
         if bad.size:
             first = int(bad[0])
             where = ", ".join(f"{name} = {float(np.asarray(v)[first]):g}" for name, v in points.items())
