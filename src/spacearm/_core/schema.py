@@ -25,6 +25,7 @@ __all__ = [
     "MAX_YAML_BYTES",
     "MAX_YAML_DEPTH",
     "MAX_YAML_NODES",
+    "SIZE_LIMITS",
     "quote",
     "read_yaml",
     "describe_yaml_error",
@@ -215,11 +216,56 @@ def number(where: str, value: Any) -> float:
     return float(value)
 
 
-def integer(where: str, value: Any, *, least: int | None = None) -> int:
-    """An integer (optionally ``>= least``), else `ConfigError` naming ``where``."""
+# Upper bounds of every size-like option, by the option's name (the last name in the
+# field path given to `integer`): each sizes an array or a loop, and a bound checked when
+# the file is read keeps a typo (order: 1e9) from allocating gigabytes before any check.
+# Listed in docs/guide/guarantees.md.
+SIZE_LIMITS: dict[str, int] = {
+    "order": 64,  # Gauss-Legendre points per panel
+    "phi1_panels": 4096,
+    "phi2_panels": 4096,
+    "n_points_joint": 2048,
+    "newton_steps": 200,
+    "n_directions": 20_000,
+    "directions": 4096,  # Pareto search rays
+    "starts": 65_536,
+    "steps": 100_000,
+    "descent_steps": 100_000,
+    "chunk": 2**20,
+    "chunk_size": 2**20,
+    "block": 2**20,
+    "randomizations": 1024,
+    "min_samples": 2**28,
+    "max_samples": 2**28,
+    "samples": 2**24,
+    "initial_samples": 2**20,
+    "keep": 65_536,
+    "candidates": 65_536,
+    "population": 100_000,
+    "evaluations": 10**8,
+    "links": 64,
+    "seed": 2**32 - 1,
+}
+
+
+def integer(where: str, value: Any, *, least: int | None = None, most: int | None = None) -> int:
+    """An integer in ``least .. most``, else `ConfigError` naming ``where``.
+
+    ``most`` defaults to the `SIZE_LIMITS` entry of the field's name (the last name in
+    ``where``), so every size-like option is bounded wherever it is read.
+    """
+    if most is None:
+        names = re.findall(r"[A-Za-z_][A-Za-z0-9_]*", where)
+        most = SIZE_LIMITS.get(names[-1]) if names else None
     if not isinstance(value, int) or isinstance(value, bool) or (least is not None and value < least):
         bound = f" >= {least}" if least is not None else ""
+        if isinstance(value, float) and value.is_integer() and (least is None or value >= least):
+            raise ConfigError(f"{where}: must be an integer{bound}, got the float {quote(value)} (write it without "
+                              "a dot or exponent)")
         raise ConfigError(f"{where}: must be an integer{bound}, got {quote(value)}")
+    if most is not None and value > most:
+        raise ConfigError(f"{where}: must be at most {most:,} (a size; larger values would not fit in memory "
+                          f"or time), got {value:,}")
     return value
 
 

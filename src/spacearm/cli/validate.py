@@ -19,6 +19,7 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     """Validate a robot, sweep or design-problem file; return (kind, one-line summary) or raise ConfigError."""
     from ..design.spatial_problem import load_design_problem
     from ..models import is_robot_mapping, robot_from_file_mapping
+    from ..studies.runner import check_sweep_memory
     from ..studies.spec import load_sweep
 
     path = os.fspath(path)
@@ -30,7 +31,9 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
         problem = load_design_problem(path)
         return "design problem", f"{problem.name}: variables {', '.join(problem.variable_names)}"
     if isinstance(config, Mapping) and ("axes" in config or "robot" in config):
-        return "sweep", load_sweep(path).summary()
+        spec = load_sweep(path)
+        check_sweep_memory(spec)  # as run_sweep does before it allocates anything
+        return "sweep", spec.summary()
     raise ConfigError(
         f"{path}: neither a robot file (needs 'base' and 'links'), a sweep file (needs 'robot' and 'axes') "
         "nor a design problem (needs 'variables' and 'objectives')"

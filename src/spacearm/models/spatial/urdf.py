@@ -319,7 +319,7 @@ def _check_tree(source: str, links: Mapping[str, _Link], parent_joint: Mapping[s
         while link not in top and link in parent_joint:
             if link in on_trail:
                 cycle = trail[trail.index(link):]
-                names = ", ".join(f"'{parent_joint[name].name}'" for name in cycle)
+                names = ", ".join(sorted(f"'{parent_joint[name].name}'" for name in cycle))
                 raise ConfigError(f"{source}: joints {names} form a cycle (a URDF is a tree)")
             trail.append(link)
             on_trail.add(link)
