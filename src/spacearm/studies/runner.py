@@ -27,10 +27,12 @@ from pathlib import Path
 
 import jax
 import numpy as np
+from jax._src import distributed as jax_distributed  # the coordination service's client
 from jax.experimental import multihost_utils
 from tqdm.auto import tqdm
 
 from .._core.errors import ConfigError, RunError
+from .._core.numeric import PEER_TIMEOUT_S
 from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
@@ -42,7 +44,7 @@ from .spec import SweepSpec
 from .table2 import REPORTS
 
 __all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP", "NonFiniteResult", "check_finite", "memory_estimate",
-           "check_sweep_memory"]
+           "check_sweep_memory", "agree_with_peers", "differing_keys"]
 
 # Designs vmapped together inside a chunk (see run_sweep): small enough for the cache.
 DESIGNS_PER_STEP = 32
@@ -104,7 +106,7 @@ class SweepResult:
 
 def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, progress: bool = True,
               command: Sequence[str] | None = None, stop_after_chunks: int | None = None,
-              outputs: Sequence[SweepOutput] = ()) -> SweepResult:
+              outputs: Sequence[SweepOutput] = (), peer_timeout_s: float = PEER_TIMEOUT_S) -> SweepResult:
     """Evaluate every design of a sweep and write ``table.csv``, ``grids.npz``, the report
     (``report:`` in the file, e.g. ``table.md``) and ``manifest.json`` into ``out_dir``
     (default: the sweep's ``output``).
@@ -117,11 +119,20 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
         outputs: further writers, each ``fn(spec, out_dir, table) -> [paths]``, run after
             the report and before the manifest, which lists their files (``spacearm sweep``
             passes `spacearm.figures.sweep.write_figures`). This layer draws nothing.
+        peer_timeout_s: under ``jax.distributed``, how long to wait for the other processes
+            when they compare their settings (`agree_with_peers`).
+
+    Raises:
+        ConfigError: a second writer holds ``out_dir``, or the sweep would not fit in memory.
+        RunError: a metric came out non-finite; under ``jax.distributed``, the processes
+            disagree on the config or the code, or a peer stopped.
     """
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)
     _check_output_dir(out_dir)
     check_sweep_memory(spec)
+    if jax.process_count() > 1:
+        agree_with_peers(spec, timeout_s=peer_timeout_s)
     with contextlib.ExitStack() as stack:
         if jax.process_index() == 0:  # the one writer: refuse a second one before computing
             stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
@@ -204,6 +215,14 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
                 write_npz(partial / f"chunk_{number:06d}.npz", **piece)
             pieces[number] = piece
             bar.update(stop - start)
+    except Exception as error:
+        if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError)):
+            raise
+        # Under jax.distributed a peer that died surfaces here as a collective's error.
+        reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
+        raise RunError(f"process {jax.process_index()} of {jax.process_count()}: a peer process stopped or failed "
+                       f"during the sweep ({reason}); finished chunks are kept: start every process again "
+                       "to resume") from None
     except KeyboardInterrupt:
         bar.close()
         kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
@@ -287,6 +306,81 @@ def check_finite(spec: SweepSpec, metric_values: Mapping[str, np.ndarray], point
 
 class NonFiniteResult(RunError):
     """A sweep's metric came out NaN or infinite (exit status 1 on the command line)."""
+
+
+def _flatten(value, prefix: str = "") -> dict[str, str]:
+    """Dotted paths of a nested config -> the JSON of each leaf (for naming differing keys)."""
+    if isinstance(value, Mapping) and value:
+        out: dict[str, str] = {}
+        for key, item in value.items():
+            out.update(_flatten(item, f"{prefix}.{key}" if prefix else str(key)))
+        return out
+    return {prefix or "(root)": json.dumps(value, sort_keys=True, default=str)}
+
+
+def _fingerprint(spec: SweepSpec) -> dict:
+    """What must be the same on every process of a distributed sweep: the resolved config
+    and the code (versions, git revision, precision)."""
+    return {"config": spec.config,
+            "code": {"spacearm": __version__, "git_revision": provenance.git_state().get("revision"),
+                     "jax": jax.__version__, "float64": bool(jax.config.jax_enable_x64)}}
+
+
+def differing_keys(mine: Mapping, theirs: Mapping) -> list[str]:
+    """The dotted keys whose values differ between two fingerprints (or exist in one only)."""
+    a, b = _flatten(mine), _flatten(theirs)
+    return sorted(key for key in set(a) | set(b) if a.get(key) != b.get(key))
+
+
+def _shown(keys: Sequence[str]) -> str:
+    return ", ".join(keys[:6]) + (f" and {len(keys) - 6} more" if len(keys) > 6 else "")
+
+
+def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S) -> None:
+    """Refuse to compute unless every process of a distributed sweep has the same resolved
+    config and code as process 0.
+
+    Each process publishes its fingerprint in the coordination service's key-value store;
+    process 0 compares every peer's with its own and publishes one verdict, which every
+    process waits for (at most ``timeout_s``). A mismatch ends every process with a
+    `RunError` naming the differing keys, before anything is computed or written.
+    """
+    client = jax_distributed.global_state.client
+    if client is None:
+        return
+    rank, count = jax.process_index(), jax.process_count()
+    wait_ms = int(max(1.0, timeout_s) * 1000)
+    mine = _fingerprint(spec)
+    client.key_value_set(f"spacearm/fingerprint/{rank}", json.dumps(mine, default=str))
+
+    def get(key: str, whom: str) -> str:
+        try:
+            return client.blocking_key_value_get(key, wait_ms)
+        except Exception:  # jaxlib's DEADLINE_EXCEEDED
+            raise RunError(f"process {rank} of {count}: {whom} did not answer within {timeout_s:g} s "
+                           "(is it running the same command? wait longer with --peer-timeout)") from None
+
+    if rank == 0:
+        problems = []
+        for peer in range(1, count):
+            keys = differing_keys(mine, json.loads(get(f"spacearm/fingerprint/{peer}", f"process {peer}")))
+            if keys:
+                problems.append(f"process {peer} differs from process 0 in {_shown(keys)}")
+        verdict = "; ".join(problems) or "ok"
+        client.key_value_set("spacearm/verdict", verdict)
+    else:
+        theirs = json.loads(get("spacearm/fingerprint/0", "process 0"))
+        keys = differing_keys(mine, theirs)
+        verdict = get("spacearm/verdict", "process 0")
+        if keys:
+            verdict = f"this process differs from process 0 in {_shown(keys)}"
+    if verdict != "ok":
+        # Every process got here: leave the job together (the shutdown barrier), so no
+        # process sees its peers vanish and no coordination-service abort follows.
+        with contextlib.suppress(Exception):
+            jax.distributed.shutdown()
+        raise RunError(f"process {rank} of {count}: refusing to run: {verdict} (every process must run the same "
+                       "sweep file, --set options and spacearm version)")
 
 
 # Working memory of one design, in float64 numbers, per metric: the arrays its kernel
