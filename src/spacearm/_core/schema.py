@@ -177,7 +177,8 @@ def read_yaml(path: str | os.PathLike, *, what: str = "YAML file") -> Any:
 
 def did_you_mean(word: str, known: Iterable[str]) -> str:
     """`` (did you mean 'x'?)`` for the closest known word, or an empty string."""
-    hint = difflib.get_close_matches(str(word)[:100], sorted(known), n=1)
+    word = word[:100] if isinstance(word, str) else quote(word, 100)  # never expand a huge value
+    hint = difflib.get_close_matches(word, sorted(known), n=1)
     return f" (did you mean '{hint[0]}'?)" if hint else ""
 
 
@@ -190,7 +191,7 @@ def check_keys(where: str, mapping: Mapping, allowed: Iterable[str]) -> None:
     for key in mapping:
         if key not in allowed:
             raise ConfigError(
-                f"{where}unknown key {quote(str(key), 60)}{did_you_mean(str(key)[:100], allowed)}; "
+                f"{where}unknown key {quote(str(key), 60)}{did_you_mean(str(key), allowed)}; "
                 f"allowed keys: {', '.join(sorted(allowed))}"
             )
 
@@ -273,7 +274,8 @@ def choice(where: str, value: Any, options: Iterable[str]) -> str:
     """One of ``options``, else `ConfigError` with a did-you-mean hint."""
     options = tuple(options)
     if value not in options:
-        raise ConfigError(f"{where}: must be one of {', '.join(options)}, got {quote(value)}{did_you_mean(quote(value), options)}")
+        hint = did_you_mean(value, options) if isinstance(value, str) else ""
+        raise ConfigError(f"{where}: must be one of {', '.join(options)}, got {quote(value)}{hint}")
     return value
 
 
