@@ -173,3 +173,10 @@ def test_size_options_have_upper_bounds(tmp_path, capsys):
     code, _, err = validate(tmp_path, sweep(metrics=[{"name": "wbar", "order": 64, "phi1_panels": 4096,
                                                       "phi2_panels": 4096}]), capsys)
     assert code == 2 and "GiB" in err and "lower metric 'wbar' option order or phi1_panels/phi2_panels" in err
+
+
+def test_a_search_too_big_for_memory_is_refused_with_the_estimate(tmp_path, capsys):
+    """directions and starts each within bounds, but 4096 x 65536 runs of w-bar side by side."""
+    code, _, err = validate(tmp_path, problem(search={"directions": 4096, "starts": 65536}), capsys)
+    assert code == 2 and "search: 268,435,456 search runs (directions x starts) need about" in err
+    assert "lower search.directions or search.starts, or wbar.order" in err

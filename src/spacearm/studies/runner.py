@@ -32,6 +32,7 @@ from jax.experimental import multihost_utils
 from tqdm.auto import tqdm
 
 from .._core.errors import ConfigError, RunError
+from .._core.memory import TEMPORARIES, working_numbers
 from .._core.numeric import PEER_TIMEOUT_S
 from .._core.schema import check_memory
 from .._version import __version__
@@ -383,47 +384,22 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S) -> N
                        "sweep file, --set options and spacearm version)")
 
 
-# Working memory of one design, in float64 numbers, per metric: the arrays its kernel
-# builds at once (quadrature grids, sample blocks, starts), times a factor for the
-# temporaries XLA keeps alive beside them. Coarse on purpose: it refuses options that
-# are off by orders of magnitude (order: 1e9), before anything is allocated.
-_TEMPORARIES = 16
-
-
-def _metric_numbers(name: str, options: Mapping, n: int) -> tuple[float, str]:
-    """(float64 numbers one design of this metric holds at once, the option that sizes it)."""
-    if name == "wbar":
-        order = options.get("order", 8)
-        if options.get("measure", "area") == "joint" and n > 2:
-            return float(options.get("n_points_joint", 48)) ** n, "n_points_joint"
-        phi1 = options.get("phi1_panels", 8) * order
-        phi2 = (options.get("phi2_panels", 8) + 2 * options.get("phi1_panels", 8) + 4) * 2 * order
-        return float(phi1 * phi2), "order or phi1_panels/phi2_panels"
-    if name == "straight_path_area":
-        return float(options.get("n_directions", 72)) * 4096 * (n + 1), "n_directions"
-    if name == "reach_radii":
-        return float(options.get("starts", 128)) * (6 * n + 3 * n + 16), "starts"
-    if name == "path_independent_radius":
-        return float(options.get("samples", 2**14)) * (6 * n + 36) + options.get("keep", 2048) * 36 * n, "samples"
-    if name in _JOINT_AVERAGES:
-        return float(options.get("block", 1024)) * options.get("randomizations", 8) * (6 * n + 36), "block"
-    return 4096.0 * (n + 1), ""
-
-
 def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float, str]:
     """Bytes a sweep holds at once (designs, results, every metric's working set of the
-    designs computed side by side) and the advice that makes it smaller."""
+    designs computed side by side, `spacearm._core.memory.working_numbers`) and the advice
+    that makes it smaller."""
     devices = devices or jax.device_count()
     n = spec.robot.n_joints if hasattr(spec.robot, "n_joints") else spec.robot.n_links
     chunk = max(devices, int(math.ceil(min(spec.chunk_size, spec.n_designs) / devices)) * devices)
     in_flight = devices * min(DESIGNS_PER_STEP, max(1, chunk // devices))
     worst, advice = 0.0, ""
     for metric in spec.metrics:
-        numbers, option = _metric_numbers(metric.name, metric.options, n)
+        numbers, option = working_numbers(metric.name, metric.options, n,
+                                          joint_average=metric.name in _JOINT_AVERAGES)
         if numbers > worst:
             worst, advice = numbers, f"lower metric '{metric.name}' option {option}" if option else ""
     columns = len(metric_columns(spec.metrics))
-    need = 8.0 * (in_flight * worst * _TEMPORARIES + 2 * spec.n_designs * (columns + len(spec.axes)))
+    need = 8.0 * (in_flight * worst * TEMPORARIES + 2 * spec.n_designs * (columns + len(spec.axes)))
     return need, advice or "split the sweep into several files"
 
 
