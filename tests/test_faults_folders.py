@@ -198,3 +198,11 @@ def test_sigint_during_a_sweep_is_one_line_and_resumable(tmp_path):
     assert process.returncode == 130, err
     assert "Traceback" not in err and "interrupted" in err
     assert not (tmp_path / "o" / "table.csv").exists()
+
+
+def test_a_folder_reached_through_a_symlink_is_swapped_where_it_lives(tmp_path):
+    real = tmp_path / "real"
+    run_sweep(load_sweep(config(num=4)), real, progress=False)
+    (tmp_path / "link").symlink_to(real, target_is_directory=True)
+    run_sweep(load_sweep(config(num=6)), tmp_path / "link", progress=False)
+    assert (tmp_path / "link").is_symlink() and consistent(real) == 6

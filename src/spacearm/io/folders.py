@@ -36,8 +36,9 @@ class FolderLocked(ConfigError):
 
 
 def lock_path(folder: str | os.PathLike) -> Path:
-    """The lock file of a result folder: ``.<name>.lock`` beside it."""
-    folder = Path(os.path.abspath(folder))
+    """The lock file of a result folder: ``.<name>.lock`` beside it (beside the real folder
+    when ``folder`` is a symbolic link, so every name of one folder shares one lock)."""
+    folder = Path(os.path.realpath(folder))
     return folder.parent / f".{folder.name}.lock"
 
 
@@ -62,7 +63,7 @@ def lock_folder(folder: str | os.PathLike, *, label: str | None = None) -> Itera
     Raises:
         FolderLocked: another process holds the lock; the message names its PID.
     """
-    folder = Path(os.path.abspath(folder))
+    folder = Path(os.path.realpath(folder))
     label = label or str(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     path = lock_path(folder)
@@ -100,7 +101,7 @@ def stage_folder(folder: str | os.PathLike, keep: Callable[[str], bool]) -> Path
 
     Write the new results into the returned folder, then call `swap_in`.
     """
-    folder = Path(os.path.abspath(folder))
+    folder = Path(os.path.realpath(folder))
     staging = folder.parent / f".{folder.name}.staging-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)
     staging.mkdir(parents=True)
@@ -147,7 +148,7 @@ def _exchange(a: Path, b: Path) -> bool:
 
 def swap_in(staging: str | os.PathLike, folder: str | os.PathLike) -> None:
     """Make ``staging`` the folder ``folder`` in one step, then remove the old folder."""
-    staging, folder = Path(staging), Path(os.path.abspath(folder))
+    staging, folder = Path(staging), Path(os.path.realpath(folder))
     if not folder.exists():
         os.rename(staging, folder)
         return
