@@ -3,7 +3,7 @@
 A process run with other settings than process 0 is refused before anything is computed,
 naming the differing keys; a process whose peer never starts gives up after
 ``--peer-timeout``; a peer killed mid-sweep ends the other with exit 1 and one line, within
-the timeout. Each test keeps the timeout short (a few seconds) so the suite stays fast.
+the timeout. The timeouts are short (20 s, 3 s for the lone process) so the suite stays fast.
 """
 
 import os
@@ -38,7 +38,7 @@ def _sweep(tmp_path, num=5, chunk_size=4, metrics=("radii",)) -> Path:
     return path
 
 
-def _start(sweep, out, coordinator, rank, *extra, timeout="5"):
+def _start(sweep, out, coordinator, rank, *extra, timeout="20"):
     command = [sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--quiet", "--out", str(out),
                "--peer-timeout", timeout, *extra]
     return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -107,7 +107,29 @@ def test_a_killed_peer_ends_the_other_process_with_one_line(tmp_path):
     assert processes[0].returncode == 1, err
     assert "Traceback" not in err and "Abort" not in err and len(_error_lines(err)) == 1, err
     assert "peer" in err, err
-    assert time.monotonic() - killed_at < 30  # within the 5 s timeout, plus slack for a loaded machine
+    assert time.monotonic() - killed_at < 60  # within the 20 s timeout, plus slack for a loaded machine
     assert list(out.glob(".partial-*/chunk_*.npz"))  # the finished chunks are kept for a resume
     assert not (out / "table.csv").exists()
     assert os.path.isdir(out)
+
+
+def test_a_locked_folder_refuses_every_process(tmp_path):
+    """Another run holds the output folder: process 0 says so, and its peer hears it rather
+    than waiting for process 0 until the heartbeat check aborts it."""
+    from tests.test_faults_folders import _HOLDER, SRC
+
+    sweep = _sweep(tmp_path)
+    out = tmp_path / "out"
+    env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, str(out)], env=env, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        coordinator = f"127.0.0.1:{_free_port()}"
+        processes = [_start(sweep, out, coordinator, 0), _start(sweep, out, coordinator, 1)]
+        outputs = _finish(processes)
+    finally:
+        holder.kill()
+        holder.wait()
+    for rank, (p, (_, err)) in enumerate(zip(processes, outputs)):
+        assert p.returncode == 1, f"process {rank}: {err}"
+        assert f"another spacearm run (PID {holder.pid})" in err and len(_error_lines(err)) == 1, err

@@ -37,7 +37,7 @@ from .._core.numeric import PEER_TIMEOUT_S
 from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
-from ..io.folders import lock_folder, stage_folder, swap_in
+from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
 from ..io import manifest as provenance
 from .designs import build_designs, design_columns
 from .metrics import METRICS, design_function, metric_columns
@@ -114,7 +114,9 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
 
     Finished chunks are saved under ``out_dir/.partial-<hash>/``; a re-run of the same
     resolved sweep loads them and computes only the rest. ``stop_after_chunks`` simulates
-    an interruption (for tests).
+    an interruption (for tests). The results are written into a staging folder beside
+    ``out_dir`` and swapped in whole at the end, under a lock that refuses a second
+    writer (`spacearm.io.folders`): a reader never sees files of two runs.
 
     Args:
         outputs: further writers, each ``fn(spec, out_dir, table) -> [paths]``, run after
@@ -132,11 +134,17 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     out_dir = Path(out_dir if out_dir is not None else spec.output)
     _check_output_dir(out_dir)
     check_sweep_memory(spec)
-    if jax.process_count() > 1:
-        agree_with_peers(spec, timeout_s=peer_timeout_s)
     with contextlib.ExitStack() as stack:
+        refusal = None
         if jax.process_index() == 0:  # the one writer: refuse a second one before computing
-            stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
+            try:
+                stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
+            except FolderLocked as error:
+                if jax.process_count() == 1:
+                    raise
+                refusal = str(error)  # every process must hear it, or they would wait for process 0
+        if jax.process_count() > 1:
+            agree_with_peers(spec, timeout_s=peer_timeout_s, refusal=refusal)
         return _run_locked(spec, out_dir, wall_start, progress=progress, command=command,
                            stop_after_chunks=stop_after_chunks, outputs=outputs)
 
@@ -217,7 +225,7 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
             pieces[number] = piece
             bar.update(stop - start)
     except Exception as error:
-        if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError)):
+        if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError, OSError)):
             raise
         # Under jax.distributed a peer that died surfaces here as a collective's error.
         reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
@@ -337,7 +345,7 @@ def _shown(keys: Sequence[str]) -> str:
     return ", ".join(keys[:6]) + (f" and {len(keys) - 6} more" if len(keys) > 6 else "")
 
 
-def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S) -> None:
+def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refusal: str | None = None) -> None:
     """Refuse to compute unless every process of a distributed sweep has the same resolved
     config and code as process 0.
 
@@ -345,6 +353,8 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S) -> N
     process 0 compares every peer's with its own and publishes one verdict, which every
     process waits for (at most ``timeout_s``). A mismatch ends every process with a
     `RunError` naming the differing keys, before anything is computed or written.
+    ``refusal``: process 0's own reason not to run (another run holds the folder's lock),
+    passed on in the verdict.
     """
     client = jax_distributed.global_state.client
     if client is None:
@@ -367,7 +377,7 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S) -> N
             keys = differing_keys(mine, json.loads(get(f"spacearm/fingerprint/{peer}", f"process {peer}")))
             if keys:
                 problems.append(f"process {peer} differs from process 0 in {_shown(keys)}")
-        verdict = "; ".join(problems) or "ok"
+        verdict = "; ".join(([refusal] if refusal else []) + problems) or "ok"
         client.key_value_set("spacearm/verdict", verdict)
     else:
         theirs = json.loads(get("spacearm/fingerprint/0", "process 0"))
