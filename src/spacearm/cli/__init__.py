@@ -7,7 +7,9 @@ named in `COMMANDS`. Building the parser imports only these light modules, so
 library layers are imported when it runs.
 
 Every command runs in float64 unless ``--float32``. Invalid input ends with exit
-status 2 and a one-line message naming the field and the reason, never a traceback.
+status 2 and a one-line message naming the field and the reason; a run that cannot
+finish correctly (a non-finite result, a full disk, a peer process gone) with exit
+status 1 and one line; Ctrl-C with 130. Never a traceback.
 """
 
 from __future__ import annotations
