@@ -206,3 +206,16 @@ def test_a_folder_reached_through_a_symlink_is_swapped_where_it_lives(tmp_path):
     (tmp_path / "link").symlink_to(real, target_is_directory=True)
     run_sweep(load_sweep(config(num=6)), tmp_path / "link", progress=False)
     assert (tmp_path / "link").is_symlink() and consistent(real) == 6
+
+
+def test_the_current_folder_is_never_swapped(tmp_path, monkeypatch, capsys):
+    """The results replace their folder as a whole: --out . (or a folder above it) is refused."""
+    sweep = tmp_path / "s.yaml"
+    sweep.write_text(yaml.safe_dump(config(num=2)))
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    for out in (".", str(tmp_path)):
+        assert main(["sweep", str(sweep), "--out", out, "--quiet"]) == 2
+        assert "need a folder of their own" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml", "work"]

@@ -452,3 +452,9 @@ def _check_output_dir(out_dir: Path) -> None:
         raise ConfigError(f"--out {out_dir}: {existing} is a file, not a folder")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise ConfigError(f"--out {out_dir}: cannot write into {existing} (permission denied)")
+    # The results replace the folder as a whole (spacearm.io.folders): never the folder this
+    # process works in or one above it, nor a mount point.
+    real, here = Path(os.path.realpath(target)), Path(os.path.realpath(os.getcwd()))
+    if real == here or real in here.parents or (real.exists() and os.path.ismount(real)):
+        raise ConfigError(f"--out {out_dir}: results replace their folder as a whole, so they need a folder of "
+                          f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})")
