@@ -108,3 +108,75 @@ def test_unknown_kind_and_missing_file(tmp_path, capsys):
     assert code == 2 and "neither a robot file" in err
     assert main(["validate", str(tmp_path / "missing.yaml")]) == 2
     assert "no such" in capsys.readouterr().err
+
+
+def _chain_urdf(joints: int) -> str:
+    links = "".join(
+        f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" '
+        f'iyz="0"/></inertial></link>' for i in range(joints + 1))
+    chain = "".join(
+        f'<joint name="j{i}" type="revolute"><origin xyz="0 0 0.1"/><parent link="l{i}"/><child link="l{i + 1}"/>'
+        f'<axis xyz="0 {i % 2} {(i + 1) % 2}"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        for i in range(joints))
+    return f'<robot name="chain">{links}{chain}</robot>'
+
+
+def _chain_robot(tmp_path, joints: int, **arm) -> Path:
+    (tmp_path / "chain.urdf").write_text(_chain_urdf(joints))
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump({
+        "name": "chain", "base": {"mass": 100.0, "inertia": [[10, 0, 0], [0, 10, 0], [0, 0, 10]]},
+        "arm": {"urdf": "chain.urdf", "root_link": "l0", "tip": f"l{joints}", **arm}}))
+    return path
+
+
+def test_joint_box_metrics_on_more_than_10_joints_fail_validate(tmp_path, capsys):
+    """Before: validate accepted them and the run refused without naming file or metric."""
+    robot = _chain_robot(tmp_path, 12)
+    code, _, err = validate(tmp_path, {"name": "many", "robot": str(robot), "metrics": ["w_avg"],
+                                       "axes": {"m": {"field": "base.mass", "values": [100.0]}}}, capsys)
+    assert code == 2
+    assert "file.yaml: metrics[0]: joints: the joint-box averages support 1 to 10 joints, the robot has 12" in err
+
+
+def test_arm_fields_are_named_in_the_robot_file(tmp_path, capsys):
+    """Before: errors about arm.tip / arm.lock_joints named only the URDF (for a package URDF,
+    a path in site-packages)."""
+    robot = _chain_robot(tmp_path, 2, tip="l9", lock_joints={"j7": 0.0})
+    assert main(["validate", str(robot)]) == 2
+    err = capsys.readouterr().err
+    assert f"{robot}: arm.lock_joints: (in {tmp_path / 'chain.urdf'}) unknown joint 'j7'" in err
+    robot = _chain_robot(tmp_path, 2, tip="l9")
+    assert main(["validate", str(robot)]) == 2
+    err = capsys.readouterr().err
+    assert f"{robot}: arm.tip: (in {tmp_path / 'chain.urdf'}) link 'l9' is not in the URDF" in err
+
+
+def test_numbers_yaml_reads_as_strings_get_the_reason(tmp_path, capsys):
+    path = tmp_path / "robot.yaml"
+    path.write_text((ROOT / "configs" / "umetani1990.yaml").read_text().replace("mass: 1000.0", "mass: 1.0e12"))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "base.mass: must be a number, got the string '1.0e12' (YAML 1.1 reads a number with an exponent" in err
+    assert "e.g. 1.0e+12" in err
+    path.write_text(path.read_text().replace("1.0e12", "1.0e+12"))
+    assert main(["validate", str(path)]) == 0
+
+
+def test_size_options_have_upper_bounds(tmp_path, capsys):
+    """Before: wbar order 1e9 took 3.4 GB in 2 s; a phi1_panels of 1e6 ended in RESOURCE_EXHAUSTED."""
+    code, _, err = validate(tmp_path, sweep(metrics=[{"name": "wbar", "order": 10**9}]), capsys)
+    assert code == 2 and "metrics[0].order: must be at most 64" in err
+    code, _, err = validate(tmp_path, problem(search={"directions": 10**8}), capsys)
+    assert code == 2 and "search.directions: must be at most 4,096" in err
+    # within every bound, yet too big together: the memory estimate and the fix
+    code, _, err = validate(tmp_path, sweep(metrics=[{"name": "wbar", "order": 64, "phi1_panels": 4096,
+                                                      "phi2_panels": 4096}]), capsys)
+    assert code == 2 and "GiB" in err and "lower metric 'wbar' option order or phi1_panels/phi2_panels" in err
+
+
+def test_a_search_too_big_for_memory_is_refused_with_the_estimate(tmp_path, capsys):
+    """directions and starts each within bounds, but 4096 x 65536 runs of w-bar side by side."""
+    code, _, err = validate(tmp_path, problem(search={"directions": 4096, "starts": 65536}), capsys)
+    assert code == 2 and "search: 268,435,456 search runs (directions x starts) need about" in err
+    assert "lower search.directions or search.starts, or wbar.order" in err

@@ -98,6 +98,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.io", "Results on disk", "results on disk"),
     ("spacearm.io.files", "Results on disk", "atomic writes, CSV tables, `.npz` grids"),
     ("spacearm.io.manifest", "Results on disk", "the manifest that lets anyone rerun a result"),
+    ("spacearm.io.folders", "Results on disk", "result folders swapped in whole, one writer at a time (a lock)"),
     ("spacearm.io.grids", "Results on disk", "`open_results`: a sweep's grids as a labelled xarray Dataset"),
     ("spacearm.figures", "Figures", "the figure registry"),
     ("spacearm.figures.robot", "Figures", "the one drawing of a planar robot"),

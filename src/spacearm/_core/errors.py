@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["ConfigError"]
+__all__ = ["ConfigError", "RunError"]
 
 
 class ConfigError(ValueError):
@@ -10,4 +10,11 @@ class ConfigError(ValueError):
 
     The message names the file, the field (or the link or joint) and the reason; the
     command line prints it on one line and exits with status 2.
+    """
+
+
+class RunError(RuntimeError):
+    """A run that started could not finish correctly (a result came out NaN, a peer
+    process died or disagrees). The command line prints the message on one line and
+    exits with status 1.
     """

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import os
+import sys
+import threading
 
 import jax
+
+from .errors import RunError
 
 
 def enable_x64(enabled: bool = True) -> None:
@@ -66,7 +71,11 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, min_compi
     return folder
 
 
-def join_processes(coordinator: str, num_processes: int, process_id: int) -> None:
+PEER_TIMEOUT_S = 60.0  # how long a process of a distributed job waits for its peers
+
+
+def join_processes(coordinator: str, num_processes: int, process_id: int, *,
+                   timeout_s: float = PEER_TIMEOUT_S) -> None:
     """Join ``num_processes`` processes into one JAX job (``jax.distributed``), CPU
     collectives over gloo, so ``jax.devices()`` spans every process and a sharded
     ``jit`` runs across them. Call before anything starts JAX's backend.
@@ -75,9 +84,37 @@ def join_processes(coordinator: str, num_processes: int, process_id: int) -> Non
         coordinator: ``HOST:PORT`` of process 0 (every process gives the same address).
         num_processes: how many processes join.
         process_id: this process's rank, 0 .. num_processes - 1.
+        timeout_s: how long to wait for every peer to join; a silent peer is declared dead
+            by the coordination service after twice that (its heartbeat timeout).
+
+    Raises:
+        RunError: the peers did not all join within ``timeout_s``.
     """
     jax.config.update("jax_cpu_collectives_implementation", "gloo")
-    jax.distributed.initialize(coordinator_address=coordinator, num_processes=num_processes, process_id=process_id)
+    seconds = max(1, int(math.ceil(timeout_s)))
+    message = (f"process {process_id} of {num_processes}: the processes did not all join at {coordinator} within "
+               f"{seconds} s (start every process, or wait longer with --peer-timeout)")
+    # jaxlib's own connect timeout ends the process with a C++ stack (a fatal log), so this
+    # process keeps its own clock, a little shorter, and leaves with one line instead.
+    joined = threading.Event()
+
+    def give_up() -> None:
+        if not joined.wait(seconds):
+            print(f"spacearm: error: {message}", file=sys.stderr, flush=True)
+            os._exit(1)
+
+    threading.Thread(target=give_up, name="spacearm-join-timeout", daemon=True).start()
+    try:
+        jax.distributed.initialize(coordinator_address=coordinator, num_processes=num_processes,
+                                   process_id=process_id, initialization_timeout=seconds + 30,
+                                   # twice the wait: a peer that is gone is reported by spacearm's own
+                                   # waits (one line) before the service's heartbeat check aborts the process
+                                   heartbeat_timeout_seconds=2 * seconds, shutdown_timeout_seconds=seconds)
+    except Exception as error:  # jaxlib's runtime error (UNAVAILABLE, ...)
+        reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
+        raise RunError(f"{message}; {reason}") from None
+    finally:
+        joined.set()
 
 
 def use_every_cpu_core() -> int:

@@ -145,6 +145,9 @@ def check_joint_box(robot) -> None:
     if isinstance(robot.joint_lower, jax.core.Tracer) or isinstance(robot.joint_upper, jax.core.Tracer):
         return
     kinds = joint_kinds(robot)
+    if not 1 <= len(kinds) <= MAX_SOBOL_DIMENSION:
+        raise ConfigError(f"joints: the joint-box averages support 1 to {MAX_SOBOL_DIMENSION} joints, "
+                          f"the robot has {len(kinds)}")
     lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
     names = getattr(getattr(robot, "labels", None), "joint_names", ()) or ()
     for i, kind in enumerate(kinds):

@@ -55,6 +55,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
+from .._core.schema import integer
 from ..models.planar.closed_forms import (
     DesignCoefficients,
     design_coefficients,
@@ -354,9 +355,7 @@ def check_average_options(*, where: str = "", **options) -> None:
     if rule not in _RULES:
         raise ConfigError(f"{where}rule: must be one of {', '.join(_RULES)}, got {rule!r}")
     for name, least in _INTEGER_OPTIONS.items():
-        value = options.get(name, least)
-        if not isinstance(value, int) or isinstance(value, bool) or value < least:
-            raise ConfigError(f"{where}{name}: must be an integer >= {least}, got {value!r}")
+        integer(f"{where}{name}", options.get(name, least), least=least)  # bounded by SIZE_LIMITS too
     if options.get("phi1_panels", 2) % 2:
         raise ConfigError(f"{where}phi1_panels: must be even so that phi1 = 0 is a panel edge, got {options['phi1_panels']}")
 

@@ -7,7 +7,9 @@ named in `COMMANDS`. Building the parser imports only these light modules, so
 library layers are imported when it runs.
 
 Every command runs in float64 unless ``--float32``. Invalid input ends with exit
-status 2 and a one-line message naming the field and the reason, never a traceback.
+status 2 and a one-line message naming the field and the reason; a run that cannot
+finish correctly (a non-finite result, a full disk, a peer process gone) with exit
+status 1 and one line; Ctrl-C with 130. Never a traceback.
 """
 
 from __future__ import annotations
@@ -17,12 +19,13 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from .._core.errors import ConfigError
+from .._core.errors import ConfigError, RunError
 from .._core.numeric import enable_compilation_cache, enable_x64, use_every_cpu_core
 
-__all__ = ["main", "console_main", "build_parser", "COMMANDS", "EXIT_INVALID"]
+__all__ = ["main", "console_main", "build_parser", "COMMANDS", "EXIT_INVALID", "EXIT_FAILED"]
 
 EXIT_INVALID = 2
+EXIT_FAILED = 1
 
 # Every command: (name, module with register(subparsers) and run(args)), in help order.
 COMMANDS: tuple[tuple[str, str], ...] = (
@@ -57,21 +60,44 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run one command; return its exit status (2 for invalid input, 130 when interrupted)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    enable_x64(not args.float32)
-    enable_compilation_cache()
-    _draw_into_files()
-    command = importlib.import_module(dict(COMMANDS)[args.command])
+    """Run one command; return its exit status (2 for invalid input, 1 when a run fails,
+    130 when interrupted). Every error is one line on stderr, never a traceback."""
+    name = "spacearm"
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        name = f"spacearm {args.command}"
+        enable_x64(not args.float32)
+        enable_compilation_cache()
+        _draw_into_files()
+        command = importlib.import_module(dict(COMMANDS)[args.command])
         return int(command.run(args) or 0)
     except ConfigError as error:
-        print(f"spacearm {args.command}: error: {error}", file=sys.stderr)
+        print(f"{name}: error: {_one_line(error)}", file=sys.stderr)
         return EXIT_INVALID
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+    except RunError as error:
+        print(f"{name}: error: {_one_line(error)}", file=sys.stderr)
+        return EXIT_FAILED
+    except KeyboardInterrupt:  # also during start-up (imports, parsing)
+        print(f"{name}: interrupted", file=sys.stderr)
         return 130
+    except RecursionError:
+        print(f"{name}: error: the input nests too deeply", file=sys.stderr)
+        return EXIT_INVALID
+    except MemoryError:
+        print(f"{name}: error: out of memory; make the run smaller (fewer designs, a smaller chunk_size)",
+              file=sys.stderr)
+        return EXIT_FAILED
+    except OSError as error:  # a read-only or full disk under --out, a vanished file
+        where = f"{error.filename}: " if error.filename else ""
+        print(f"{name}: error: {where}{error.strerror or error}", file=sys.stderr)
+        return EXIT_FAILED
+
+
+def _one_line(error: BaseException, limit: int = 2000) -> str:
+    """The message on one line, at most ``limit`` characters."""
+    text = " ".join(str(error).split("\n"))
+    return text if len(text) <= limit else text[: limit - 15] + " ... (shortened)"
 
 
 def _draw_into_files() -> None:

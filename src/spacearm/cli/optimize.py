@@ -29,11 +29,13 @@ def run(args: argparse.Namespace) -> int:
     from .._core.schema import read_yaml
     from ..design import run_problem
     from ..design.spatial_problem import load_design_problem
+    from .validate import check_problem_memory
     from ..figures.design import plot_results
 
     config = read_yaml(args.file, what="design problem file")
     problem = load_design_problem(config, name=os.fspath(args.file),
                                   base_dir=os.path.dirname(os.path.abspath(args.file)))
+    check_problem_memory(os.fspath(args.file), problem)  # before the search allocates anything
     out_dir = Path(args.out) if args.out else Path("results") / problem.name
     outputs = (plot_results, *_html_outputs())
     run_problem(problem, out_dir, baselines=not args.no_baselines, config=config, outputs=outputs,

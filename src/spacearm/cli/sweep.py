@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._core.errors import ConfigError
+from .._core.errors import ConfigError, RunError
 from ._help import LazyEpilogHelp
 
 ROWS_SHOWN = 20  # a longer table prints its first rows and a summary of every column
@@ -62,6 +62,10 @@ def register(subparsers) -> None:
                        help="how many processes run the sweep together (SPACEARM_NUM_PROCESSES)")
     group.add_argument("--process-id", metavar="I", type=int, default=os.environ.get("SPACEARM_PROCESS_ID") or None,
                        help="this process's rank, 0..N-1; process 0 writes the results (SPACEARM_PROCESS_ID)")
+    group.add_argument("--peer-timeout", metavar="SECONDS", type=float,
+                       default=float(os.environ.get("SPACEARM_PEER_TIMEOUT") or 60.0),
+                       help="how long to wait for the other processes before giving up with one line "
+                            "(SPACEARM_PEER_TIMEOUT; default 60)")
 
 
 def _join(args: argparse.Namespace) -> None:
@@ -80,10 +84,28 @@ def _join(args: argparse.Namespace) -> None:
         raise ConfigError(f"--coordinator {args.coordinator}: must be HOST:PORT, e.g. 127.0.0.1:8476")
     from .._core.numeric import join_processes
 
-    join_processes(args.coordinator, args.num_processes, args.process_id)
+    if not args.peer_timeout > 0:
+        raise ConfigError(f"--peer-timeout {args.peer_timeout:g}: must be a positive number of seconds")
+    join_processes(args.coordinator, args.num_processes, args.process_id, timeout_s=args.peer_timeout)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.coordinator is None and args.num_processes is None and args.process_id is None:
+        return _run(args)
+    try:
+        return _run(args)
+    except (ConfigError, RunError) as error:
+        # One of several processes: say why in one line and leave at once. A normal exit
+        # would wait in jax.distributed's shutdown for peers that may be gone, then abort
+        # with a C++ stack.
+        status = 2 if isinstance(error, ConfigError) else 1
+        message = " ".join(str(error).splitlines())
+        print(f"spacearm sweep: error: {message}", file=sys.stderr, flush=True)
+        sys.stdout.flush()
+        os._exit(status)
+
+
+def _run(args: argparse.Namespace) -> int:
     _join(args)  # first: jax.distributed must start before JAX's backend
 
     from ..figures.sweep import write_figures
@@ -95,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         # The table, the grids and the report, then the figures (listed in the manifest).
         result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv,
-                           outputs=(write_figures, _shells_view))
+                           outputs=(write_figures, _shells_view), peer_timeout_s=args.peer_timeout)
     except OSError as error:  # e.g. a read-only file system under --out
         raise ConfigError(f"--out {out_dir}: cannot write the results ({error.strerror or error})") from None
     if not result.manifest:  # a distributed sweep's other processes: process 0 wrote the results

@@ -12,13 +12,32 @@ import os
 from collections.abc import Mapping
 
 from .._core.errors import ConfigError
+from .._core.memory import check_working_memory, working_numbers
 from .._core.schema import read_yaml
+
+
+def check_problem_memory(where: str, problem) -> float:
+    """Refuse a design problem whose search would not fit in memory: its directions x starts
+    runs evaluate the objectives (and their gradients) side by side. Returns the estimate."""
+    runs = problem.search.directions * problem.search.starts
+    if hasattr(problem, "wbar_options"):  # planar: the w-bar quadrature dominates
+        n = problem.n_links
+        numbers, option = (working_numbers("wbar", problem.wbar_options, n) if "wbar" in problem.objectives
+                           else (4096.0 * (n + 1), ""))
+        option = f"wbar.{option.split(' or ')[0]}" if option else ""
+    else:  # spatial: the joint-box samples of each objective
+        numbers, option = working_numbers("objectives", {"samples": problem.samples}, problem.base.n_joints)
+        option = "average.samples"
+    advice = "lower search.directions or search.starts" + (f", or {option}" if option else "")
+    return check_working_memory(f"{where}: search", runs, 3 * numbers,  # value and gradient
+                                f"{runs:,} search runs (directions x starts)", advice)
 
 
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     """Validate a robot, sweep or design-problem file; return (kind, one-line summary) or raise ConfigError."""
     from ..design.spatial_problem import load_design_problem
     from ..models import is_robot_mapping, robot_from_file_mapping
+    from ..studies.runner import check_sweep_memory
     from ..studies.spec import load_sweep
 
     path = os.fspath(path)
@@ -28,9 +47,12 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
         return "robot", f"{robot.name}, {robot.n_links} links, L = {float(robot.reach):g} m"
     if isinstance(config, Mapping) and ("variables" in config or "objectives" in config):
         problem = load_design_problem(path)
+        check_problem_memory(path, problem)
         return "design problem", f"{problem.name}: variables {', '.join(problem.variable_names)}"
     if isinstance(config, Mapping) and ("axes" in config or "robot" in config):
-        return "sweep", load_sweep(path).summary()
+        spec = load_sweep(path)
+        check_sweep_memory(spec)  # as run_sweep does before it allocates anything
+        return "sweep", spec.summary()
     raise ConfigError(
         f"{path}: neither a robot file (needs 'base' and 'links'), a sweep file (needs 'robot' and 'axes') "
         "nor a design problem (needs 'variables' and 'objectives')"

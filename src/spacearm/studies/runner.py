@@ -12,6 +12,7 @@ an empty `SweepResult`.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import json
@@ -26,19 +27,25 @@ from pathlib import Path
 
 import jax
 import numpy as np
+from jax._src import distributed as jax_distributed  # the coordination service's client
 from jax.experimental import multihost_utils
 from tqdm.auto import tqdm
 
-from .._core.errors import ConfigError
+from .._core.errors import ConfigError, RunError
+from .._core.memory import TEMPORARIES, working_numbers
+from .._core.numeric import PEER_TIMEOUT_S
+from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
+from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
 from ..io import manifest as provenance
 from .designs import build_designs, design_columns
 from .metrics import METRICS, design_function, metric_columns
 from .spec import SweepSpec
 from .table2 import REPORTS
 
-__all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP"]
+__all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP", "NonFiniteResult", "check_finite", "memory_estimate",
+           "check_sweep_memory", "agree_with_peers", "differing_keys"]
 
 # Designs vmapped together inside a chunk (see run_sweep): small enough for the cache.
 DESIGNS_PER_STEP = 32
@@ -100,23 +107,52 @@ class SweepResult:
 
 def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, progress: bool = True,
               command: Sequence[str] | None = None, stop_after_chunks: int | None = None,
-              outputs: Sequence[SweepOutput] = ()) -> SweepResult:
+              outputs: Sequence[SweepOutput] = (), peer_timeout_s: float = PEER_TIMEOUT_S) -> SweepResult:
     """Evaluate every design of a sweep and write ``table.csv``, ``grids.npz``, the report
     (``report:`` in the file, e.g. ``table.md``) and ``manifest.json`` into ``out_dir``
     (default: the sweep's ``output``).
 
     Finished chunks are saved under ``out_dir/.partial-<hash>/``; a re-run of the same
     resolved sweep loads them and computes only the rest. ``stop_after_chunks`` simulates
-    an interruption (for tests).
+    an interruption (for tests). The results are written into a staging folder beside
+    ``out_dir`` and swapped in whole at the end, under a lock that refuses a second
+    writer (`spacearm.io.folders`): a reader never sees files of two runs.
 
     Args:
         outputs: further writers, each ``fn(spec, out_dir, table) -> [paths]``, run after
             the report and before the manifest, which lists their files (``spacearm sweep``
             passes `spacearm.figures.sweep.write_figures`). This layer draws nothing.
+        peer_timeout_s: under ``jax.distributed``, how long to wait for the other processes
+            when they compare their settings (`agree_with_peers`).
+
+    Raises:
+        ConfigError: a second writer holds ``out_dir``, or the sweep would not fit in memory.
+        RunError: a metric came out non-finite; under ``jax.distributed``, the processes
+            disagree on the config or the code, or a peer stopped.
     """
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)
     _check_output_dir(out_dir)
+    check_sweep_memory(spec)
+    with contextlib.ExitStack() as stack:
+        refusal = None
+        if jax.process_index() == 0:  # the one writer: refuse a second one before computing
+            try:
+                stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
+            except FolderLocked as error:
+                if jax.process_count() == 1:
+                    raise
+                refusal = str(error)  # every process must hear it, or they would wait for process 0
+        if jax.process_count() > 1:
+            agree_with_peers(spec, timeout_s=peer_timeout_s, refusal=refusal)
+        return _run_locked(spec, out_dir, wall_start, progress=progress, command=command,
+                           stop_after_chunks=stop_after_chunks, outputs=outputs)
+
+
+def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: bool,
+                command: Sequence[str] | None, stop_after_chunks: int | None,
+                outputs: Sequence[SweepOutput]) -> SweepResult:
+    """`run_sweep` once this process may write ``out_dir``."""
     code_state = provenance.git_state()  # before this run changes any tracked result file
     robot, points = build_designs(spec)
     total = spec.n_designs
@@ -188,6 +224,14 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
                 write_npz(partial / f"chunk_{number:06d}.npz", **piece)
             pieces[number] = piece
             bar.update(stop - start)
+    except Exception as error:
+        if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError, OSError)):
+            raise
+        # Under jax.distributed a peer that died surfaces here as a collective's error.
+        reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
+        raise RunError(f"process {jax.process_index()} of {jax.process_count()}: a peer process stopped or failed "
+                       f"during the sweep ({reason}); finished chunks are kept: start every process again "
+                       "to resume") from None
     except KeyboardInterrupt:
         bar.close()
         kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
@@ -201,39 +245,185 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
     if jax.process_index() != 0:  # multi-host: the first process writes the results
         return SweepResult(out_dir, {}, {}, [])
     metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
+    check_finite(spec, metric_values, points)
     table: dict[str, np.ndarray] = {"design": np.arange(total)}
     table.update(points)
     table.update(design_columns(robot, spec.axes))
     table.update(metric_values)
-    files = [write_csv(out_dir / "table.csv", table)]
-    grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
-    grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
-    grid_arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
-    files.append(write_npz(out_dir / "grids.npz", **grid_arrays))
-    if spec.report:
-        rows = [{k: float(v[i]) for k, v in table.items()} for i in range(total)]
-        files.extend(REPORTS[spec.report](out_dir, rows, spec))
-    for output in outputs:
-        files.extend(output(spec, out_dir, table))
-    timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
-    data = build_manifest(
-        spec.config, command=command, timings=timings, git=code_state,
-        extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk, "resumed_chunks": len(spans) - len(todo),
-               "files": sorted(str(p.relative_to(out_dir)) for p in files)},
-    )
+    # Every result is written into a staging folder beside out_dir, which then replaces
+    # out_dir in one step: a reader never sees files of two runs, and a run that dies
+    # before the swap leaves the old folder as it was.
     previous = _previous_files(out_dir)
-    files.append(write_json(out_dir / "manifest.json", data))
+    staging = stage_folder(out_dir, keep=lambda name: name not in previous and name != partial.name)
+    try:
+        files = [write_csv(staging / "table.csv", table)]
+        grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
+        grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
+        grid_arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
+        files.append(write_npz(staging / "grids.npz", **grid_arrays))
+        if spec.report:
+            rows = [{k: float(v[i]) for k, v in table.items()} for i in range(total)]
+            files.extend(REPORTS[spec.report](staging, rows, spec))
+        for output in outputs:
+            files.extend(output(spec, staging, table))
+        timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
+        data = build_manifest(
+            spec.config, command=command, timings=timings, git=code_state,
+            extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk,
+                   "resumed_chunks": len(spans) - len(todo),
+                   "files": sorted(str(p.relative_to(staging)) for p in files)},
+        )
+        files.append(write_json(staging / "manifest.json", data))
+        if _BEFORE_SWAP is not None:
+            _BEFORE_SWAP(staging)
+        swap_in(staging, out_dir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    files = [out_dir / p.relative_to(staging) for p in files]
     shutil.rmtree(partial, ignore_errors=True)
-    for name in previous - {str(p.relative_to(out_dir)) for p in files}:
-        try:
-            (out_dir / name).unlink(missing_ok=True)  # an earlier sweep's figure this run did not draw
-        except OSError:
-            pass
     others = sorted(p.name for p in out_dir.glob(".partial-*") if p.is_dir())
     if others:
         print(f"note: {out_dir} also holds {', '.join(others)} (chunks of another sweep run into this folder; "
               "delete them if no run needs them)", file=sys.stderr)
     return SweepResult(out_dir, table, data, files)
+
+
+# Columns where +inf is a documented value, not a failure ("none found").
+INFINITE_MEANS_NONE = frozenset({"R_path_independent_m"})
+
+# A hook for tests: called with the staging folder just before it is swapped in.
+_BEFORE_SWAP: Callable[[Path], None] | None = None
+
+
+def check_finite(spec: SweepSpec, metric_values: Mapping[str, np.ndarray], points: Mapping[str, np.ndarray]) -> None:
+    """Refuse a result that came out non-finite (NaN or inf): `NonFiniteResult` naming the
+    metric column and the first such design, instead of a silent NaN column."""
+    for column, values in metric_values.items():
+        values = np.asarray(values, dtype=float)
+        bad = np.isnan(values) if column in INFINITE_MEANS_NONE else ~np.isfinite(values)
+        bad = np.flatnonzero(bad | (np.isneginf(values) if column in INFINITE_MEANS_NONE else False))
+        if bad.size:
+            first = int(bad[0])
+            where = ", ".join(f"{name} = {float(np.asarray(v)[first]):g}" for name, v in points.items())
+            raise NonFiniteResult(
+                f"{spec.source}: metric column '{column}' is {float(values[first])} for design {first} ({where})"
+                f" and {bad.size - 1} more of {len(values)}; nothing was written (check the design's numbers"
+                + (", or drop --float32" if not jax.config.jax_enable_x64 else "") + ")"
+            )
+
+
+class NonFiniteResult(RunError):
+    """A sweep's metric came out NaN or infinite (exit status 1 on the command line)."""
+
+
+def _flatten(value, prefix: str = "") -> dict[str, str]:
+    """Dotted paths of a nested config -> the JSON of each leaf (for naming differing keys)."""
+    if isinstance(value, Mapping) and value:
+        out: dict[str, str] = {}
+        for key, item in value.items():
+            out.update(_flatten(item, f"{prefix}.{key}" if prefix else str(key)))
+        return out
+    return {prefix or "(root)": json.dumps(value, sort_keys=True, default=str)}
+
+
+def _fingerprint(spec: SweepSpec) -> dict:
+    """What must be the same on every process of a distributed sweep: the resolved config
+    and the code (versions, git revision, precision)."""
+    return {"config": spec.config,
+            "code": {"spacearm": __version__, "git_revision": provenance.git_state().get("revision"),
+                     "jax": jax.__version__, "float64": bool(jax.config.jax_enable_x64)}}
+
+
+def differing_keys(mine: Mapping, theirs: Mapping) -> list[str]:
+    """The dotted keys whose values differ between two fingerprints (or exist in one only)."""
+    a, b = _flatten(mine), _flatten(theirs)
+    return sorted(key for key in set(a) | set(b) if a.get(key) != b.get(key))
+
+
+def _shown(keys: Sequence[str]) -> str:
+    return ", ".join(keys[:6]) + (f" and {len(keys) - 6} more" if len(keys) > 6 else "")
+
+
+def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refusal: str | None = None) -> None:
+    """Refuse to compute unless every process of a distributed sweep has the same resolved
+    config and code as process 0.
+
+    Each process publishes its fingerprint in the coordination service's key-value store;
+    process 0 compares every peer's with its own and publishes one verdict, which every
+    process waits for (at most ``timeout_s``). A mismatch ends every process with a
+    `RunError` naming the differing keys, before anything is computed or written.
+    ``refusal``: process 0's own reason not to run (another run holds the folder's lock),
+    passed on in the verdict.
+    """
+    client = jax_distributed.global_state.client
+    if client is None:
+        return
+    rank, count = jax.process_index(), jax.process_count()
+    wait_ms = int(max(1.0, timeout_s) * 1000)
+    mine = _fingerprint(spec)
+    client.key_value_set(f"spacearm/fingerprint/{rank}", json.dumps(mine, default=str))
+
+    def get(key: str, whom: str) -> str:
+        try:
+            return client.blocking_key_value_get(key, wait_ms)
+        except Exception:  # jaxlib's DEADLINE_EXCEEDED
+            raise RunError(f"process {rank} of {count}: {whom} did not answer within {timeout_s:g} s "
+                           "(is it running the same command? wait longer with --peer-timeout)") from None
+
+    if rank == 0:
+        problems = []
+        for peer in range(1, count):
+            keys = differing_keys(mine, json.loads(get(f"spacearm/fingerprint/{peer}", f"process {peer}")))
+            if keys:
+                problems.append(f"process {peer} differs from process 0 in {_shown(keys)}")
+        verdict = "; ".join(([refusal] if refusal else []) + problems) or "ok"
+        client.key_value_set("spacearm/verdict", verdict)
+    else:
+        theirs = json.loads(get("spacearm/fingerprint/0", "process 0"))
+        keys = differing_keys(mine, theirs)
+        verdict = get("spacearm/verdict", "process 0")
+        if keys:
+            verdict = f"this process differs from process 0 in {_shown(keys)}"
+    if verdict != "ok":
+        # Every process got here: leave the job together (the shutdown barrier), so no
+        # process sees its peers vanish and no coordination-service abort follows.
+        with contextlib.suppress(Exception):
+            jax.distributed.shutdown()
+        raise RunError(f"process {rank} of {count}: refusing to run: {verdict} (every process must run the same "
+                       "sweep file, --set options and spacearm version)")
+
+
+def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float, str]:
+    """Bytes a sweep holds at once (designs, results, every metric's working set of the
+    designs computed side by side, `spacearm._core.memory.working_numbers`) and the advice
+    that makes it smaller."""
+    devices = devices or jax.device_count()
+    n = spec.robot.n_joints if hasattr(spec.robot, "n_joints") else spec.robot.n_links
+    chunk = max(devices, int(math.ceil(min(spec.chunk_size, spec.n_designs) / devices)) * devices)
+    in_flight = devices * min(DESIGNS_PER_STEP, max(1, chunk // devices))
+    worst, advice = 0.0, ""
+    for metric in spec.metrics:
+        numbers, option = working_numbers(metric.name, metric.options, n,
+                                          joint_average=metric.name in _JOINT_AVERAGES)
+        if numbers > worst:
+            worst, advice = numbers, f"lower metric '{metric.name}' option {option}" if option else ""
+    columns = len(metric_columns(spec.metrics))
+    need = 8.0 * (in_flight * worst * TEMPORARIES + 2 * spec.n_designs * (columns + len(spec.axes)))
+    return need, advice or "split the sweep into several files"
+
+
+def check_sweep_memory(spec: SweepSpec) -> None:
+    """Refuse a sweep whose estimated working memory (`memory_estimate`) is over half of this
+    machine's memory, with the estimate and the fix; `ConfigError` (exit status 2)."""
+    need, advice = memory_estimate(spec)
+    check_memory(f"{spec.source}: metrics", need, f"the sweep's metrics ({', '.join(m.name for m in spec.metrics)}) "
+                 f"on {spec.n_designs:,} designs", advice)
+
+
+# The joint-box averages: the metrics with a standard-error column.
+_JOINT_AVERAGES = frozenset(name for name, metric in METRICS.items()
+                            if any(column.endswith("_error") for column in metric.columns({})))
 
 
 # The names a sweep writes (see run_sweep, the reports and spacearm.figures.sweep): only these
@@ -262,3 +452,9 @@ def _check_output_dir(out_dir: Path) -> None:
         raise ConfigError(f"--out {out_dir}: {existing} is a file, not a folder")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise ConfigError(f"--out {out_dir}: cannot write into {existing} (permission denied)")
+    # The results replace the folder as a whole (spacearm.io.folders): never the folder this
+    # process works in or one above it, nor a mount point.
+    real, here = Path(os.path.realpath(target)), Path(os.path.realpath(os.getcwd()))
+    if real == here or real in here.parents or (real.exists() and os.path.ismount(real)):
+        raise ConfigError(f"--out {out_dir}: results replace their folder as a whole, so they need a folder of "
+                          f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})")

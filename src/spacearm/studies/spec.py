@@ -27,7 +27,9 @@ import numpy as np
 import yaml
 
 from .._core.errors import ConfigError
-from .._core.schema import check_keys, check_memory, describe_yaml_error, is_number, read_yaml
+from .._core.schema import (
+    check_keys, check_memory, describe_yaml_error, integer, is_number, number, quote, read_yaml,
+)
 from ..models import load_robot, robot_from_file_mapping
 from ..models.planar import PlanarRobot, robot_to_mapping
 from ..models.spatial import SpatialRobot
@@ -85,12 +87,13 @@ def _axis_values(where: str, spec: Mapping, numbers: int) -> np.ndarray:
     if "values" in spec:
         values = spec["values"]
         if not isinstance(values, (list, tuple)):
-            raise ConfigError(f"{where}.values: must be a list of numbers, got {type(values).__name__}")
+            raise ConfigError(f"{where}.values: must be a list of numbers, got {type(values).__name__} {quote(values)}")
         if not values:
             raise ConfigError(f"{where}.values: is empty; an axis needs at least one value")
         for i, value in enumerate(values):
             if not is_number(value) or not math.isfinite(value):
-                raise ConfigError(f"{where}.values[{i}]: must be a finite number, got {value!r}")
+                raise ConfigError(f"{where}.values[{i}]: must be a finite number, got {quote(value)}")
+            number(f"{where}.values[{i}]", value)  # not huge either (MAX_MAGNITUDE)
         return np.asarray(values, dtype=np.float64)
     rng = spec["range"]
     if not isinstance(rng, Mapping):
@@ -100,7 +103,8 @@ def _axis_values(where: str, spec: Mapping, numbers: int) -> np.ndarray:
         if key not in rng:
             raise ConfigError(f"{where}.range.{key}: missing required key")
         if not is_number(rng[key]) or not math.isfinite(rng[key]):
-            raise ConfigError(f"{where}.range.{key}: must be a finite number, got {rng[key]!r}")
+            raise ConfigError(f"{where}.range.{key}: must be a finite number, got {quote(rng[key])}")
+        number(f"{where}.range.{key}", rng[key])  # not huge either (MAX_MAGNITUDE)
     if ("num" in rng) == ("step" in rng):
         raise ConfigError(f"{where}.range: give exactly one of 'num' or 'step'")
     start, stop = float(rng["start"]), float(rng["stop"])
@@ -243,6 +247,7 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     chunk_size = config.get("chunk_size", 256)
     if not isinstance(chunk_size, int) or isinstance(chunk_size, bool) or chunk_size < 1:
         raise ConfigError(f"{where}: chunk_size: must be a positive integer, got {chunk_size!r}")
+    integer(f"{where}: chunk_size", chunk_size, least=1)  # its upper bound (SIZE_LIMITS)
     output = config.get("output", f"results/{name}")
     if not isinstance(output, str):
         raise ConfigError(f"{where}: output: must be a folder path")

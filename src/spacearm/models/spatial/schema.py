@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ..._core.schema import check_keys, number, read_yaml, robot_file_name
+from ..._core.schema import check_keys, is_number, number, quote, read_yaml, robot_file_name
 from .robot import SpatialRobot, robot_from_chain
 from .urdf import check_inertia, read_urdf
 
@@ -54,15 +54,14 @@ def _mapping(where: str, value: Any, keys: set[str]) -> Mapping:
 
 
 def _array(where: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
-    try:
-        array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{where}: must be numbers of shape {list(shape)}, got {value!r}") from None
-    if array.shape != shape or any(isinstance(v, bool) for v in np.ravel(np.array(value, dtype=object))):
-        raise ConfigError(f"{where}: must be numbers of shape {list(shape)}, got {value!r}")
-    if not np.all(np.isfinite(array)):
-        raise ConfigError(f"{where}: must be finite numbers, got {value!r}")
-    return array
+    """Numbers of a fixed shape (a list, or a list of lists), each finite and not huge."""
+    if not isinstance(value, (list, tuple)) or len(value) != shape[0]:
+        raise ConfigError(f"{where}: must be numbers of shape {list(shape)}, got {quote(value)}")
+    if len(shape) > 1:
+        return np.array([_array(f"{where}[{i}]", row, shape[1:]) for i, row in enumerate(value)])
+    if not all(is_number(v) for v in value):
+        raise ConfigError(f"{where}: must be numbers of shape {list(shape)}, got {quote(value)}")
+    return np.array([number(f"{where}[{i}]", v) for i, v in enumerate(value)], dtype=float)
 
 
 def locate_package_file(source: str, package: str, path: str) -> str:
@@ -97,7 +96,7 @@ def _urdf_path(source: str, arm: Mapping, base_dir: str) -> str:
             if not isinstance(value.get(key), str):
                 raise ConfigError(f"{source}: arm.urdf.{key}: missing or not a string")
         return locate_package_file(source, value["package"], value["path"])
-    raise ConfigError(f"{source}: arm.urdf: must be a path or {{package: ..., path: ...}}, got {value!r}")
+    raise ConfigError(f"{source}: arm.urdf: must be a path or {{package: ..., path: ...}}, got {quote(value)}")
 
 
 def spatial_robot_from_mapping(
@@ -146,14 +145,18 @@ def spatial_robot_from_mapping(
     lock = arm.get("lock_joints") or {}
     if not isinstance(lock, Mapping):
         raise ConfigError(f"{source}: arm.lock_joints: must be a mapping joint: value")
-    lock = {str(k): number(f"{source}: arm.lock_joints.{k}", v) for k, v in lock.items()}
+    lock = {str(k): number(f"{source}: arm.lock_joints.{quote(str(k), 60)}", v) for k, v in lock.items()}
     as_written = arm.get("inertia_as_written", False)
     if not isinstance(as_written, bool):
-        raise ConfigError(f"{source}: arm.inertia_as_written: must be true or false, got {as_written!r}")
+        raise ConfigError(f"{source}: arm.inertia_as_written: must be true or false, got {quote(as_written)}")
     urdf = _urdf_path(source, arm, os.fspath(base_dir))
-    chain = read_urdf(
-        urdf, root_link=arm["root_link"], tip=arm["tip"], lock_joints=lock, inertia_as_written=as_written
-    )
+    try:
+        chain = read_urdf(urdf, root_link=arm["root_link"], tip=arm["tip"], lock_joints=lock,
+                          inertia_as_written=as_written, fields=f"{source}: arm.")
+    except ConfigError as error:  # a problem inside the URDF: name the robot file's field first
+        if str(error).startswith(f"{source}: "):
+            raise
+        raise ConfigError(f"{source}: arm.urdf: {error}") from None
     try:
         return robot_from_chain(
             chain,

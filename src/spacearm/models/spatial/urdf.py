@@ -29,6 +29,7 @@ file and the link, joint or attribute.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import math
 import os
@@ -38,7 +39,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ..._core.schema import did_you_mean
+from ..._core.schema import MAX_MAGNITUDE, did_you_mean, quote
 
 __all__ = [
     "ArmChain",
@@ -53,6 +54,9 @@ _KNOWN_TYPES = MOVABLE + ("fixed", "floating", "planar")
 # Relative tolerance for the symmetric-positive and triangle checks (URDF numbers are
 # printed with a few digits; a body that is a thin rod sits on the triangle's edge).
 _INERTIA_RTOL = 1e-9
+# Bounds on what is read (so a hostile file cannot make the reader, or a run, blow up).
+MAX_URDF_BYTES = 64 * 2**20
+MAX_ARM_JOINTS = 64
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,11 +197,13 @@ def _floats(where: str, text: str | None, count: int, default=None) -> np.ndarra
     try:
         values = np.array([float(p) for p in parts])
     except ValueError:
-        raise ConfigError(f"{where}: expected {count} numbers, got {text!r}") from None
+        raise ConfigError(f"{where}: expected {count} numbers, got {quote(text)}") from None
     if values.shape != (count,):
-        raise ConfigError(f"{where}: expected {count} numbers, got {text!r}")
+        raise ConfigError(f"{where}: expected {count} numbers, got {quote(text)}")
     if not np.all(np.isfinite(values)):
-        raise ConfigError(f"{where}: must be finite numbers, got {text!r}")
+        raise ConfigError(f"{where}: must be finite numbers, got {quote(text)}")
+    if np.any(np.abs(values) > MAX_MAGNITUDE):
+        raise ConfigError(f"{where}: numbers must be at most {MAX_MAGNITUDE:g} in magnitude, got {quote(text)}")
     return values
 
 
@@ -307,6 +313,39 @@ def _joint_motion(joint: _Joint, value: float) -> tuple[np.ndarray, np.ndarray]:
     return _axis_angle(joint.axis, value), np.zeros(3)
 
 
+def _check_tree(source: str, links: Mapping[str, _Link], parent_joint: Mapping[str, _Joint],
+                root_link: str) -> dict[str, str]:
+    """Refuse joints that form a cycle (naming them) and links in a second, unconnected tree
+    (naming the orphan links); return each link's top link (the URDF's one root)."""
+    top: dict[str, str] = {}
+    for start in links:
+        trail: list[str] = []
+        on_trail: set[str] = set()
+        link = start
+        while link not in top and link in parent_joint:
+            if link in on_trail:
+                cycle = trail[trail.index(link):]
+                names = ", ".join(sorted(f"'{parent_joint[name].name}'" for name in cycle))
+                raise ConfigError(f"{source}: joints {names} form a cycle (a URDF is a tree)")
+            trail.append(link)
+            on_trail.add(link)
+            link = parent_joint[link].parent
+        root = top.get(link, link)
+        for name in trail + [link]:
+            top[name] = root
+    sizes = collections.Counter(top.values())
+    if len(sizes) > 1:
+        main = top.get(root_link) or sizes.most_common(1)[0][0]
+        roots = [main] + sorted(r for r in sizes if r != main)
+        orphans = sorted(name for name, root in top.items() if root != main)
+        shown = ", ".join(f"'{name}'" for name in orphans[:8]) + (f" and {len(orphans) - 8} more" if len(orphans) > 8 else "")
+        raise ConfigError(
+            f"{source}: links {shown} are not connected to the tree of '{roots[0]}' "
+            f"(a URDF has one root link; {len(roots)} found: {', '.join(repr(r) for r in roots[:8])})"
+        )
+    return top
+
+
 def parse_urdf(
     text: str,
     *,
@@ -315,6 +354,7 @@ def parse_urdf(
     tip: str,
     lock_joints: Mapping[str, float] | None = None,
     inertia_as_written: bool = False,
+    fields: str | None = None,
 ) -> ArmChain:
     """Read the arm from URDF text. See the module docstring for the rules.
 
@@ -325,11 +365,19 @@ def parse_urdf(
         tip: the link whose origin is the tip point.
         lock_joints: movable joints held fixed, name -> value (rad or m).
         inertia_as_written: skip the triangle inequality and accept zero principal moments.
+        fields: where ``root_link``, ``tip`` and ``lock_joints`` were given (``"robot.yaml: arm."``):
+            problems with them name that file and field, and the URDF after it.
 
     Raises:
         ConfigError: naming the file and the link, joint or attribute.
     """
     lock_joints = dict(lock_joints or {})
+    if len(text) > MAX_URDF_BYTES:
+        raise ConfigError(f"{source}: the URDF is {len(text):,} characters; at most {MAX_URDF_BYTES:,} are read")
+
+    def field(name: str) -> str:
+        """The prefix of a message about the root_link, tip or lock_joints field."""
+        return f"{fields}{name}: (in {source}) " if fields else f"{source}: {name}: "
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
@@ -366,40 +414,39 @@ def parse_urdf(
         parent_joint[joint.child] = joint
         children[joint.parent].append(joint)
 
+    _check_tree(source, links, parent_joint, root_link)
     for name, value in lock_joints.items():
         if name not in joints:
             extra = did_you_mean(str(name), list(joints))
-            raise ConfigError(f"{source}: lock_joints: unknown joint '{name}'{extra}")
+            raise ConfigError(f"{field('lock_joints')}unknown joint {quote(name)}{extra}")
         if joints[name].kind == "fixed":
-            raise ConfigError(f"{source}: lock_joints: joint '{name}' is fixed already; only movable joints are locked")
+            raise ConfigError(f"{field('lock_joints')}joint '{name}' is fixed already; only movable joints are locked")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise ConfigError(f"{source}: lock_joints: joint '{name}': the value must be a finite number, got {value!r}")
+            raise ConfigError(f"{field('lock_joints')}joint '{name}': the value must be a finite number, got {quote(value)}")
     for role, name in (("root_link", root_link), ("tip", tip)):
         if name not in links:
             extra = did_you_mean(str(name), list(links))
-            raise ConfigError(f"{source}: {role}: link '{name}' is not in the URDF{extra}")
+            raise ConfigError(f"{field(role)}link {quote(name)} is not in the URDF{extra}")
 
-    # The path from root_link to tip, walking up from the tip.
+    # The path from root_link to tip, walking up from the tip (the tree has no cycle).
     path: list[_Joint] = []
     link = tip
-    seen = {tip}
     while link != root_link:
         if link not in parent_joint:
-            raise ConfigError(f"{source}: tip: link '{tip}' is not below root_link '{root_link}'")
+            raise ConfigError(f"{field('tip')}link '{tip}' is not below root_link '{root_link}'")
         joint = parent_joint[link]
         path.append(joint)
         link = joint.parent
-        if link in seen:
-            raise ConfigError(f"{source}: joint '{joint.name}': the joints form a loop")
-        seen.add(link)
     path.reverse()
-    {joint.name for joint in path}
     arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
     if not arm:
         raise ConfigError(
             f"{source}: no movable joint between root_link '{root_link}' and tip '{tip}' "
             "(all fixed or locked)"
         )
+    if len(arm) > MAX_ARM_JOINTS:
+        raise ConfigError(f"{source}: the arm from '{root_link}' to '{tip}' has {len(arm)} movable joints; "
+                          f"at most {MAX_ARM_JOINTS} are supported (lock the others in arm.lock_joints)")
     arm_names = {j.name for j in arm}
 
     def rigid_closure(start: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
@@ -485,6 +532,7 @@ def read_urdf(
     tip: str,
     lock_joints: Mapping[str, float] | None = None,
     inertia_as_written: bool = False,
+    fields: str | None = None,
 ) -> ArmChain:
     """Read the arm from a URDF file (see `parse_urdf`).
 
@@ -494,7 +542,7 @@ def read_urdf(
     path = os.fspath(path)
     try:
         with open(path, encoding="utf-8") as handle:
-            text = handle.read()
+            text = handle.read(MAX_URDF_BYTES + 1)
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such URDF file") from None
     except (IsADirectoryError, UnicodeDecodeError, PermissionError) as error:
@@ -506,4 +554,5 @@ def read_urdf(
         tip=tip,
         lock_joints=lock_joints,
         inertia_as_written=inertia_as_written,
+        fields=fields,
     )
