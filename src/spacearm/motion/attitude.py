@@ -28,9 +28,8 @@ product of the rotations is a balanced tree of 3x3 products (depth log2 of the s
 count). The public entry points flatten paths, start attitudes and designs into one
 batch inside one ``jit``.
 
-SO(3) helpers: `hat`, `vee`, `expm` (Rodrigues), `log`,
-`geodesic_distance`, all batched over leading axes and safe to differentiate at
-the identity.
+The SO(3) helpers `hat`, `vee`, `expm` (Rodrigues), `log` and `geodesic_distance`
+are `spacearm._core.groups`' (re-exported here).
 """
 
 from __future__ import annotations
@@ -44,6 +43,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
+from .._core.groups import expm, geodesic_distance, hat, log, safe_norm, vee
 from ..models.spatial import primitives
 from ..models.spatial.robot import SpatialRobot
 from .batching import flatten_batch, is_traced
@@ -73,88 +73,6 @@ DEFAULT_STEPS = 4
 # chosen from the data: 6th-order steps of 0.15 rad keep UR5 errors near 1e-11 rad per
 # 2-rad segment (docs/explanation/spatial-attitude.md).
 MAX_STEP = 0.15
-
-# SO(3) -----------------------------------------------------------------------------------
-
-
-def hat(v: jax.Array) -> jax.Array:
-    """``(..., 3) -> (..., 3, 3)`` the skew matrix [v]x with [v]x w = v x w."""
-    v = jnp.asarray(v)
-    zero = jnp.zeros_like(v[..., 0])
-    x, y, z = v[..., 0], v[..., 1], v[..., 2]
-    return jnp.stack(
-        [jnp.stack([zero, -z, y], -1), jnp.stack([z, zero, -x], -1), jnp.stack([-y, x, zero], -1)], axis=-2
-    )
-
-
-def vee(W: jax.Array) -> jax.Array:
-    """``(..., 3, 3) -> (..., 3)`` the vector of the skew part of W (inverse of `hat`)."""
-    return 0.5 * jnp.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0], W[..., 1, 0] - W[..., 0, 1]], -1)
-
-
-def _safe_norm(v: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """|v| and |v|^2, with a finite gradient at v = 0 (the double-where idiom)."""
-    sq = jnp.sum(v * v, axis=-1)
-    positive = sq > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), 0.0), sq
-
-
-def expm(v: jax.Array) -> jax.Array:
-    """Rotation matrix of a rotation vector, Rodrigues' formula: ``(..., 3) -> (..., 3, 3)``.
-
-    expm([v]x) = 1 + (sin t / t) [v]x + ((1 - cos t) / t^2) [v]x^2, t = |v|; the two
-    coefficients switch to their Taylor series below t = 1e-3 (truncation < 1e-20), so
-    the map is accurate and differentiable at v = 0.
-    """
-    v = jnp.asarray(v)
-    theta, sq = _safe_norm(v)
-    small = theta < 1e-3
-    t = jnp.where(small, 1.0, theta)
-    sinc = jnp.where(small, 1.0 - sq / 6.0 + sq * sq / 120.0, jnp.sin(t) / t)
-    cosc = jnp.where(small, 0.5 - sq / 24.0 + sq * sq / 720.0, (1.0 - jnp.cos(t)) / (t * t))
-    K = hat(v)
-    eye = jnp.eye(3, dtype=v.dtype)
-    return eye + sinc[..., None, None] * K + cosc[..., None, None] * (K @ K)
-
-
-def log(R: jax.Array) -> jax.Array:
-    """Rotation vector of a rotation matrix, angle in [0, pi]: ``(..., 3, 3) -> (..., 3)``.
-
-    The angle comes from atan2(|vee(R - R^T)| / 2, (tr R - 1) / 2), accurate over the
-    whole range. Below pi - 1e-3 the axis is vee(R - R^T) / (2 sin t); near pi, where
-    that part vanishes, the axis comes from the symmetric part (R + R^T)/2 = cos t 1 +
-    (1 - cos t) u u^T (its largest column), with the sign of the skew part.
-    """
-    R = jnp.asarray(R)
-    w = vee(R)  # sin(t) u
-    s, _ = _safe_norm(w)
-    c = 0.5 * (jnp.trace(R, axis1=-2, axis2=-1) - 1.0)
-    theta = jnp.arctan2(s, c)
-    small = theta < 1e-3
-    # t / sin t, Taylor below 1e-3
-    s_safe = jnp.where(small, 1.0, s)
-    scale = jnp.where(small, 1.0 + theta * theta / 6.0, theta / s_safe)
-    regular = scale[..., None] * w
-    # near pi: u u^T = (S - c 1) / (1 - c), S the symmetric part
-    near_pi = theta > math.pi - 1e-3
-    S = 0.5 * (R + jnp.swapaxes(R, -1, -2))
-    denominator = jnp.where(near_pi, 1.0 - c, 1.0)  # the unused branch stays finite (and its gradient)
-    B = (S - c[..., None, None] * jnp.eye(3, dtype=R.dtype)) / denominator[..., None, None]
-    column = jnp.argmax(jnp.diagonal(B, axis1=-2, axis2=-1), axis=-1)
-    u = jnp.take_along_axis(B, column[..., None, None], axis=-1)[..., 0]
-    u_norm, _ = _safe_norm(u)
-    u = u / jnp.where(u_norm > 0, u_norm, 1.0)[..., None]
-    sign = jnp.where(jnp.sum(u * w, axis=-1) < 0, -1.0, 1.0)
-    return jnp.where(near_pi[..., None], (sign * theta)[..., None] * u, regular)
-
-
-def geodesic_distance(R1: jax.Array, R2: jax.Array) -> jax.Array:
-    """The angle of R1^T R2 in [0, pi], rad: the geodesic distance on SO(3), ``(...)``."""
-    E = jnp.swapaxes(R1, -1, -2) @ R2
-    s, _ = _safe_norm(vee(E))
-    c = 0.5 * (jnp.trace(E, axis1=-2, axis2=-1) - 1.0)
-    return jnp.arctan2(s, c)
-
 
 # The generator -----------------------------------------------------------------------------
 
@@ -200,7 +118,7 @@ def _magnus6(a):
 
 def _dexpinv(u, b):
     """dexp^-1_u(b) on so(3) in vectors: b - u x b / 2 + (1 - (t/2) cot(t/2)) / t^2 u x (u x b)."""
-    theta, sq = _safe_norm(u)
+    theta, sq = safe_norm(u)
     small = theta < 1e-2
     t = jnp.where(small, 1.0, theta)
     coeff = jnp.where(small, 1.0 / 12.0 + sq / 720.0, (1.0 - 0.5 * t / jnp.tan(0.5 * t)) / (t * t))

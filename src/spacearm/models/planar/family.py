@@ -10,6 +10,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from ..._core.groups import SO2
 from ..family import RobotFamily
 from .closed_forms import (
     arm_jacobian,
@@ -46,8 +47,21 @@ class PlanarFamily(RobotFamily):
         "straight_path_field": straight_path_field,
     }
 
+    attitude = SO2
+    straight_field_loops = False  # the closed-form field: stages written out run faster
+    straight_defaults = {"max_step": 0.25, "tol": None, "rtol": None, "sing_rate": -float("inf"), "max_steps": 4096}
+
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links
+
+    def attitude_rate_map(self, robot: PlanarRobot, joints: jax.Array) -> jax.Array:
+        i_s, i_m = momentum_inertias(robot, jnp.concatenate([jnp.zeros((1,), joints.dtype), joints]))
+        return (-i_m / i_s)[None, :]
+
+    def straight_maps(self, robot: PlanarRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        phi = jnp.concatenate([jnp.zeros((1,), joints.dtype), joints])  # base axes: phi0 = 0
+        i_s, i_m = momentum_inertias(robot, phi)
+        return generalized_jacobian(robot, phi), (-i_m / i_s)[None, :]
 
     def tip(self, robot: PlanarRobot, posture: jax.Array) -> jax.Array:
         return tip_position(robot, posture)
