@@ -44,8 +44,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.groups import expm, geodesic_distance, hat, log, safe_norm, vee
-from ..models.spatial import primitives
-from ..models.spatial.robot import SpatialRobot
+from ..models.family import family_of
 from .batching import flatten_batch, is_traced
 
 __all__ = [
@@ -77,13 +76,13 @@ MAX_STEP = 0.15
 # The generator -----------------------------------------------------------------------------
 
 
-def bus_rate_map(robot: SpatialRobot, q: jax.Array) -> jax.Array:
+def bus_rate_map(robot, q: jax.Array) -> jax.Array:
     """``(..., 3, n)`` C_w(q): bus angular velocity (bus axes) per joint rate.
 
     The angular rows of the base twist map C(q) = -I_S^-1 I_M (zero momentum), for
     ``q (..., n)`` with any leading batch (one batch-last pass over the chain).
     """
-    return primitives.base_twist_map(robot, q)[..., 3:, :]
+    return family_of(robot).attitude_rate_map(robot, q)
 
 
 # Magnus and RKMK steps (generators as 3-vectors; [x, y] -> x cross y) ----------------------
@@ -224,7 +223,7 @@ def path_rotation_history(
 # Public entry points (spatial robots) ----------------------------------------------------
 
 
-def _prepare(robot: SpatialRobot, q_start, joint_waypoints, base_rotation):
+def _prepare(robot, q_start, joint_waypoints, base_rotation):
     n = robot.n_joints
     dtype = jnp.result_type(float)
     q_start = jnp.asarray(q_start, dtype)
@@ -274,7 +273,7 @@ def _integrate_flat(robot, waypoints, base_rotation, robot_batched, steps, order
 
 
 def integrate_spatial_joint_path(
-    robot: SpatialRobot,
+    robot,
     q_start: jax.Array,
     joint_waypoints: jax.Array,
     base_rotation: jax.Array | None = None,
@@ -329,7 +328,7 @@ def _history_flat(robot, waypoints, base_rotation, robot_batched, samples, steps
 
 
 def spatial_joint_path_history(
-    robot: SpatialRobot,
+    robot,
     q_start: jax.Array,
     joint_waypoints: jax.Array,
     base_rotation: jax.Array | None = None,

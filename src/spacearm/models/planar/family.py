@@ -55,8 +55,10 @@ class PlanarFamily(RobotFamily):
         return robot.n_links
 
     def attitude_rate_map(self, robot: PlanarRobot, joints: jax.Array) -> jax.Array:
-        i_s, i_m = momentum_inertias(robot, jnp.concatenate([jnp.zeros((1,), joints.dtype), joints]))
-        return (-i_m / i_s)[None, :]
+        """``(..., 1, n)`` -I_M / I_S (eq. 5), for ``joints (..., n)`` with any leading batch."""
+        zero = jnp.zeros(joints.shape[:-1] + (1,), joints.dtype)
+        i_s, i_m = momentum_inertias(robot, jnp.concatenate([zero, joints], axis=-1))
+        return (-i_m / i_s[..., None])[..., None, :]
 
     def straight_maps(self, robot: PlanarRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         phi = jnp.concatenate([jnp.zeros((1,), joints.dtype), joints])  # base axes: phi0 = 0
