@@ -104,6 +104,15 @@ class RobotFamily:
         """``(attitude.dim, n)`` base angular velocity (base axes) per joint rate, zero momentum."""
         raise NotImplementedError
 
+    def loop_holonomy(self, robot, waypoints: jax.Array, **options) -> jax.Array:
+        """The base attitude change (a group element, base axes) along a joint polyline ``(k, n)``.
+
+        The fast path of each group (`spacearm._core.magnus`): for SO(2) the line integral
+        by Gauss-Legendre quadrature (exact, SO(2) being abelian; options ``nodes``,
+        ``pieces``), for SO(3) the 6th-order Magnus integrator (options ``steps``, ``order``).
+        """
+        raise NotImplementedError
+
     def straight_maps(self, robot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         """``(J*_v (translational_rows, n) in base axes, attitude_rate_map (attitude.dim, n))`` at one
         posture, in one evaluation (a straight tip path's field needs both)."""

@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
+from .._core.magnus import composite_gauss, line_integral
 from ..kinematics import tip_position
 from ..models.family import family_of
 from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
@@ -30,31 +31,12 @@ from .batching import check_arm_axis, flatten_batch, is_traced
 __all__ = ["integrate_joint_path", "joint_path_history", "joint_path_base_increments"]
 
 
-@functools.lru_cache(maxsize=None)
-def _composite_gauss(nodes: int, pieces: int) -> tuple[np.ndarray, np.ndarray]:
-    """Composite Gauss-Legendre rule on [0, 1]: ``pieces`` equal panels of ``nodes`` points."""
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    starts = np.arange(pieces)[:, None] / pieces
-    t = (starts + (x[None, :] + 1.0) / (2.0 * pieces)).reshape(-1)
-    weights = np.tile(w / (2.0 * pieces), pieces)
-    return t, weights
-
-
 def _segment_integrals(robot, starts: jax.Array, steps: jax.Array, t, weights) -> jax.Array:
     """Base rotation of an abelian attitude (SO(2)) over straight joint segments q(t) = start + t step.
 
-    Args:
-        starts, steps: ``(m, n)`` segment start points and displacements, rad.
-        t: ``(m, Q)`` or ``(Q,)`` quadrature nodes in segment parameter; weights the same shape.
-
-    Returns:
-        ``(m,)`` increments of phi0, rad: sum_q w_q * (-(I_M . step) / I_S)(q(t_q)).
+    Returns ``(m,)`` increments of phi0, rad: sum_q w_q (-(I_M . step) / I_S)(q(t_q)) (eq. 5).
     """
-    t = jnp.broadcast_to(jnp.asarray(t), (starts.shape[0],) + jnp.shape(t)[-1:])
-    q = starts[:, None, :] + t[..., None] * steps[:, None, :]
-    rates = family_of(robot).attitude_rate_map(robot, q)[..., 0, :]  # -I_M / I_S (eq. 5)
-    integrand = jnp.sum(rates * steps[:, None, :], axis=-1)
-    return jnp.sum(integrand * weights, axis=-1)
+    return line_integral(functools.partial(family_of(robot).attitude_rate_map, robot), starts, steps, t, weights)
 
 
 # Widest panel of the default rule, in rad of the largest joint excursion: 24 nodes per
@@ -80,12 +62,9 @@ def _default_pieces(joint_waypoints, pieces):
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
 def _joint_path_flat(robot, phi_start, waypoints, robot_batched, nodes, pieces):
-    t, w = _composite_gauss(nodes, pieces)
-    t, w = jnp.asarray(t, phi_start.dtype), jnp.asarray(w, phi_start.dtype)
-
     def one(robot, phi, wp):
-        increments = _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
-        return jnp.concatenate([phi[:1] + jnp.sum(increments), wp[-1]])
+        turn = family_of(robot).loop_holonomy(robot, wp, nodes=nodes, pieces=pieces)
+        return jnp.concatenate([phi[:1] + turn, wp[-1]])
 
     return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, phi_start, waypoints)
 
@@ -178,7 +157,7 @@ def integrate_joint_path(
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
 def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
-    t, w = _composite_gauss(nodes, pieces)
+    t, w = composite_gauss(nodes, pieces)
     t, w = jnp.asarray(t, waypoints.dtype), jnp.asarray(w, waypoints.dtype)
 
     def one(robot, wp):

@@ -18,7 +18,10 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+import functools
+
 from ..._core.groups import SO3
+from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import RobotFamily
 from ..._core.linalg import gram_root_determinant
 from .primitives import (
@@ -81,6 +84,11 @@ class SpatialFamily(RobotFamily):
 
     def attitude_rate_map(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         return base_twist_map(robot, joints)[..., 3:, :]
+
+    def loop_holonomy(self, robot: SpatialRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS,
+                      order=DEFAULT_ORDER) -> jax.Array:
+        """``(..., 3, 3)`` bus rotation along joint polylines ``(..., k, n)``, bus axes (6th-order Magnus)."""
+        return path_rotation(functools.partial(self.attitude_rate_map, robot), waypoints, steps, order)
 
     def straight_maps(self, robot: SpatialRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         maps = straight_path_maps(robot, joints)
