@@ -108,7 +108,7 @@ def tableau_arrays(tableau: str):
     raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
 
 
-def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False, first_slope=None):
+def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False, first_slope=None, end_slope=False):
     """One explicit Runge-Kutta step of size h (may be negative) of y' = field(y).
 
     Unrolled (default), the stages are written out at trace time: under vmap on CPU this
@@ -120,6 +120,9 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False,
 
     Args:
         first_slope: field(y) when the caller knows it (the first stage is not evaluated).
+        end_slope: rolled only: also evaluate field(y_new) inside the same loop, as a 13th
+            stage whose weights are the solution weights (one copy of the field in the
+            program instead of two); it is the last row of the returned slopes.
 
     Returns:
         y_new, or (y_new, slopes) with ``return_slopes``: a list of the stage slopes
@@ -128,6 +131,10 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False,
     a, b = tableau_arrays(tableau)
     if rolled:
         stages = a.shape[0]
+        if end_slope:  # one more row: the solution weights, i.e. the slope at y_new
+            a = np.vstack([np.hstack([a, np.zeros((stages, 1))]), np.append(b, 0.0)[None]])
+            b = np.append(b, 0.0)
+            stages += 1
         A = jnp.asarray(a, y.dtype)
         K = jnp.zeros((stages,) + y.shape, y.dtype)
         if first_slope is None:
@@ -151,15 +158,17 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False,
 
 def error_norm(h, slopes, slope_new, y, y_new, rtol):
     """Hairer's DOP853 error norm of one step (<= 1: accept), from the stage slopes
-    (a list, or a ``(12, m)`` array from a rolled step)."""
+    (a list, or a ``(12, m)`` or ``(13, m)`` array from a rolled step; with 13 rows the
+    last is the slope at y_new)."""
     scale = rtol * (1.0 + jnp.maximum(jnp.abs(y), jnp.abs(y_new)))
     if isinstance(slopes, (list, tuple)):
         every = list(slopes) + [slope_new]  # 13 slopes (m,)
         err5 = sum(w * k for w, k in zip(ERROR_WEIGHTS_5, every) if w != 0.0) / scale
         err3 = sum(w * k for w, k in zip(ERROR_WEIGHTS_3, every) if w != 0.0) / scale
     else:  # the last weights (on slope_new) are zero
-        err5 = (jnp.asarray(ERROR_WEIGHTS_5[:-1], y.dtype) @ slopes) / scale
-        err3 = (jnp.asarray(ERROR_WEIGHTS_3[:-1], y.dtype) @ slopes) / scale
+        rows = slopes.shape[0]
+        err5 = (jnp.asarray(ERROR_WEIGHTS_5[:rows], y.dtype) @ slopes) / scale
+        err3 = (jnp.asarray(ERROR_WEIGHTS_3[:rows], y.dtype) @ slopes) / scale
     e5, e3 = jnp.sum(err5**2), jnp.sum(err3**2)
     denom = e5 + 0.01 * e3
     safe = jnp.where(denom > 0, denom, 1.0)

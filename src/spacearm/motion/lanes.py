@@ -122,8 +122,12 @@ def step_lane(field, lane: dict, joints, lower, upper, *, square: bool, max_leng
         # The error controller's step bounds the event-limited step (either sign).
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
-    y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, rolled=rolled, first_slope=f)
-    f_new = field(y_new)
+    if rolled:  # field(y_new) as the loop's last stage: one copy of the field in the program
+        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, rolled=True, first_slope=f, end_slope=True)
+        f_new = slopes[-1]
+    else:
+        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, first_slope=f)
+        f_new = field(y_new)
     if adaptive:
         error = error_norm(h, slopes, f_new, y, y_new, rtol)
         accept = error <= 1.0
