@@ -175,6 +175,13 @@ def test_dispatch_and_errors(ur5, table1):
         sa.integrate_joint_path(ur5, np.zeros(5), np.zeros((3, 6)))
     with pytest.raises(sa.ConfigError, match="order"):
         sa.integrate_joint_path(ur5, np.zeros(6), np.zeros((3, 6)), order=5)
+    # options of the other family's integrator are refused, never silently ignored
+    for option in ({"nodes": 10}, {"pieces": 2}):
+        with pytest.raises(TypeError, match="Magnus"):
+            sa.integrate_joint_path(ur5, np.zeros(6), np.zeros((3, 6)), **option)
+    for option in ({"steps": 4}, {"order": 6}):
+        with pytest.raises(TypeError, match="line integral"):
+            sa.integrate_joint_path(table1, phi, waypoints, **option)
 
 
 def test_no_retrace_and_gradients(ur5):

@@ -8,7 +8,11 @@ import pytest
 
 import spacearm as sa
 from spacearm.analysis import reaction
+from spacearm.models.spatial import primitives
 from spacearm.motion import attitude, spatial_go_and_back, spatial_straight_tip_path
+from spacearm.motion.straight_paths import generic_straight_field
+
+from .conftest import count_compiles
 
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 
@@ -51,6 +55,49 @@ def test_go_and_back_retraces_the_way_out(ur5):
     np.testing.assert_allclose(back.end_tip, np.asarray(sa.tip_position(ur5, q0)), atol=1e-9)
     np.testing.assert_allclose(back.end_joints, q0, atol=1e-8)
     assert float(attitude.geodesic_distance(np.eye(3), back.end_rotation)) < 1e-9
+
+
+def test_straight_field_takes_one_chain_pass_and_equals_the_two_pass_field(ur5):
+    """The field's J*_v and C_w come from one pass over the chain; the same numbers as J* and
+    the base twist map computed apart, and the field is the formula of the module docstring."""
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-2, 2, (6, 6))
+    maps = np.asarray(primitives.straight_path_maps(ur5, q))
+    np.testing.assert_array_equal(maps[:, :3], np.asarray(primitives.generalized_jacobian(ur5, q))[:, :3])
+    np.testing.assert_allclose(maps[:, 3:], np.asarray(primitives.base_twist_map(ur5, q))[:, 3:], rtol=0, atol=1e-15)
+    for qk in q:
+        R = np.asarray(attitude.expm(jnp.asarray(rng.normal(size=3))))
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        y = np.concatenate([qk, R.reshape(9), [0.2]])
+        f = np.asarray(generic_straight_field(ur5, jnp.asarray(d), jnp.asarray(1.0))(jnp.asarray(y)))
+        J = np.asarray(sa.generalized_jacobian(ur5, qk))[:3]
+        rates = J.T @ np.linalg.solve(J @ J.T, R.T @ d)  # minimum-norm rates, unit tip speed
+        scale = np.linalg.norm(rates)
+        np.testing.assert_allclose(f[:6], rates / scale, atol=1e-12)
+        np.testing.assert_allclose(f[-1], 1.0 / scale, rtol=1e-11)
+        w = np.asarray(attitude.bus_rate_map(ur5, qk)) @ f[:6]
+        np.testing.assert_allclose(f[6:15], (R @ np.asarray(attitude.hat(w))).reshape(9), atol=1e-13)
+
+
+@pytest.mark.slow  # compiles the spatial DOP853 loop once (~5 s CPU)
+def test_spatial_straight_paths_one_program_per_bucket(ur5):
+    """64 and 65 paths, and a new step budget, run in the program compiled for 8 (batches are
+    padded to a power-of-two bucket, the budget is traced); the padding is never integrated."""
+    rng = np.random.default_rng(6)
+    q0 = np.array([0.3, -1.2, 1.6, -0.9, 1.2, 0.2])
+    d = rng.normal(size=(65, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    few = spatial_straight_tip_path(ur5, q0, d[:8], 0.03, max_steps=300)
+    with count_compiles() as compiles:
+        many = spatial_straight_tip_path(ur5, q0, d[:64], 0.03, max_steps=300)
+        more = spatial_straight_tip_path(ur5, q0, d, 0.03, max_steps=400)
+    assert not [name for name in compiles if "_straight_flat" in name]
+    assert more.length.shape == (65,) and np.all(np.asarray(more.reason) == sa.motion.REASON_MAX_LENGTH)
+    np.testing.assert_allclose(many.end_joints[:8], few.end_joints, atol=1e-14)
+    np.testing.assert_allclose(more.end_joints[:64], many.end_joints, atol=1e-14)
+    start = np.asarray(sa.tip_position(ur5, q0))
+    np.testing.assert_allclose(np.asarray(more.end_tip) - start, 0.03 * d, atol=1e-9)  # on the line
 
 
 def test_reaction_null_space_and_disturbance_map(ur5):

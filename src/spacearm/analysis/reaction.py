@@ -26,11 +26,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._core.batching import bucket_size, pad_leading
 from .._core.errors import ConfigError
 from ..models.spatial import primitives
 from ..models.spatial.robot import SpatialRobot
@@ -125,8 +127,8 @@ def reaction_free_rates(robot: SpatialRobot, q: jax.Array, tip_direction_bus: ja
     Returns:
         ``(q' (n,), tip residual ||J*_v q' - d|| (), bus rate ||C_w q'|| ())``.
     """
-    C = primitives.base_twist_map(robot, q)[3:]
-    J = primitives.generalized_jacobian(robot, q)[:3]
+    maps = primitives.straight_path_maps(robot, q)  # [J*_v; C_w], one pass over the chain
+    J, C = maps[:3], maps[3:]
     A = jnp.concatenate([C, J], axis=0)
     b = jnp.concatenate([jnp.zeros(3, q.dtype), tip_direction_bus])
     rates = jnp.linalg.pinv(A, rtol=1e-12) @ b
@@ -157,6 +159,8 @@ class ReactionFreePath:
 
 @functools.partial(jax.jit, static_argnames=("steps",))
 def _reaction_free_flat(robot, q0, R0, direction, length, steps):
+    """A padded batch of reaction-free paths (the padding rows are copies of a real one)."""
+
     def one(q0, R0, d, length):
         d_bus = R0.T @ (d / jnp.linalg.norm(d))
 
@@ -166,15 +170,16 @@ def _reaction_free_flat(robot, q0, R0, direction, length, steps):
         h = length / steps
 
         def step(q, _):
-            q_new = dop853.rk_step(field, q, h)
+            # The field holds a scan over the chain: the stages run in a loop (one copy
+            # of the field in the program), as for spatial straight paths.
+            q_new = dop853.rk_step(field, q, h, rolled=True)
             return q_new, q_new
 
         _, qs = jax.lax.scan(step, q0, None, length=steps)
         joints = jnp.concatenate([q0[None], qs], axis=0)
         _, residual, bus = jax.vmap(lambda q: reaction_free_rates(robot, q, d_bus))(joints)
-        C = primitives.base_twist_map(robot, joints)[:, 3:]
-        J = primitives.generalized_jacobian(robot, joints)[:, :3]
-        sv = jnp.linalg.svd(jnp.concatenate([C, J], axis=1), compute_uv=False)[:, -1]
+        maps = primitives.straight_path_maps(robot, joints)  # (steps + 1, 6, n): [J*_v; C_w]
+        sv = jnp.linalg.svd(maps, compute_uv=False)[:, -1]
         tip = jnp.einsum("ij,sj->si", R0, primitives.tip(robot, joints))
         return ReactionFreePath(joints, tip, jnp.max(residual), jnp.max(bus), jnp.min(sv))
 
@@ -216,6 +221,9 @@ def reaction_free_tip_path(
     if q_start.shape[-1:] != (n,) or direction.shape[-1:] != (3,):
         raise ConfigError(f"q_start (..., {n}) and direction (..., 3) expected, got {q_start.shape}, {direction.shape}")
     batch = np.broadcast_shapes(q_start.shape[:-1], direction.shape[:-1], R0.shape[:-2], length.shape)
+    count = math.prod(batch)
+    padded = bucket_size(count)  # one program per power of two of paths, not per batch size
     flat = lambda x, core: jnp.broadcast_to(x, batch + core).reshape((-1,) + core)  # noqa: E731
-    out = _reaction_free_flat(robot, flat(q_start, (n,)), flat(R0, (3, 3)), flat(direction, (3,)), flat(length, ()), int(steps))
-    return jax.tree_util.tree_map(lambda x: x.reshape(batch + x.shape[1:]), out)
+    inputs = pad_leading((flat(q_start, (n,)), flat(R0, (3, 3)), flat(direction, (3,)), flat(length, ())), padded)
+    out = _reaction_free_flat(robot, *inputs, int(steps))
+    return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), out)

@@ -6,7 +6,11 @@ family gives, for ONE posture (no batch axes):
 - the tip position about the system centroid;
 - the Jacobians J_S (tip twist per base velocity) and J_M (tip twist per joint rate);
 - the momentum map (I_S, I_M), with I_S x_base_dot + I_M q_dot = 0;
-- the fixed-base Jacobian of the same arm.
+- the fixed-base Jacobian of the same arm;
+- the base attitude as a group (`spacearm._core.groups`: SO(2) or SO(3)), the
+  split/join of an integrator state into joints and attitude coordinates, the
+  attitude-rate map (base angular velocity per joint rate at zero momentum), and the
+  maps a straight tip path needs at one posture, in one evaluation.
 
 Everything else (J* = J_M - J_S I_S^-1 I_M, w*, ellipses and ellipsoids, base rates,
 straight-path fields, averages) is written once over these in
@@ -22,6 +26,9 @@ from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import jax
+import jax.numpy as jnp
+
+from .._core.groups import Group
 
 __all__ = ["RobotFamily", "family_of"]
 
@@ -38,6 +45,12 @@ class RobotFamily:
         rotates_with_base: whether kernels take ``base_rotation`` (spatial: the
             primitives work in bus axes; the generic layer rotates the results).
         fast_paths: closed forms by public kernel name.
+        attitude: the base-attitude group.
+        straight_field_loops: whether the straight-path field holds a loop (a scan
+            over the chain): the integrator then rolls its Runge-Kutta stages into a
+            loop instead of writing them out (a shorter compile for the same speed).
+        straight_defaults: the family's defaults of the straight-path options
+            (``max_step``, ``tol``, ``rtol``, ``sing_rate``, ``max_steps``).
     """
 
     name: ClassVar[str] = "abstract"
@@ -46,6 +59,9 @@ class RobotFamily:
     posture_offset: ClassVar[int] = 0
     rotates_with_base: ClassVar[bool] = False
     fast_paths: Mapping[str, Callable[..., Any]] = {}
+    attitude: ClassVar[Group]
+    straight_field_loops: ClassVar[bool] = True
+    straight_defaults: ClassVar[Mapping[str, Any]] = {}
 
     def joint_count(self, robot) -> int:
         """The number of joints n (static)."""
@@ -65,6 +81,41 @@ class RobotFamily:
 
     def fixed_base_jacobian(self, robot, joints: jax.Array) -> jax.Array:
         """``(m, n)`` Jacobian of the same arm with its base held fixed."""
+        raise NotImplementedError
+
+
+    # The base attitude and the integrator state -----------------------------------------
+
+    def split_state(self, robot, state: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """``(joints (n,), attitude coordinates (attitude.coords,))`` of a flat integrator state."""
+        n = self.joint_count(robot)
+        offset = self.posture_offset
+        if offset:
+            return state[offset : offset + n], state[:offset]
+        return state[:n], state[n:]
+
+    def join_state(self, robot, joints: jax.Array, coords: jax.Array) -> jax.Array:
+        """The flat integrator state of joints and attitude coordinates (inverse of `split_state`)."""
+        if self.posture_offset:
+            return jnp.concatenate([coords, joints])
+        return jnp.concatenate([joints, coords])
+
+    def attitude_rate_map(self, robot, joints: jax.Array) -> jax.Array:
+        """``(attitude.dim, n)`` base angular velocity (base axes) per joint rate, zero momentum."""
+        raise NotImplementedError
+
+    def loop_holonomy(self, robot, waypoints: jax.Array, **options) -> jax.Array:
+        """The base attitude change (a group element, base axes) along a joint polyline ``(k, n)``.
+
+        The fast path of each group (`spacearm._core.magnus`): for SO(2) the line integral
+        by Gauss-Legendre quadrature (exact, SO(2) being abelian; options ``nodes``,
+        ``pieces``), for SO(3) the 6th-order Magnus integrator (options ``steps``, ``order``).
+        """
+        raise NotImplementedError
+
+    def straight_maps(self, robot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """``(J*_v (translational_rows, n) in base axes, attitude_rate_map (attitude.dim, n))`` at one
+        posture, in one evaluation (a straight tip path's field needs both)."""
         raise NotImplementedError
 
 

@@ -28,24 +28,32 @@ product of the rotations is a balanced tree of 3x3 products (depth log2 of the s
 count). The public entry points flatten paths, start attitudes and designs into one
 batch inside one ``jit``.
 
-SO(3) helpers: `hat`, `vee`, `expm` (Rodrigues), `log`,
-`geodesic_distance`, all batched over leading axes and safe to differentiate at
-the identity.
+The Magnus schemes live in `spacearm._core.magnus` (the spatial family's
+``loop_holonomy``), the SO(3) helpers `hat`, `vee`, `expm` (Rodrigues), `log` and
+`geodesic_distance` in `spacearm._core.groups`; both are re-exported here.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from ..models.spatial import primitives
-from ..models.spatial.robot import SpatialRobot
+from .._core.groups import expm, geodesic_distance, hat, log, vee
+from .._core.magnus import (
+    DEFAULT_ORDER,
+    DEFAULT_STEPS,
+    check_order,
+    path_rotation,
+    path_rotation_history,
+    step_generators,
+    step_nodes,
+)
+from ..models.family import family_of
 from .batching import flatten_batch, is_traced
 
 __all__ = [
@@ -67,246 +75,27 @@ __all__ = [
     "choose_steps",
 ]
 
-DEFAULT_ORDER = 6
-DEFAULT_STEPS = 4
 # Largest joint move per Magnus step (infinity norm, rad or m) when the step count is
 # chosen from the data: 6th-order steps of 0.15 rad keep UR5 errors near 1e-11 rad per
 # 2-rad segment (docs/explanation/spatial-attitude.md).
 MAX_STEP = 0.15
 
-# SO(3) -----------------------------------------------------------------------------------
-
-
-def hat(v: jax.Array) -> jax.Array:
-    """``(..., 3) -> (..., 3, 3)`` the skew matrix [v]x with [v]x w = v x w."""
-    v = jnp.asarray(v)
-    zero = jnp.zeros_like(v[..., 0])
-    x, y, z = v[..., 0], v[..., 1], v[..., 2]
-    return jnp.stack(
-        [jnp.stack([zero, -z, y], -1), jnp.stack([z, zero, -x], -1), jnp.stack([-y, x, zero], -1)], axis=-2
-    )
-
-
-def vee(W: jax.Array) -> jax.Array:
-    """``(..., 3, 3) -> (..., 3)`` the vector of the skew part of W (inverse of `hat`)."""
-    return 0.5 * jnp.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0], W[..., 1, 0] - W[..., 0, 1]], -1)
-
-
-def _safe_norm(v: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """|v| and |v|^2, with a finite gradient at v = 0 (the double-where idiom)."""
-    sq = jnp.sum(v * v, axis=-1)
-    positive = sq > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), 0.0), sq
-
-
-def expm(v: jax.Array) -> jax.Array:
-    """Rotation matrix of a rotation vector, Rodrigues' formula: ``(..., 3) -> (..., 3, 3)``.
-
-    expm([v]x) = 1 + (sin t / t) [v]x + ((1 - cos t) / t^2) [v]x^2, t = |v|; the two
-    coefficients switch to their Taylor series below t = 1e-3 (truncation < 1e-20), so
-    the map is accurate and differentiable at v = 0.
-    """
-    v = jnp.asarray(v)
-    theta, sq = _safe_norm(v)
-    small = theta < 1e-3
-    t = jnp.where(small, 1.0, theta)
-    sinc = jnp.where(small, 1.0 - sq / 6.0 + sq * sq / 120.0, jnp.sin(t) / t)
-    cosc = jnp.where(small, 0.5 - sq / 24.0 + sq * sq / 720.0, (1.0 - jnp.cos(t)) / (t * t))
-    K = hat(v)
-    eye = jnp.eye(3, dtype=v.dtype)
-    return eye + sinc[..., None, None] * K + cosc[..., None, None] * (K @ K)
-
-
-def log(R: jax.Array) -> jax.Array:
-    """Rotation vector of a rotation matrix, angle in [0, pi]: ``(..., 3, 3) -> (..., 3)``.
-
-    The angle comes from atan2(|vee(R - R^T)| / 2, (tr R - 1) / 2), accurate over the
-    whole range. Below pi - 1e-3 the axis is vee(R - R^T) / (2 sin t); near pi, where
-    that part vanishes, the axis comes from the symmetric part (R + R^T)/2 = cos t 1 +
-    (1 - cos t) u u^T (its largest column), with the sign of the skew part.
-    """
-    R = jnp.asarray(R)
-    w = vee(R)  # sin(t) u
-    s, _ = _safe_norm(w)
-    c = 0.5 * (jnp.trace(R, axis1=-2, axis2=-1) - 1.0)
-    theta = jnp.arctan2(s, c)
-    small = theta < 1e-3
-    # t / sin t, Taylor below 1e-3
-    s_safe = jnp.where(small, 1.0, s)
-    scale = jnp.where(small, 1.0 + theta * theta / 6.0, theta / s_safe)
-    regular = scale[..., None] * w
-    # near pi: u u^T = (S - c 1) / (1 - c), S the symmetric part
-    near_pi = theta > math.pi - 1e-3
-    S = 0.5 * (R + jnp.swapaxes(R, -1, -2))
-    denominator = jnp.where(near_pi, 1.0 - c, 1.0)  # the unused branch stays finite (and its gradient)
-    B = (S - c[..., None, None] * jnp.eye(3, dtype=R.dtype)) / denominator[..., None, None]
-    column = jnp.argmax(jnp.diagonal(B, axis1=-2, axis2=-1), axis=-1)
-    u = jnp.take_along_axis(B, column[..., None, None], axis=-1)[..., 0]
-    u_norm, _ = _safe_norm(u)
-    u = u / jnp.where(u_norm > 0, u_norm, 1.0)[..., None]
-    sign = jnp.where(jnp.sum(u * w, axis=-1) < 0, -1.0, 1.0)
-    return jnp.where(near_pi[..., None], (sign * theta)[..., None] * u, regular)
-
-
-def geodesic_distance(R1: jax.Array, R2: jax.Array) -> jax.Array:
-    """The angle of R1^T R2 in [0, pi], rad: the geodesic distance on SO(3), ``(...)``."""
-    E = jnp.swapaxes(R1, -1, -2) @ R2
-    s, _ = _safe_norm(vee(E))
-    c = 0.5 * (jnp.trace(E, axis1=-2, axis2=-1) - 1.0)
-    return jnp.arctan2(s, c)
-
-
 # The generator -----------------------------------------------------------------------------
 
 
-def bus_rate_map(robot: SpatialRobot, q: jax.Array) -> jax.Array:
+def bus_rate_map(robot, q: jax.Array) -> jax.Array:
     """``(..., 3, n)`` C_w(q): bus angular velocity (bus axes) per joint rate.
 
     The angular rows of the base twist map C(q) = -I_S^-1 I_M (zero momentum), for
     ``q (..., n)`` with any leading batch (one batch-last pass over the chain).
     """
-    return primitives.base_twist_map(robot, q)[..., 3:, :]
-
-
-# Magnus and RKMK steps (generators as 3-vectors; [x, y] -> x cross y) ----------------------
-
-_GAUSS = {
-    2: np.array([0.5 - math.sqrt(3.0) / 6.0, 0.5 + math.sqrt(3.0) / 6.0]),
-    3: np.array([0.5 - math.sqrt(15.0) / 10.0, 0.5, 0.5 + math.sqrt(15.0) / 10.0]),
-}
-_RK4_NODES = np.array([0.0, 0.5, 1.0])
-
-
-def _magnus4(a):
-    """4th-order Magnus on two Gauss nodes; ``a (..., 2, 3)`` = h * generator at the nodes.
-
-    Written for Y' = A Y (left); the bus attitude (right action) runs it on Y = R^T
-    with A = -[omega]x, see `step_generators`.
-    """
-    a1, a2 = a[..., 0, :], a[..., 1, :]
-    return 0.5 * (a1 + a2) + (math.sqrt(3.0) / 12.0) * jnp.cross(a2, a1)
-
-
-def _magnus6(a):
-    """6th-order Magnus on three Gauss nodes (Blanes, Casas, Oteo & Ros 2009, eq. 4.59), left action."""
-    a1, a2, a3 = a[..., 0, :], a[..., 1, :], a[..., 2, :]
-    alpha1 = a2
-    alpha2 = (math.sqrt(15.0) / 3.0) * (a3 - a1)
-    alpha3 = (10.0 / 3.0) * (a3 - 2.0 * a2 + a1)
-    c1 = jnp.cross(alpha1, alpha2)
-    c2 = -(1.0 / 60.0) * jnp.cross(alpha1, 2.0 * alpha3 + c1)
-    return alpha1 + alpha3 / 12.0 + (1.0 / 240.0) * jnp.cross(-20.0 * alpha1 - alpha3 + c1, alpha2 + c2)
-
-
-def _dexpinv(u, b):
-    """dexp^-1_u(b) on so(3) in vectors: b - u x b / 2 + (1 - (t/2) cot(t/2)) / t^2 u x (u x b)."""
-    theta, sq = _safe_norm(u)
-    small = theta < 1e-2
-    t = jnp.where(small, 1.0, theta)
-    coeff = jnp.where(small, 1.0 / 12.0 + sq / 720.0, (1.0 - 0.5 * t / jnp.tan(0.5 * t)) / (t * t))
-    uxb = jnp.cross(u, b)
-    return b - 0.5 * uxb + coeff[..., None] * jnp.cross(u, uxb)
-
-
-def _rkmk4(a):
-    """Classical RK4 in the Lie algebra (Munthe-Kaas 1998); ``a (..., 3, 3)`` = h * generator at t, t + h/2, t + h."""
-    k1 = a[..., 0, :]
-    k2 = _dexpinv(0.5 * k1, a[..., 1, :])
-    k3 = _dexpinv(0.5 * k2, a[..., 1, :])
-    k4 = _dexpinv(k3, a[..., 2, :])
-    return (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
-
-
-_SCHEMES = {4: (_GAUSS[2], _magnus4), 6: (_GAUSS[3], _magnus6), "rkmk4": (_RK4_NODES, _rkmk4)}
-
-
-def _scheme(order):
-    try:
-        return _SCHEMES[order]
-    except KeyError:
-        raise ConfigError(f"order: expected 4, 6 or 'rkmk4', got {order!r}") from None
-
-
-def step_nodes(waypoints: jax.Array, steps: int, order=DEFAULT_ORDER) -> jax.Array:
-    """Joint positions where a scheme evaluates the generator.
-
-    Args:
-        waypoints: ``(..., k, n)`` joint polylines.
-        steps: equal sub-steps per segment (static).
-        order: ``6`` (Magnus, 3 Gauss nodes), ``4`` (Magnus, 2 Gauss nodes) or
-            ``"rkmk4"`` (RKMK with classical RK4, nodes 0, 1/2, 1).
-
-    Returns:
-        ``(..., k-1, steps, s, n)``, s nodes per step.
-    """
-    nodes, _ = _scheme(order)
-    starts, moves = waypoints[..., :-1, :], waypoints[..., 1:, :] - waypoints[..., :-1, :]
-    t = jnp.asarray((np.arange(steps)[:, None] + nodes[None, :]) / steps, waypoints.dtype)  # (steps, s)
-    return starts[..., :, None, None, :] + t[:, :, None] * moves[..., :, None, None, :]
-
-
-def step_generators(maps: jax.Array, waypoints: jax.Array, steps: int, order=DEFAULT_ORDER) -> jax.Array:
-    """Rotation vectors Omega of every sub-step of joint polylines.
-
-    Args:
-        maps: ``(..., k-1, steps, s, 3, n)`` C_w at `step_nodes`.
-        waypoints: ``(..., k, n)`` the polylines.
-
-    Returns:
-        ``(..., (k-1) steps, 3)``: R_end = R_start expm([Omega_1]x) ... expm([Omega_S]x).
-    """
-    _, scheme = _scheme(order)
-    moves = waypoints[..., 1:, :] - waypoints[..., :-1, :]
-    omega = jnp.einsum("...kjsin,...kn->...kjsi", maps, moves)  # bus rate per unit segment parameter
-    # The schemes are written for Y' = A Y; the attitude is R' = R [omega]x, i.e. Y = R^T
-    # with generator -omega, and the step of R is expm(-Omega_Y).
-    generators = -scheme(-omega / steps)
-    return generators.reshape(generators.shape[:-3] + (-1, 3))
-
-
-def _ordered_product(R: jax.Array) -> jax.Array:
-    """R_1 R_2 ... R_S of ``(..., S, 3, 3)`` by a balanced tree of products (S static)."""
-    while R.shape[-3] > 1:
-        if R.shape[-3] % 2:
-            eye = jnp.broadcast_to(jnp.eye(3, dtype=R.dtype), R.shape[:-3] + (1, 3, 3))
-            R = jnp.concatenate([R, eye], axis=-3)
-        R = R[..., 0::2, :, :] @ R[..., 1::2, :, :]
-    return R[..., 0, :, :]
-
-
-def path_rotation(
-    omega_map: Callable[[jax.Array], jax.Array], waypoints: jax.Array, steps: int = DEFAULT_STEPS, order=DEFAULT_ORDER
-) -> jax.Array:
-    """The bus rotation over joint polylines, bus axes: R_end = R_start @ result.
-
-    Args:
-        omega_map: ``q (..., n) -> (..., 3, n)`` bus angular velocity per joint rate,
-            bus axes, batched over leading axes (e.g. ``functools.partial(bus_rate_map, robot)``).
-        waypoints: ``(..., k, n)`` joint positions joined by straight segments.
-        steps, order: sub-steps per segment and scheme (static), see `step_nodes`.
-
-    Returns:
-        ``(..., 3, 3)``.
-    """
-    maps = omega_map(step_nodes(waypoints, steps, order))
-    return _ordered_product(expm(step_generators(maps, waypoints, steps, order)))
-
-
-def path_rotation_history(
-    omega_map: Callable[[jax.Array], jax.Array], waypoints: jax.Array, steps: int, order=DEFAULT_ORDER
-) -> jax.Array:
-    """``(..., (k-1) steps + 1, 3, 3)``: the bus rotation after each sub-step (the first is the identity)."""
-    maps = omega_map(step_nodes(waypoints, steps, order))
-    factors = expm(step_generators(maps, waypoints, steps, order))
-    partial = jax.lax.associative_scan(jnp.matmul, factors, axis=factors.ndim - 3)
-    eye = jnp.broadcast_to(jnp.eye(3, dtype=partial.dtype), partial.shape[:-3] + (1, 3, 3))
-    return jnp.concatenate([eye, partial], axis=-3)
+    return family_of(robot).attitude_rate_map(robot, q)
 
 
 # Public entry points (spatial robots) ----------------------------------------------------
 
 
-def _prepare(robot: SpatialRobot, q_start, joint_waypoints, base_rotation):
+def _prepare(robot, q_start, joint_waypoints, base_rotation):
     n = robot.n_joints
     dtype = jnp.result_type(float)
     q_start = jnp.asarray(q_start, dtype)
@@ -348,7 +137,7 @@ def choose_steps(joint_waypoints, steps: int | None) -> int:
 @functools.partial(jax.jit, static_argnames=("robot_batched", "steps", "order"))
 def _integrate_flat(robot, waypoints, base_rotation, robot_batched, steps, order):
     def rotate(robot, wp):
-        return path_rotation(functools.partial(bus_rate_map, robot), wp, steps, order)
+        return family_of(robot).loop_holonomy(robot, wp, steps=steps, order=order)
 
     if robot_batched:  # one design per path
         return base_rotation @ jax.vmap(rotate)(robot, waypoints)
@@ -356,7 +145,7 @@ def _integrate_flat(robot, waypoints, base_rotation, robot_batched, steps, order
 
 
 def integrate_spatial_joint_path(
-    robot: SpatialRobot,
+    robot,
     q_start: jax.Array,
     joint_waypoints: jax.Array,
     base_rotation: jax.Array | None = None,
@@ -390,7 +179,7 @@ def integrate_spatial_joint_path(
     batch, flat_robot, batched, (wp_flat, R_flat, q_flat) = flatten_batch(
         robot, [(joint_waypoints, 2), (base_rotation, 2), (q_start, 1)]
     )
-    _scheme(order)
+    check_order(order)
     R_end = _integrate_flat(flat_robot, wp_flat, R_flat, batched, choose_steps(joint_waypoints, steps), order)
     q_end = jnp.broadcast_to(joint_waypoints[..., -1, :], batch + (robot.n_joints,))
     return R_end.reshape(batch + (3, 3)), q_end
@@ -411,7 +200,7 @@ def _history_flat(robot, waypoints, base_rotation, robot_batched, samples, steps
 
 
 def spatial_joint_path_history(
-    robot: SpatialRobot,
+    robot,
     q_start: jax.Array,
     joint_waypoints: jax.Array,
     base_rotation: jax.Array | None = None,

@@ -6,6 +6,7 @@ as also used by SciPy), with the embedded 5th- and 3rd-order error estimators. N
 dense output. Generated once from SciPy's table; kept literal so the package needs no SciPy.
 """
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -107,16 +108,48 @@ def tableau_arrays(tableau: str):
     raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
 
 
-def rk_step(field, y, h, tableau="dop853", return_slopes=False):
+def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False, first_slope=None, end_slope=False):
     """One explicit Runge-Kutta step of size h (may be negative) of y' = field(y).
 
-    The stages are unrolled at trace time: under vmap on CPU this runs about 5x faster
-    than a ``lax.scan`` over the stages (which carries and updates a stage array), at
-    the price of a longer compile (measured in benchmarks/bench_motion.py).
+    Unrolled (default), the stages are written out at trace time: under vmap on CPU this
+    runs about 5x faster than a loop over the stages for a cheap closed-form field, at
+    the price of a longer compile (measured in benchmarks/bench_motion.py). ``rolled``
+    runs the stages in a ``lax.fori_loop`` over a stage array: one copy of the field in
+    the program, for fields that hold a loop themselves (a scan over a kinematic chain),
+    where unrolling multiplies the compile time and buys no speed.
+
+    Args:
+        first_slope: field(y) when the caller knows it (the first stage is not evaluated).
+        end_slope: rolled only: also evaluate field(y_new) inside the same loop, as a 13th
+            stage whose weights are the solution weights (one copy of the field in the
+            program instead of two); it is the last row of the returned slopes.
+
+    Returns:
+        y_new, or (y_new, slopes) with ``return_slopes``: a list of the stage slopes
+        (unrolled) or a ``(stages, m)`` array (rolled).
     """
     a, b = tableau_arrays(tableau)
+    if rolled:
+        stages = a.shape[0]
+        if end_slope:  # one more row: the solution weights, i.e. the slope at y_new
+            a = np.vstack([np.hstack([a, np.zeros((stages, 1))]), np.append(b, 0.0)[None]])
+            b = np.append(b, 0.0)
+            stages += 1
+        A = jnp.asarray(a, y.dtype)
+        K = jnp.zeros((stages,) + y.shape, y.dtype)
+        if first_slope is None:
+            first = 0
+        else:
+            first = 1
+            K = K.at[0].set(first_slope)
+        K = jax.lax.fori_loop(first, stages, lambda i, K: K.at[i].set(field(y + h * (A[i] @ K))), K)
+        y_new = y + h * (jnp.asarray(b, y.dtype) @ K)
+        return (y_new, K) if return_slopes else y_new
     slopes = []
-    for row in a:
+    for i, row in enumerate(a):
+        if i == 0 and first_slope is not None:
+            slopes.append(first_slope)
+            continue
         increment = sum((w * k for w, k in zip(row, slopes) if w != 0.0), jnp.zeros_like(y))
         slopes.append(field(y + h * increment))
     y_new = y + h * sum(w * k for w, k in zip(b, slopes) if w != 0.0)
@@ -124,13 +157,19 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False):
 
 
 def error_norm(h, slopes, slope_new, y, y_new, rtol):
-    """Hairer's DOP853 error norm of one step (<= 1: accept), from the stage slopes."""
-    every = list(slopes) + [slope_new]  # 13 slopes (m,)
+    """Hairer's DOP853 error norm of one step (<= 1: accept), from the stage slopes
+    (a list, or a ``(12, m)`` or ``(13, m)`` array from a rolled step; with 13 rows the
+    last is the slope at y_new)."""
     scale = rtol * (1.0 + jnp.maximum(jnp.abs(y), jnp.abs(y_new)))
-    err5 = sum(w * k for w, k in zip(ERROR_WEIGHTS_5, every) if w != 0.0) / scale
-    err3 = sum(w * k for w, k in zip(ERROR_WEIGHTS_3, every) if w != 0.0) / scale
+    if isinstance(slopes, (list, tuple)):
+        every = list(slopes) + [slope_new]  # 13 slopes (m,)
+        err5 = sum(w * k for w, k in zip(ERROR_WEIGHTS_5, every) if w != 0.0) / scale
+        err3 = sum(w * k for w, k in zip(ERROR_WEIGHTS_3, every) if w != 0.0) / scale
+    else:  # the last weights (on slope_new) are zero
+        rows = slopes.shape[0]
+        err5 = (jnp.asarray(ERROR_WEIGHTS_5[:rows], y.dtype) @ slopes) / scale
+        err3 = (jnp.asarray(ERROR_WEIGHTS_3[:rows], y.dtype) @ slopes) / scale
     e5, e3 = jnp.sum(err5**2), jnp.sum(err3**2)
     denom = e5 + 0.01 * e3
     safe = jnp.where(denom > 0, denom, 1.0)
     return jnp.where(denom > 0, jnp.abs(h) * e5 / jnp.sqrt(safe * y.shape[0]), 0.0)
-

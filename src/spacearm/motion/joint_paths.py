@@ -22,41 +22,21 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from ..models.planar.closed_forms import momentum_inertias, tip_position
-from ..models.planar.robot import PlanarRobot
-from ..models.spatial.robot import SpatialRobot
+from .._core.magnus import composite_gauss, line_integral
+from ..kinematics import tip_position
+from ..models.family import family_of
 from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = ["integrate_joint_path", "joint_path_history", "joint_path_base_increments"]
 
 
-@functools.lru_cache(maxsize=None)
-def _composite_gauss(nodes: int, pieces: int) -> tuple[np.ndarray, np.ndarray]:
-    """Composite Gauss-Legendre rule on [0, 1]: ``pieces`` equal panels of ``nodes`` points."""
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    starts = np.arange(pieces)[:, None] / pieces
-    t = (starts + (x[None, :] + 1.0) / (2.0 * pieces)).reshape(-1)
-    weights = np.tile(w / (2.0 * pieces), pieces)
-    return t, weights
+def _segment_integrals(robot, starts: jax.Array, steps: jax.Array, t, weights) -> jax.Array:
+    """Base rotation of an abelian attitude (SO(2)) over straight joint segments q(t) = start + t step.
 
-
-def _segment_integrals(robot: PlanarRobot, starts: jax.Array, steps: jax.Array, t, weights) -> jax.Array:
-    """Base rotation over straight joint segments q(t) = start + t step, t in [t_a, t_b].
-
-    Args:
-        starts, steps: ``(m, n)`` segment start points and displacements, rad.
-        t: ``(m, Q)`` or ``(Q,)`` quadrature nodes in segment parameter; weights the same shape.
-
-    Returns:
-        ``(m,)`` increments of phi0, rad: sum_q w_q * (-(I_M . step) / I_S)(q(t_q)).
+    Returns ``(m,)`` increments of phi0, rad: sum_q w_q (-(I_M . step) / I_S)(q(t_q)) (eq. 5).
     """
-    t = jnp.broadcast_to(jnp.asarray(t), (starts.shape[0],) + jnp.shape(t)[-1:])
-    q = starts[:, None, :] + t[..., None] * steps[:, None, :]
-    phi = jnp.concatenate([jnp.zeros(q.shape[:-1] + (1,), q.dtype), q], axis=-1)
-    i_s, i_m = momentum_inertias(robot, phi)
-    integrand = -jnp.sum(i_m * steps[:, None, :], axis=-1) / i_s
-    return jnp.sum(integrand * weights, axis=-1)
+    return line_integral(functools.partial(family_of(robot).attitude_rate_map, robot), starts, steps, t, weights)
 
 
 # Widest panel of the default rule, in rad of the largest joint excursion: 24 nodes per
@@ -82,12 +62,9 @@ def _default_pieces(joint_waypoints, pieces):
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
 def _joint_path_flat(robot, phi_start, waypoints, robot_batched, nodes, pieces):
-    t, w = _composite_gauss(nodes, pieces)
-    t, w = jnp.asarray(t, phi_start.dtype), jnp.asarray(w, phi_start.dtype)
-
     def one(robot, phi, wp):
-        increments = _segment_integrals(robot, wp[:-1], wp[1:] - wp[:-1], t, w)
-        return jnp.concatenate([phi[:1] + jnp.sum(increments), wp[-1]])
+        turn = family_of(robot).loop_holonomy(robot, wp, nodes=nodes, pieces=pieces)
+        return jnp.concatenate([phi[:1] + turn, wp[-1]])
 
     return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, phi_start, waypoints)
 
@@ -111,23 +88,26 @@ def _prepare_joint_path(robot, phi_start, joint_waypoints):
 
 
 def integrate_joint_path(
-    robot: PlanarRobot | SpatialRobot,
+    robot,
     phi_start: jax.Array,
     joint_waypoints: jax.Array,
     *,
-    nodes: int = 24,
+    nodes: int | None = None,
     pieces: int | None = None,
     base_rotation: jax.Array | None = None,
     steps: int | None = None,
-    order=DEFAULT_ORDER,
+    order=None,
 ):
     """Posture at the end of a joint-space polyline, the base attitude following eq. (5).
 
-    Spatial robots: ``R_end, q_end = integrate_joint_path(robot, q_start,
-    joint_waypoints, base_rotation=R0)`` integrates the bus attitude on SO(3)
-    (`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` 6th-order
-    Magnus steps per segment, by default from the segment lengths; ``order`` the
-    scheme); ``nodes`` and ``pieces`` are planar only. The rest of this docstring is the planar case.
+    The integrator follows the family's attitude group. SO(3) (spatial robots):
+    ``R_end, q_end = integrate_joint_path(robot, q_start, joint_waypoints,
+    base_rotation=R0)`` integrates the bus attitude by the 6th-order Magnus scheme
+    (`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` Magnus steps
+    per segment, by default from the segment lengths; ``order`` the scheme, default 6);
+    ``nodes`` and ``pieces`` are refused there. SO(2) is abelian, so the attitude is a
+    plain line integral, evaluated exactly by Gauss-Legendre quadrature (planar robots,
+    the rest of this docstring); ``base_rotation``, ``steps`` and ``order`` are refused there.
 
     The base rotation is the line integral of -(I_M . dq)/I_S along the straight
     joint-space segments (Umetani & Yoshida 1990, eq. 5, zero momentum), evaluated with
@@ -143,18 +123,29 @@ def integrate_joint_path(
         phi_start: ``(..., n+1)`` initial posture [phi0, phi1..phin], rad.
         joint_waypoints: ``(..., k, n)`` joint angles joined by straight segments, rad;
             the first row equals ``phi_start[..., 1:]``.
-        nodes: quadrature points per panel (static).
+        nodes: quadrature points per panel (static; ``None``: 24).
         pieces: panels per segment (static; ``None``: from the longest segment, as above).
 
     Returns:
         ``(..., n+1)`` posture at the last waypoint, base attitude included, rad.
     """
-    if isinstance(robot, SpatialRobot):
+    group = family_of(robot).attitude
+    if not group.abelian:
+        if nodes is not None or pieces is not None:
+            raise TypeError(
+                f"integrate_joint_path: nodes and pieces set the quadrature of an abelian attitude; the "
+                f"{group.name} attitude is integrated by Magnus steps (use steps=, order=)"
+            )
         return integrate_spatial_joint_path(
-            robot, phi_start, joint_waypoints, base_rotation, steps=steps, order=order
+            robot, phi_start, joint_waypoints, base_rotation, steps=steps, order=DEFAULT_ORDER if order is None else order
         )
-    if base_rotation is not None:
-        raise TypeError("base_rotation applies to spatial robots; a planar posture carries its base angle phi0")
+    for name, value in (("base_rotation", base_rotation), ("steps", steps), ("order", order)):
+        if value is not None:
+            raise TypeError(
+                f"integrate_joint_path: {name} applies to a non-abelian attitude (spatial robots); the "
+                f"{group.name} attitude is a line integral (use nodes=, pieces=; a planar posture carries phi0)"
+            )
+    nodes = 24 if nodes is None else nodes
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     pieces = _default_pieces(joint_waypoints, pieces)
     batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
@@ -166,7 +157,7 @@ def integrate_joint_path(
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))
 def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
-    t, w = _composite_gauss(nodes, pieces)
+    t, w = composite_gauss(nodes, pieces)
     t, w = jnp.asarray(t, waypoints.dtype), jnp.asarray(w, waypoints.dtype)
 
     def one(robot, wp):
@@ -176,7 +167,7 @@ def _increments_flat(robot, waypoints, robot_batched, nodes, pieces):
 
 
 def joint_path_base_increments(
-    robot: PlanarRobot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int | None = None
+    robot, joint_waypoints: jax.Array, *, nodes: int = 24, pieces: int | None = None
 ) -> jax.Array:
     """Base rotation over each segment of a joint polyline (eq. 5).
 
@@ -220,7 +211,7 @@ def _joint_history_flat(robot, phi_start, waypoints, robot_batched, samples, nod
 
 
 def joint_path_history(
-    robot: PlanarRobot,
+    robot,
     phi_start: jax.Array,
     joint_waypoints: jax.Array,
     samples_per_segment: int = 32,

@@ -1,37 +1,31 @@
-"""Straight tip paths and go-and-back motions of the free-floating arm (eq. 5, 6).
+"""Straight tip paths and go-and-back motions of the free-floating arm, for every family.
 
-With zero momentum the base turns as the joints move, I_S dphi0 + I_M . dphi_M = 0
-(Umetani & Yoshida 1990, eq. 5). I_S and I_M depend on the joint angles only, so the
-relation is driftless: along a joint-space path the base rotation is the line integral
+With zero momentum the base turns as the joints move (Umetani & Yoshida 1990, eq. 5:
+I_S dphi0 + I_M . dphi_M = 0 in the plane; omega_B = C_w(q) q' in 3-D), so a tip path
+fixed in inertial axes couples the joints and the base attitude: the state
+y = [family state (joints and attitude coordinates), s] is integrated together,
 
-    Delta phi0 = - integral (I_M(q) . dq) / I_S(q)
+    q' = regularized rates of J*_v(q) (base axes) for the base-frame direction g^-1 d,
+    g' = g [A(q) q'] (A the attitude-rate map; for SO(2) simply phi0' = A q'),
+    s' = tip speed along d,
 
-and does not depend on the timing. Three families of motion are integrated here:
-- straight inertial tip paths (Fig. 3a): joint rates from inverting J* (eq. 6),
-  minimum-norm for redundant arms, integrated until J* loses rank, a joint limit, or
-  a length limit (the end is located by Newton steps on the event functions);
-- go-and-back tip motions (Fig. 9): two straight tip paths, out and back.
+with respect to the joint-space arc length sigma (Fig. 3a). The rates are
+`spacearm.kinematics.straight_path_rates`, written once: for a square J*_v the
+adjugate form sgn0 adj(J*_v) d / |adj(J*_v) d| (finite and smooth through det J*_v = 0),
+for a redundant arm the minimum-norm rates J*_v^T (J*_v J*_v^T)^-1 d regularized with
+adj(J*_v J*_v^T). The path ends where ds/dsigma = 0 (the tip can no longer advance along
+the line: the translational J* lost rank, a dynamic singularity; Papadopoulos & Dubowsky
+1993), at a joint limit, or after ``max_length``.
 
-Everything is written for one path and batched with ``vmap`` over paths, initial
-postures and designs, inside one ``jit`` per entry point (static shapes).
-
-Straight paths use the joint-space arc length sigma as the independent variable, with
-the regularized rates of the adjugate: for n = 2,
-
-    dphi_M/dsigma = sgn0 adj(J*) d / |adj(J*) d|,   ds/dsigma = sgn0 det(J*) / |adj(J*) d|,
-
-(sgn0 the sign of det J* at the start, d the inertial unit direction, s the tip
-distance travelled), which stays finite and smooth through det J* = 0; the path ends
-where ds/dsigma = 0, i.e. where the tip stops advancing along the line. For n > 2 the
-minimum-norm rates J*^T (J* J*^T)^-1 d are regularized the same way with
-adj(J* J*^T). The scheme is the 8th-order Dormand-Prince method (DOP853) with its
-embedded error control, written out in ``lax.while_loop`` so that the event steps, the
-step control and the batch share one compiled loop; see
-docs/explanation/integrators.md for the measured comparison with diffrax, SciPy and
-fixed-step RK4.
+Each family supplies its state (`spacearm.models.RobotFamily.split_state`), its
+attitude group and the maps J*_v and A from one evaluation (``straight_maps``); a
+family may register a closed-form field (the planar one) as a fast path. The
+integrator is `spacearm.motion.lanes` (DOP853 with event location, lane refill,
+power-of-two buckets), written once; see docs/explanation/integrators.md for the
+measured comparison with diffrax, SciPy and fixed-step RK4. SO(3) coordinates are
+integrated as 9 numbers and projected back onto the group (polar factor) at the end, a
+correction at the level of the tolerance.
 """
-
-from __future__ import annotations
 
 from __future__ import annotations
 
@@ -44,28 +38,30 @@ import numpy as np
 
 from .._core.batching import bucket_size, pad_leading, shapes_of
 from .._core.errors import ConfigError
+from .._core.linalg import gram_root_determinant
 from ..kinematics import (
-    base_rate,
+    fixed_base_jacobian,
     fixed_base_manipulability,
-    generalized_jacobian,
     square_determinant,
     straight_path_rates,
     tip_position,
 )
 from ..models.family import family_of
-from ..models.planar.robot import PlanarRobot
-from ..models.spatial.robot import SpatialRobot
-from .dop853 import error_norm, rk_step
-from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR, REASON_STEP_BUDGET
-from .spatial_paths import spatial_straight_tip_path
 from .batching import check_arm_axis, flatten_batch, is_traced
+from .dop853 import rk_step
+from .lanes import PATH_BUCKET, lane_count, run_queue, start_lane, step_lane
+from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR, REASON_STEP_BUDGET
 
 __all__ = [
     "StraightPath",
+    "SpatialStraightPath",
     "straight_tip_path",
     "straight_tip_path_history",
     "compile_straight_tip_path_history",
     "go_and_back",
+    "generic_straight_field",
+    "lane_count",
+    "PATH_BUCKET",
     "REASON_SINGULAR",
     "REASON_MAX_LENGTH",
     "REASON_JOINT_LIMIT",
@@ -73,14 +69,13 @@ __all__ = [
 ]
 
 
-
-# Straight tip paths ----------------------------------------------------------------------
+# The ends of straight tip paths -----------------------------------------------------------
 
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class StraightPath:
-    """The end of a straight inertial tip path (Umetani & Yoshida 1990, section 3.1 (3-b)).
+    """The end of a straight inertial tip path of a planar arm (Umetani & Yoshida 1990, section 3.1 (3-b)).
 
     Attributes:
         end_posture: ``(..., n+1)`` posture where the path ended, rad.
@@ -104,197 +99,37 @@ class StraightPath:
     steps: jax.Array
 
 
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class SpatialStraightPath:
+    """The end of a straight inertial tip path of a spatial arm.
 
-def generic_straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
-    """The regularized straight-path field y' = f(y), y = [phi0, phi_1..phi_n, s].
-
-    Derivatives are with respect to the joint-space arc length sigma. Returns a function
-    of y giving ``(n+2,)``: [dphi0, dphi_M (unit norm), ds]. The joint rates come from
-    `spacearm.kinematics.straight_path_rates` on J* (eq. 6), the base rate from
-    eq. (5): both written once over the family's primitives.
+    Attributes:
+        end_joints: ``(..., n)`` joints where the path ended.
+        end_rotation: ``(..., 3, 3)`` bus attitude there (bus axes -> inertial axes).
+        end_tip: ``(..., 3)`` tip there, inertial axes, about the system centroid, m.
+        length: ``(...)`` distance the tip travelled along the line, m.
+        reason: ``(...)`` int32: 0 = J*_v lost rank (dynamic or kinematic singularity),
+            1 = max_length reached, 2 = joint limit, 3 = step budget exhausted.
+        fixed_manipulability: ``(...)`` the fixed-base w = sqrt det(J_v J_v^T) at the end
+            (m^3): near 0 when the singular end is also a kinematic singularity.
+        joint_arc: ``(...)`` joint-space arc length, rad (the integration variable).
+        steps: ``(...)`` int32 accepted and rejected steps.
     """
-    n = robot.n_links
 
-    def field(y):
-        phi = y[: n + 1]
-        dq, ds = straight_path_rates(generalized_jacobian(robot, phi), direction, sign0)
-        return jnp.concatenate([base_rate(robot, phi, dq)[None], dq, ds[None]])
-
-    return field
-
-
-def _straight_field(robot: PlanarRobot, direction: jax.Array, sign0):
-    """The family's closed-form field where it has one (chosen by type), else the generic one."""
-    fast = family_of(robot).fast_paths.get("straight_path_field")
-    return (fast or generic_straight_field)(robot, direction, sign0)
+    end_joints: jax.Array
+    end_rotation: jax.Array
+    end_tip: jax.Array
+    length: jax.Array
+    reason: jax.Array
+    fixed_manipulability: jax.Array
+    joint_arc: jax.Array
+    steps: jax.Array
 
 
-def _initial_sign(robot: PlanarRobot, phi) -> jax.Array:
-    """sign(det J*) at the start for n = 2 (+1 when exactly singular)."""
-    return jnp.where(square_determinant(generalized_jacobian(robot, phi)) < 0, -1.0, 1.0)
-
-
-def _lane_start(robot, phi_start, direction, max_step):
-    """Integration state at the start of one straight path (a dict of arrays)."""
-    n = robot.n_links
-    dtype = phi_start.dtype
-    direction = direction / jnp.linalg.norm(direction)
-    sign0 = _initial_sign(robot, phi_start) if n == 2 else jnp.asarray(1.0, dtype)
-    field = _straight_field(robot, direction, sign0)
-    y0 = jnp.concatenate([phi_start, jnp.zeros((1,), dtype)])
-    f0 = field(y0)
-    # The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
-    # through the last two steps (a forward difference at the start): cheaper than a jvp
-    # of the field, and exact enough, since the end test is on ds/dsigma itself.
-    probe = 1e-7
-    slope0 = (field(y0 + probe * f0)[-1] - f0[-1]) / probe
-    return {
-        "y": y0,
-        "f": f0,
-        "slope": slope0,
-        "arc": jnp.zeros((), dtype),
-        "count": jnp.int32(0),
-        "h_control": jnp.asarray(max_step, dtype),
-        "direction": direction,
-        "sign0": jnp.asarray(sign0, dtype),
-    }
-
-
-def _lane_step(robot, lane, max_length, max_step, tol, rtol, *, max_steps, tableau):
-    """One attempted step of one straight path.
-
-    Returns:
-        (new lane state, finished, reason): finished when an event is located to ``tol``
-        (reason = the event) or the step budget is spent (reason 3).
-    """
-    n = robot.n_links
-    y, f, slope, h_control = lane["y"], lane["f"], lane["slope"], lane["h_control"]
-    dtype = y.dtype
-    field = _straight_field(robot, lane["direction"], lane["sign0"])
-    lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
-    upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
-    inf = jnp.asarray(jnp.inf, dtype)
-    # The singular event is a sign change of ds/dsigma for n = 2 (smooth through the
-    # fold), but a one-sided approach for n > 2, where the field turns on the scale of
-    # the distance to the singular posture: there every step stays within half the
-    # predicted distance, approaching or receding.
-    approach = 1.0 if n == 2 else 0.5
-
-    # Newton predictions of the step to each event (negative: step back after overshoot).
-    rate = f[-1]
-    approaching = slope < 0
-    h_sing = jnp.where(approaching, approach * rate / -jnp.where(approaching, slope, -1.0), inf)
-    h_len = jnp.where(rate > 0, (max_length - y[-1]) / jnp.where(rate > 0, rate, 1.0), inf)
-    dq, q = f[1 : n + 1], y[1 : n + 1]
-    safe_dq = jnp.where(dq == 0, 1.0, dq)
-    h_up = jnp.where(dq > 0, (upper - q) / safe_dq, inf)
-    h_lo = jnp.where(dq < 0, (lower - q) / safe_dq, inf)
-    h_lim = jnp.min(jnp.minimum(h_up, h_lo))
-    max_h = max_step
-    if n > 2:
-        receding = approach * rate / jnp.where(approaching, 1.0, jnp.maximum(slope, 1e-300))
-        max_h = jnp.minimum(max_step, jnp.where(approaching, inf, receding))
-    candidates = jnp.stack([h_sing, h_len, h_lim])
-    event = jnp.argmin(candidates).astype(jnp.int32)
-    h_event = candidates[event]
-    reached = jnp.abs(h_event) <= tol
-    h = jnp.minimum(h_event, max_h)
-
-    adaptive = tableau == "dop853"
-    if adaptive:
-        # The error controller's step bounds the event-limited step (either sign).
-        h = jnp.clip(h, -h_control, h_control)
-    h = jnp.where(reached, 0.0, h)
-    y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True)
-    f_new = field(y_new)
-    if adaptive:
-        error = error_norm(h, slopes, f_new, y, y_new, rtol)
-        accept = error <= 1.0
-        factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
-        limited = jnp.abs(h) < 0.999 * h_control
-        grown = jnp.where(accept & limited, h_control, jnp.abs(h) * factor)
-        h_control = jnp.where(reached, h_control, jnp.minimum(grown, max_step))
-    else:
-        accept = jnp.bool_(True)
-    take = accept & ~reached
-    slope_new = jnp.where(h != 0, (f_new[-1] - f[-1]) / jnp.where(h != 0, h, 1.0), slope)
-    keep = lambda new, old: jnp.where(take, new, old)  # noqa: E731
-    count = lane["count"] + jnp.where(reached, 0, 1).astype(jnp.int32)
-    new_lane = dict(
-        lane,
-        y=keep(y_new, y),
-        f=keep(f_new, f),
-        slope=keep(slope_new, slope),
-        arc=lane["arc"] + jnp.where(take, h, 0.0),
-        count=count,
-        h_control=h_control,
-    )
-    finished = reached | (count >= max_steps)
-    reason = jnp.where(reached, event, REASON_STEP_BUDGET)
-    return new_lane, finished, reason
-
-
-def _straight_queue(robot, phi_start, direction, max_length, max_step, tol, rtol, real, *, robot_batched, lanes,
-                    max_steps, tableau):
-    """Integrate the first ``real`` of P (padded) straight paths on ``lanes`` vectorized lanes with refill.
-
-    A plain ``vmap`` of a while loop runs every path for as many steps as the longest
-    one needs (here 3-4x the mean). Instead each lane, when its path ends, writes the
-    result and takes the next path from the queue, so the batch does about
-    (total steps / lanes + longest path) iterations. ``real`` is traced: the padding
-    rows beyond it are never integrated (their results stay zero), so any number of
-    paths up to P runs in the same compiled program.
-    """
-    count = phi_start.shape[0]
-    n = robot.n_links
-    width = min(lanes, count)
-    robot_axis = 0 if robot_batched else None
-
-    def robot_for(index):
-        return jax.tree_util.tree_map(lambda x: x[index], robot) if robot_batched else robot
-
-    start = jax.vmap(_lane_start, in_axes=(robot_axis, 0, 0, None))
-    step = jax.vmap(
-        functools.partial(_lane_step, max_steps=max_steps, tableau=tableau),
-        in_axes=(robot_axis, 0, 0, None, None, None),
-    )
-    index0 = jnp.arange(width, dtype=jnp.int32)
-    lanes0 = start(robot_for(index0), phi_start[index0], direction[index0], max_step)
-    dtype = phi_start.dtype
-    results0 = {
-        "y": jnp.zeros((count, n + 2), dtype),
-        "arc": jnp.zeros((count,), dtype),
-        "count": jnp.zeros((count,), jnp.int32),
-        "reason": jnp.zeros((count,), jnp.int32),
-    }
-    state0 = (lanes0, index0, index0 < real, jnp.int32(width), results0)
-
-    def cond(state):
-        return jnp.any(state[2])
-
-    def body(state):
-        lane, index, active, next_index, results = state
-        lane, finished, reason = step(robot_for(index), lane, max_length[index], max_step, tol, rtol)
-        finished = finished & active
-        target = jnp.where(finished, index, count)  # out of range: dropped
-        results = {
-            "y": results["y"].at[target].set(lane["y"], mode="drop"),
-            "arc": results["arc"].at[target].set(lane["arc"], mode="drop"),
-            "count": results["count"].at[target].set(lane["count"], mode="drop"),
-            "reason": results["reason"].at[target].set(reason, mode="drop"),
-        }
-        rank = jnp.cumsum(finished.astype(jnp.int32)) - 1
-        refill = finished & (next_index + rank < real)
-        index = jnp.where(refill, next_index + rank, index)
-        fresh = start(robot_for(index), phi_start[index], direction[index], max_step)
-        lane = jax.tree_util.tree_map(
-            lambda new, old: jnp.where(refill.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), fresh, lane
-        )
-        active = jnp.where(finished, refill, active)
-        next_index = next_index + jnp.sum(finished, dtype=jnp.int32)
-        return lane, index, active, next_index, results
-
-    results = jax.lax.while_loop(cond, body, state0)[-1]
+def _attitude_in_posture(robot, results):
+    """Ends of a family whose posture carries the attitude (planar: phi = [phi0, joints])."""
+    n = family_of(robot).joint_count(robot)
     posture = results["y"][:, : n + 1]
     reason = results["reason"]
     fixed_w = fixed_base_manipulability(robot, posture[:, 1:]) / robot.reach**2
@@ -309,31 +144,127 @@ def _straight_queue(robot, phi_start, direction, max_length, max_step, tol, rtol
     )
 
 
-@functools.partial(jax.jit, static_argnames=("robot_batched", "lanes", "max_steps", "tableau"))
-def _straight_flat(robot, phi_start, direction, max_length, max_step, tol, rtol, real, robot_batched, lanes,
-                   max_steps, tableau):
-    return _straight_queue(
-        robot, phi_start, direction, max_length, max_step, tol, rtol, real,
-        robot_batched=robot_batched, lanes=lanes, max_steps=max_steps, tableau=tableau,
+def _attitude_beside_posture(robot, results, robot_batched):
+    """Ends of a family whose attitude is a rotation beside the joints (spatial)."""
+    family = family_of(robot)
+
+    def one(robot, y):
+        joints, coords = family.split_state(robot, y[:-1])
+        R = family.attitude.from_coords(coords)
+        fixed = fixed_base_jacobian(robot, joints)[: family.translational_rows]
+        return joints, R, R @ tip_position(robot, joints), gram_root_determinant(fixed)
+
+    joints, R, tip, fixed_w = jax.vmap(one, in_axes=(0 if robot_batched else None, 0))(robot, results["y"])
+    return SpatialStraightPath(
+        end_joints=joints,
+        end_rotation=R,
+        end_tip=tip,
+        length=results["y"][:, -1],
+        reason=results["reason"],
+        fixed_manipulability=fixed_w,
+        joint_arc=results["arc"],
+        steps=results["count"],
     )
 
 
-# Batches of straight paths are padded to PATH_BUCKET or the next power of two beyond.
-PATH_BUCKET = 512
+# The field ---------------------------------------------------------------------------------
 
 
-def lane_count(padded: int, lanes: int | None = None) -> int:
-    """Lanes for a padded batch: ``lanes`` when given (at most ``padded``), else padded / 16,
-    at least 64 and at most 512.
+def generic_straight_field(robot, direction: jax.Array, sign0):
+    """The regularized straight-path field y' = f(y), y = [family state, s], of any family.
 
-    Narrow queues run faster on CPU, because a lane that finishes takes the next path
-    at once (CPU time of 1,000 random Table 1 paths: 95 ms on 64 lanes, 212 ms on 512;
-    4,000 paths: 361 ms vs 525 ms); wider ones only pay off on many-core backends, so the
-    width grows with the bucket.
+    Derivatives are with respect to the joint-space arc length sigma: the joint rates
+    have unit norm, the attitude follows the family's attitude-rate map (eq. 5), the last
+    entry is ds/dsigma. J*_v and the attitude-rate map come from one evaluation of the
+    family's ``straight_maps`` (one pass over a spatial chain).
     """
-    if lanes is not None:
-        return int(max(1, min(lanes, padded)))
-    return int(min(512, max(64, padded // 16), padded))
+    family = family_of(robot)
+    group = family.attitude
+
+    def field(y):
+        joints, coords = family.split_state(robot, y[:-1])
+        J, A = family.straight_maps(robot, joints)
+        dq, ds = straight_path_rates(J, group.coords_matrix(coords).T @ direction, sign0)
+        dg = group.rate(coords, A @ dq)
+        return jnp.concatenate([family.join_state(robot, dq, dg), ds[None]])
+
+    return field
+
+
+def _straight_field(robot, direction: jax.Array, sign0):
+    """The family's closed-form field where it has one (chosen by type), else the generic one."""
+    fast = family_of(robot).fast_paths.get("straight_path_field")
+    return (fast or generic_straight_field)(robot, direction, sign0)
+
+
+def _square(robot) -> bool:
+    family = family_of(robot)
+    return family.joint_count(robot) == family.translational_rows
+
+
+def _start_sign(robot, joints) -> jax.Array:
+    """sign(det J*_v) at the start for a square J*_v (+1 when exactly singular, or redundant)."""
+    dtype = joints.dtype
+    if not _square(robot):
+        return jnp.asarray(1.0, dtype)
+    J, _ = family_of(robot).straight_maps(robot, joints)
+    return jnp.where(square_determinant(J) < 0, -1.0, 1.0).astype(dtype)
+
+
+def _initial_sign(robot, phi) -> jax.Array:
+    """sign(det J*) at the start of a planar path from its posture ``phi`` (n = 2)."""
+    return _start_sign(robot, family_of(robot).split_state(robot, phi)[0])
+
+
+def _lane_start(robot, joints, coords, direction, max_step):
+    """Integration state at the start of one straight path (a dict of arrays)."""
+    family = family_of(robot)
+    dtype = joints.dtype
+    direction = direction / jnp.linalg.norm(direction)
+    sign0 = _start_sign(robot, joints)
+    field = _straight_field(robot, direction, sign0)
+    y0 = jnp.concatenate([family.join_state(robot, joints, coords), jnp.zeros((1,), dtype)])
+    return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0})
+
+
+def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_steps, *, tableau):
+    family = family_of(robot)
+    n = family.joint_count(robot)
+    dtype = lane["y"].dtype
+    field = _straight_field(robot, lane["direction"], lane["sign0"])
+    lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
+    upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
+    return step_lane(
+        field, lane, (family.posture_offset, n), lower, upper, square=_square(robot), max_length=max_length,
+        max_step=max_step, tol=tol, rtol=rtol, sing_rate=sing_rate, max_steps=max_steps, tableau=tableau,
+        rolled=family.straight_field_loops,
+    )
+
+
+@functools.partial(jax.jit, static_argnames=("robot_batched", "lanes", "tableau"))
+def _straight_flat(robot, joints, coords, direction, max_length, max_step, tol, rtol, sing_rate, max_steps, real,
+                   robot_batched, lanes, tableau):
+    """Integrate a padded batch of straight paths (the first ``real`` rows) on ``lanes`` lanes."""
+    count = joints.shape[0]
+    robot_axis = 0 if robot_batched else None
+
+    def robot_for(index):
+        return jax.tree_util.tree_map(lambda x: x[index], robot) if robot_batched else robot
+
+    start = jax.vmap(_lane_start, in_axes=(robot_axis, 0, 0, 0, None))
+    step = jax.vmap(
+        functools.partial(_lane_step, tableau=tableau), in_axes=(robot_axis, 0, 0, None, None, None, None, None)
+    )
+    results = run_queue(
+        lambda index: start(robot_for(index), joints[index], coords[index], direction[index], max_step),
+        lambda index, lane: step(robot_for(index), lane, max_length[index], max_step, tol, rtol, sing_rate, max_steps),
+        count,
+        min(lanes, count),
+        real,
+    )
+    if family_of(robot).posture_offset:
+        return _attitude_in_posture(robot, results)
+    return _attitude_beside_posture(robot, results, robot_batched)
 
 
 def _as_array(x, dtype):
@@ -342,14 +273,18 @@ def _as_array(x, dtype):
 
 
 def _prepare_straight(robot, phi_start, direction, max_length):
-    n = robot.n_links
+    """Planar inputs as arrays, checked: ``(phi_start, direction, max_length)``."""
+    family = family_of(robot)
     dtype = jnp.result_type(float)
     # Concrete inputs stay NumPy until the compiled kernel takes them: jnp.asarray of a
     # NumPy array compiles a small staging program per shape.
     phi_start, direction = (_as_array(x, dtype) for x in (phi_start, direction))
-    check_arm_axis(robot, "phi_start", phi_start, n + 1)
-    if direction.ndim < 1 or direction.shape[-1] != 2:
-        raise ConfigError(f"direction: expected shape (..., 2), got {direction.shape}")
+    n = family.joint_count(robot)
+    name = "phi_start" if family.posture_offset else "q_start"
+    check_arm_axis(robot, name, phi_start, n + family.posture_offset)
+    space = family.attitude.space
+    if direction.ndim < 1 or direction.shape[-1] != space:
+        raise ConfigError(f"direction: expected shape (..., {space}), got {direction.shape}")
     if not is_traced(direction) and np.any(np.linalg.norm(np.asarray(direction), axis=-1) == 0):
         raise ConfigError("direction: must be a nonzero vector")
     max_length = _as_array(np.inf if max_length is None else max_length, dtype)
@@ -358,39 +293,62 @@ def _prepare_straight(robot, phi_start, direction, max_length):
     return phi_start, direction, max_length
 
 
+def _split_start(robot, posture, base_rotation):
+    """``(joints (..., n), attitude coordinates (..., c))`` of the start, per family."""
+    family = family_of(robot)
+    group = family.attitude
+    offset = family.posture_offset
+    if offset:
+        if base_rotation is not None:
+            raise TypeError("base_rotation applies to spatial robots; a planar posture carries its base attitude")
+        return posture[..., offset:], posture[..., :offset]
+    dtype = posture.dtype
+    if base_rotation is None:
+        R0 = np.eye(group.space, dtype=dtype)
+    else:
+        R0 = _as_array(base_rotation, dtype)
+        if R0.shape[-2:] != (group.space, group.space):
+            raise ConfigError(f"base_rotation: expected shape (..., {group.space}, {group.space}), got {R0.shape}")
+    return posture, R0.reshape(R0.shape[:-2] + (group.coords,))
+
+
 def straight_tip_path(
-    robot: PlanarRobot,
+    robot,
     phi_start: jax.Array,
     direction: jax.Array,
     *,
     max_length=None,
-    max_step: float = 0.25,
+    max_step: float | None = None,
     tol: float | None = None,
     rtol: float | None = None,
-    max_steps: int = 4096,
+    max_steps: int | None = None,
     tableau: str = "dop853",
     lanes: int | None = None,
     base_rotation: jax.Array | None = None,
-) -> StraightPath:
-    """Move the tip along a straight inertial line until J* loses rank (Fig. 3a).
+    sing_rate: float | None = None,
+):
+    """Move the tip along a straight inertial line until J* loses rank (Fig. 3a), any family.
 
-    Joint rates invert the Generalized Jacobian (eq. 6), minimum-norm for n > 2, and the
-    base follows eq. (5). Integration runs in joint-space arc length with the adjugate
-    regularization (module docstring) and DOP853 steps of at most ``max_step`` rad sized
-    by the embedded error estimate, shortened near an event; the end is located by
-    Newton steps on the event functions to ``tol`` rad of joint arc. Batched over directions, initial postures and designs (all broadcast).
+    Joint rates invert the Generalized Jacobian (eq. 6), minimum-norm for a redundant arm,
+    and the base attitude follows eq. (5). Integration runs in joint-space arc length with
+    the adjugate regularization (module docstring) and DOP853 steps of at most
+    ``max_step`` rad sized by the embedded error estimate, shortened near an event; the
+    end is located by Newton steps on the event functions to ``tol`` rad of joint arc.
+    Batched over directions, initial postures and designs (all broadcast).
 
     Args:
         robot: the design (or a batch of designs).
-        phi_start: ``(..., n+1)`` initial posture, rad.
-        direction: ``(..., 2)`` direction of travel in the inertial frame (normalized here).
+        phi_start: planar: ``(..., n+1)`` initial posture, rad; spatial: ``(..., n)`` joints.
+        direction: ``(..., 2)`` or ``(..., 3)`` direction of travel, inertial axes (normalized here).
         max_length: scalar or ``(...)`` length limit, m (None: none).
-        max_step: largest integration step, rad of joint arc.
-        tol: event location tolerance, rad of joint arc (None: 1e-12 in float64,
-            1e-5 in float32, where 1e-12 is below rounding and no step would pass).
+        max_step: largest integration step, rad of joint arc (None: 0.25 planar, 0.1 spatial).
+        tol: event location tolerance, rad of joint arc (None: planar 1e-12 in float64,
+            1e-5 in float32, where 1e-12 is below rounding and no step would pass; spatial 1e-11).
         rtol: local error tolerance of the DOP853 step controller (relative to 1 + |y|);
-            ignored by "rk4", which takes fixed steps of ``max_step`` (None: as ``tol``).
-        max_steps: step budget (static); paths that exhaust it get reason 3.
+            ignored by "rk4", which takes fixed steps of ``max_step`` (None: planar as
+            ``tol``, spatial 1e-12).
+        max_steps: step budget per path (None: 4096 planar, 4000 spatial); paths that
+            exhaust it get reason 3.
         tableau: "dop853" (8th order with its embedded error control, default) or "rk4"
             (fixed steps, a baseline; static).
         lanes: paths integrated side by side (static; None: `lane_count` of the
@@ -398,42 +356,49 @@ def straight_tip_path(
             paths do not wait for long ones (``lanes`` = the batch size is a plain vmap).
             The batch is padded to 512 paths or the next power of two (one compiled
             program per bucket, not per batch size); the padding is never integrated.
+        base_rotation: spatial robots: ``(..., 3, 3)`` bus attitude at the start (bus axes ->
+            inertial axes; default identity). A planar posture carries its base angle.
+        sing_rate: spatial redundant arms: the path also ends (singular) once the tip
+            advances less than this per radian of joint motion, m/rad (None: 1e-6; the
+            minimum-norm flow of a redundant arm may approach rank loss only
+            asymptotically). Planar paths have no such stall event.
 
     Returns:
-        `StraightPath` with batch shape ``(...)``.
-
-    Spatial robots: ``straight_tip_path(robot, q_start, direction_xyz, max_length=...,
-    base_rotation=R0)`` runs `spacearm.motion.spatial_paths.spatial_straight_tip_path`
-    (the bus attitude integrated with the joints) and returns its `SpatialStraightPath`.
+        `StraightPath` (planar) or `SpatialStraightPath` (spatial) with batch shape ``(...)``.
     """
-    if isinstance(robot, SpatialRobot):
-        if tableau != "dop853" or lanes is not None:
-            raise TypeError("straight_tip_path: tableau and lanes apply to planar robots only")
-        spatial = {"max_step": max_step} if max_step != 0.25 else {}
-        spatial.update({k: v for k, v in (("tol", tol), ("rtol", rtol)) if v is not None})
-        return spatial_straight_tip_path(
-            robot, phi_start, direction, max_length, base_rotation=base_rotation, max_steps=max_steps, **spatial
-        )
-    if base_rotation is not None:
-        raise TypeError("base_rotation applies to spatial robots; a planar posture carries its base attitude")
+    family = family_of(robot)
+    defaults = family.straight_defaults
     phi_start, direction, max_length = _prepare_straight(robot, phi_start, direction, max_length)
-    batch, flat_robot, batched, (phi_flat, dir_flat, len_flat) = flatten_batch(
-        robot, [(phi_start, 1), (direction, 1), (max_length, 0)]
+    joints, coords = _split_start(robot, phi_start, base_rotation)
+    batch, flat_robot, batched, (joints_flat, coords_flat, dir_flat, len_flat) = flatten_batch(
+        robot, [(joints, 1), (coords, 1), (direction, 1), (max_length, 0)]
     )
-    dtype = phi_flat.dtype
+    dtype = joints_flat.dtype
     default_tol = 1e-12 if jnp.finfo(dtype).bits >= 64 else 1e-5
-    tol = default_tol if tol is None else tol
-    rtol = default_tol if rtol is None else rtol
+
+    def option(value, name, fallback=None):
+        if value is not None:
+            return value
+        return fallback if defaults.get(name) is None else defaults[name]
+
+    tol = option(tol, "tol", default_tol)
+    rtol = option(rtol, "rtol", default_tol)
+    max_step = option(max_step, "max_step")
+    sing_rate = option(sing_rate, "sing_rate")
+    max_steps = option(max_steps, "max_steps")
+    if tableau not in ("dop853", "rk4"):
+        raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
     # One program for every batch of up to 512 paths, and one per power of two beyond:
-    # the batch is padded (the padding is never integrated, see _straight_queue).
-    count = phi_flat.shape[0]
+    # the batch is padded (the padding is never integrated, see lanes.run_queue).
+    count = joints_flat.shape[0]
     padded = bucket_size(count, minimum=PATH_BUCKET)
     if batched:
         flat_robot = pad_leading(flat_robot, padded)
-    phi_flat, dir_flat, len_flat = pad_leading((phi_flat, dir_flat, len_flat), padded)
+    joints_flat, coords_flat, dir_flat, len_flat = pad_leading((joints_flat, coords_flat, dir_flat, len_flat), padded)
     out = _straight_flat(
-        flat_robot, phi_flat, dir_flat, len_flat, _as_array(max_step, dtype), _as_array(tol, dtype),
-        _as_array(rtol, dtype), np.int32(count), batched, lane_count(padded, lanes), int(max_steps), tableau,
+        flat_robot, joints_flat, coords_flat, dir_flat, len_flat, _as_array(max_step, dtype), _as_array(tol, dtype),
+        _as_array(rtol, dtype), _as_array(sing_rate, dtype), np.int32(max_steps), np.int32(count), batched,
+        lane_count(padded, lanes), tableau,
     )
     return _unpad(out, count, batch)
 
@@ -475,7 +440,7 @@ def _history_flat(robot, phi_start, direction, joint_arc, robot_batched, interva
     return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0, 0))(robot, phi_start, direction, joint_arc)
 
 
-def compile_straight_tip_path_history(robot: PlanarRobot, count: int = 1, n_samples: int = 101, *,
+def compile_straight_tip_path_history(robot, count: int = 1, n_samples: int = 101, *,
                                       substeps: int = 4, tableau: str = "dop853") -> None:
     """Compile, without running, the sampler `straight_tip_path_history` uses for
     ``count`` paths of one design; a later call with those sizes finds the program.
@@ -491,7 +456,7 @@ def compile_straight_tip_path_history(robot: PlanarRobot, count: int = 1, n_samp
 
 
 def straight_tip_path_history(
-    robot: PlanarRobot,
+    robot,
     phi_start: jax.Array,
     direction: jax.Array,
     n_samples: int = 101,
@@ -528,7 +493,7 @@ def straight_tip_path_history(
 
 
 def go_and_back(
-    robot: PlanarRobot,
+    robot,
     phi_start: jax.Array,
     direction: jax.Array,
     distance,

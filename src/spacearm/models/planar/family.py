@@ -10,6 +10,10 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+import functools
+
+from ..._core.groups import SO2
+from ..._core.magnus import composite_gauss, line_integral
 from ..family import RobotFamily
 from .closed_forms import (
     arm_jacobian,
@@ -46,8 +50,29 @@ class PlanarFamily(RobotFamily):
         "straight_path_field": straight_path_field,
     }
 
+    attitude = SO2
+    straight_field_loops = False  # the closed-form field: stages written out run faster
+    straight_defaults = {"max_step": 0.25, "tol": None, "rtol": None, "sing_rate": -float("inf"), "max_steps": 4096}
+
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links
+
+    def attitude_rate_map(self, robot: PlanarRobot, joints: jax.Array) -> jax.Array:
+        """``(..., 1, n)`` -I_M / I_S (eq. 5), for ``joints (..., n)`` with any leading batch."""
+        zero = jnp.zeros(joints.shape[:-1] + (1,), joints.dtype)
+        i_s, i_m = momentum_inertias(robot, jnp.concatenate([zero, joints], axis=-1))
+        return (-i_m / i_s[..., None])[..., None, :]
+
+    def loop_holonomy(self, robot: PlanarRobot, waypoints: jax.Array, *, nodes: int = 24, pieces: int = 1) -> jax.Array:
+        """phi0 change along one joint polyline ``(k, n)``: the line integral of eq. (5), rad."""
+        t, w = (jnp.asarray(x, waypoints.dtype) for x in composite_gauss(nodes, pieces))
+        rate_map = functools.partial(self.attitude_rate_map, robot)
+        return jnp.sum(line_integral(rate_map, waypoints[:-1], waypoints[1:] - waypoints[:-1], t, w))
+
+    def straight_maps(self, robot: PlanarRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        phi = jnp.concatenate([jnp.zeros((1,), joints.dtype), joints])  # base axes: phi0 = 0
+        i_s, i_m = momentum_inertias(robot, phi)
+        return generalized_jacobian(robot, phi), (-i_m / i_s)[None, :]
 
     def tip(self, robot: PlanarRobot, posture: jax.Array) -> jax.Array:
         return tip_position(robot, posture)

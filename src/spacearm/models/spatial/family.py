@@ -18,6 +18,10 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+import functools
+
+from ..._core.groups import SO3
+from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import RobotFamily
 from ..._core.linalg import gram_root_determinant
 from .primitives import (
@@ -28,6 +32,7 @@ from .primitives import (
     jacobians,
     mass_matrix,
     momentum_map,
+    straight_path_maps,
     tip,
 )
 from .robot import SpatialRobot
@@ -70,8 +75,24 @@ class SpatialFamily(RobotFamily):
         "fixed_base_manipulability": _fixed_base_manipulability,
     }
 
+    attitude = SO3
+    straight_field_loops = True  # the chain pass is a scan: roll the DOP853 stages
+    straight_defaults = {"max_step": 0.1, "tol": 1e-11, "rtol": 1e-12, "sing_rate": 1e-6, "max_steps": 4000}
+
     def joint_count(self, robot: SpatialRobot) -> int:
         return robot.n_joints
+
+    def attitude_rate_map(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
+        return base_twist_map(robot, joints)[..., 3:, :]
+
+    def loop_holonomy(self, robot: SpatialRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS,
+                      order=DEFAULT_ORDER) -> jax.Array:
+        """``(..., 3, 3)`` bus rotation along joint polylines ``(..., k, n)``, bus axes (6th-order Magnus)."""
+        return path_rotation(functools.partial(self.attitude_rate_map, robot), waypoints, steps, order)
+
+    def straight_maps(self, robot: SpatialRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        maps = straight_path_maps(robot, joints)
+        return maps[:3], maps[3:]
 
     def tip(self, robot: SpatialRobot, posture: jax.Array) -> jax.Array:
         return tip(robot, posture)

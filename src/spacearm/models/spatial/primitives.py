@@ -56,6 +56,7 @@ __all__ = [
     "mass_matrix",
     "momentum_map",
     "rpy_to_matrix",
+    "straight_path_maps",
     "tip",
     "tip_pose",
 ]
@@ -430,6 +431,16 @@ def _base_twist_minor(robot, q):
     return _rows(v, _scale(-1.0, solved))
 
 
+def _straight_maps_minor(robot, q):
+    """J*_v and C_w rows from ONE chain pass: what a straight-path field needs per evaluation."""
+    state = _chain_pass(robot, q)
+    _, solved = _coupling(state)
+    v, _ = _fixed_columns(state)
+    r_t = _sub(state.tip, state.centroid)
+    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    return _rows(v_star, _scale(-1.0, solved))
+
+
 def _outer(a, b):
     """``(n, n, *batch)``: a_j . b_k for 3-tuples of ``(n, *batch)``."""
     return sum(a[c][:, None] * b[c][None, :] for c in range(3))
@@ -506,6 +517,11 @@ only a 3x3 system is solved, one pass over the chain per posture."""
 
 base_twist_map = batched(_base_twist_minor, 2)
 base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate at zero momentum, bus axes."""
+
+straight_path_maps = batched(_straight_maps_minor, 2)
+straight_path_maps.__doc__ = """``(..., 6, n)``: rows 0-2 J*_v (tip velocity per joint rate at zero momentum) and
+rows 3-5 C_w (bus angular velocity per joint rate), bus axes, from one pass over the chain
+(the rows of `generalized_jacobian` and `base_twist_map` a straight tip path needs)."""
 
 mass_matrix = batched(_mass_minor, 2)
 mass_matrix.__doc__ = """``(..., n, n)`` H_m: the arm's joint-space inertia with the bus held fixed."""

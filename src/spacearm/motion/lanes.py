@@ -1,0 +1,208 @@
+"""One lane integrator: DOP853 with event location, lane refill and power-of-two buckets.
+
+Written once for every robot family. A path is a state y = [family state, s] (the
+family's joints and base-attitude coordinates, `spacearm.models.RobotFamily.split_state`,
+then the tip distance s) integrated in joint-space arc length sigma by an explicit
+Runge-Kutta scheme (DOP853 with its embedded error control, or fixed RK4 steps), until
+an event, located by Newton predictions on the event functions to ``tol``:
+
+- singular: ds/dsigma reaches 0 (a sign change when the translational J* is square,
+  a one-sided approach otherwise, where every step stays within half the predicted
+  distance), or, for a redundant arm, the tip advances less than ``sing_rate`` per
+  radian of joint motion (a stall: the minimum-norm flow may approach rank loss only
+  asymptotically);
+- length: s reaches ``max_length``;
+- limit: a joint reaches its limit;
+- the step budget ``max_steps`` runs out (reason 3, not converged).
+
+The lane state (a dict pytree of arrays: y, f = field(y), the secant slope of
+ds/dsigma, arc, count, the controller's step, and the per-path field parameters) is
+advanced by `step_lane`, written for one path. `run_queue` integrates a padded batch on
+a few vectorized lanes: a lane whose path ends writes its result and takes the next
+path from the queue, so short paths do not wait for long ones, and the number of real
+paths is traced, so any batch up to the padded size runs in one compiled program.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from .dop853 import error_norm, rk_step
+from .path_ends import REASON_SINGULAR, REASON_STEP_BUDGET
+
+__all__ = ["start_lane", "step_lane", "run_queue", "lane_count", "PATH_BUCKET"]
+
+# Batches of paths are padded to PATH_BUCKET or the next power of two beyond.
+PATH_BUCKET = 512
+
+
+def lane_count(padded: int, lanes: int | None = None) -> int:
+    """Lanes for a padded batch: ``lanes`` when given (at most ``padded``), else padded / 16,
+    at least 64 and at most 512.
+
+    Narrow queues run faster on CPU, because a lane that finishes takes the next path
+    at once (CPU time of 1,000 random Table 1 paths: 95 ms on 64 lanes, 212 ms on 512;
+    4,000 paths: 361 ms vs 525 ms); wider ones only pay off on many-core backends, so the
+    width grows with the bucket.
+    """
+    if lanes is not None:
+        return int(max(1, min(lanes, padded)))
+    return int(min(512, max(64, padded // 16), padded))
+
+
+def start_lane(field, y0: jax.Array, max_step, params: dict) -> dict:
+    """The lane state at the start of one path (``params``: the field's per-path parameters)."""
+    dtype = y0.dtype
+    f0 = field(y0)
+    # The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
+    # through the last two steps (a forward difference at the start): cheaper than a jvp
+    # of the field, and exact enough, since the end test is on ds/dsigma itself.
+    probe = 1e-7
+    slope0 = (field(y0 + probe * f0)[-1] - f0[-1]) / probe
+    return dict(
+        params,
+        y=y0,
+        f=f0,
+        slope=slope0,
+        arc=jnp.zeros((), dtype),
+        count=jnp.int32(0),
+        h_control=jnp.asarray(max_step, dtype),
+    )
+
+
+def step_lane(field, lane: dict, joints, lower, upper, *, square: bool, max_length, max_step, tol, rtol, sing_rate,
+              max_steps, tableau: str = "dop853", rolled: bool = False):
+    """One attempted step of one path.
+
+    Args:
+        field: y -> dy/dsigma of this path.
+        joints: ``(start, n)``: where the joints sit in y (static).
+        lower, upper: ``(n,)`` joint limits.
+        square: whether the translational J* is square (the singular end is a sign change).
+        sing_rate: the stall rate of a redundant arm, m/rad (-inf: no stall event).
+        rolled: the Runge-Kutta stages in a loop (for fields that hold a loop), static.
+
+    Returns:
+        (new lane state, finished, reason): finished when an event is located to ``tol``
+        (reason = the event) or the step budget is spent (reason 3).
+    """
+    first, n = joints
+    y, f, slope, h_control = lane["y"], lane["f"], lane["slope"], lane["h_control"]
+    dtype = y.dtype
+    inf = jnp.asarray(jnp.inf, dtype)
+    approach = 1.0 if square else 0.5
+
+    # Newton predictions of the step to each event (negative: step back after overshoot).
+    rate = f[-1]
+    approaching = slope < 0
+    h_sing = jnp.where(approaching, approach * rate / -jnp.where(approaching, slope, -1.0), inf)
+    h_len = jnp.where(rate > 0, (max_length - y[-1]) / jnp.where(rate > 0, rate, 1.0), inf)
+    dq, q = f[first : first + n], y[first : first + n]
+    safe_dq = jnp.where(dq == 0, 1.0, dq)
+    h_up = jnp.where(dq > 0, (upper - q) / safe_dq, inf)
+    h_lo = jnp.where(dq < 0, (lower - q) / safe_dq, inf)
+    h_lim = jnp.min(jnp.minimum(h_up, h_lo))
+    max_h = max_step
+    if not square:
+        receding = approach * rate / jnp.where(approaching, 1.0, jnp.maximum(slope, 1e-300))
+        max_h = jnp.minimum(max_step, jnp.where(approaching, inf, receding))
+    candidates = jnp.stack([h_sing, h_len, h_lim])
+    event = jnp.argmin(candidates).astype(jnp.int32)
+    h_event = candidates[event]
+    reached = jnp.abs(h_event) <= tol
+    if not square:
+        stalled = rate <= sing_rate
+        event = jnp.where(stalled & ~reached, REASON_SINGULAR, event).astype(jnp.int32)
+        reached = reached | stalled
+    h = jnp.minimum(h_event, max_h)
+
+    adaptive = tableau == "dop853"
+    if adaptive:
+        # The error controller's step bounds the event-limited step (either sign).
+        h = jnp.clip(h, -h_control, h_control)
+    h = jnp.where(reached, 0.0, h)
+    if rolled:  # field(y_new) as the loop's last stage: one copy of the field in the program
+        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, rolled=True, first_slope=f, end_slope=True)
+        f_new = slopes[-1]
+    else:
+        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, first_slope=f)
+        f_new = field(y_new)
+    if adaptive:
+        error = error_norm(h, slopes, f_new, y, y_new, rtol)
+        accept = error <= 1.0
+        factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
+        limited = jnp.abs(h) < 0.999 * h_control
+        grown = jnp.where(accept & limited, h_control, jnp.abs(h) * factor)
+        h_control = jnp.where(reached, h_control, jnp.minimum(grown, max_step))
+    else:
+        accept = jnp.bool_(True)
+    take = accept & ~reached
+    slope_new = jnp.where(h != 0, (f_new[-1] - f[-1]) / jnp.where(h != 0, h, 1.0), slope)
+    keep = lambda new, old: jnp.where(take, new, old)  # noqa: E731
+    count = lane["count"] + jnp.where(reached, 0, 1).astype(jnp.int32)
+    new_lane = dict(
+        lane,
+        y=keep(y_new, y),
+        f=keep(f_new, f),
+        slope=keep(slope_new, slope),
+        arc=lane["arc"] + jnp.where(take, h, 0.0),
+        count=count,
+        h_control=h_control,
+    )
+    finished = reached | (count >= max_steps)
+    reason = jnp.where(reached, event, REASON_STEP_BUDGET)
+    return new_lane, finished, reason
+
+
+def run_queue(start, step, count: int, width: int, real) -> dict:
+    """Integrate the first ``real`` of ``count`` (padded) paths on ``width`` lanes with refill.
+
+    Args:
+        start: ``indices (width,) -> lanes``: the start states of those paths (vectorized).
+        step: ``(indices, lanes) -> (lanes, finished, reason)`` (vectorized `step_lane`).
+        count: the padded batch size (static).
+        width: the lanes (static, at most ``count``).
+        real: the number of real paths (traced): the padding rows are never integrated
+            and their results stay zero.
+
+    Returns:
+        ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``.
+    """
+    index0 = jnp.arange(width, dtype=jnp.int32)
+    lanes0 = start(index0)
+    y0 = lanes0["y"]
+    results0 = {
+        "y": jnp.zeros((count,) + y0.shape[1:], y0.dtype),
+        "arc": jnp.zeros((count,), y0.dtype),
+        "count": jnp.zeros((count,), jnp.int32),
+        "reason": jnp.zeros((count,), jnp.int32),
+    }
+    state0 = (lanes0, index0, index0 < real, jnp.int32(width), results0)
+
+    def cond(state):
+        return jnp.any(state[2])
+
+    def body(state):
+        lane, index, active, next_index, results = state
+        lane, finished, reason = step(index, lane)
+        finished = finished & active
+        target = jnp.where(finished, index, count)  # out of range: dropped
+        written = {"y": lane["y"], "arc": lane["arc"], "count": lane["count"], "reason": reason}
+        results = {k: results[k].at[target].set(written[k], mode="drop") for k in results}
+        rank = jnp.cumsum(finished.astype(jnp.int32)) - 1
+        refill = finished & (next_index + rank < real)
+        index = jnp.where(refill, next_index + rank, index)
+
+        def refilled():  # the start costs two field evaluations: only when a lane takes a path
+            fresh = start(index)
+            return jax.tree_util.tree_map(
+                lambda new, old: jnp.where(refill.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), fresh, lane
+            )
+
+        lane = jax.lax.cond(jnp.any(refill), refilled, lambda: lane)
+        active = jnp.where(finished, refill, active)
+        next_index = next_index + jnp.sum(finished, dtype=jnp.int32)
+        return lane, index, active, next_index, results
+
+    return jax.lax.while_loop(cond, body, state0)[-1]
