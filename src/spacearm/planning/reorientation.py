@@ -39,6 +39,7 @@ import optax
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from ..models.planar.closed_forms import momentum_inertias
+from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.robot import SpatialRobot
 from ..motion import integrate_joint_path
@@ -408,9 +409,14 @@ def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0,
         ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the
         first and last rows equal phi_start[1:].
     """
-    if isinstance(robot, SpatialRobot):
-        return plan_spatial_reorientation(robot, phi_start, delta_phi0, **options)
+    planner = _REORIENTATION_PLANNERS.get(family_of(robot).name)
+    if planner is None:
+        raise ConfigError(f"robot: no reorientation planner for the {family_of(robot).name!r} family")
+    return planner(robot, phi_start, delta_phi0, **options)
+
+
+def _plan_planar_reorientation(robot: PlanarRobot, phi_start, delta_phi0, **options) -> np.ndarray:
     return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
 
 
-# Reaching a target ---------------------------------------------------------------------
+_REORIENTATION_PLANNERS = {"planar": _plan_planar_reorientation, "spatial": plan_spatial_reorientation}
