@@ -112,6 +112,11 @@ def test_joint_limits_are_respected_and_the_cache_is_reused():
     again = planning.plan_reorientation_details(other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG)
     assert reorientation._optimize_loops._cache_size() == cache_size
     assert abs(again.rotation + 12.0 * DEG) < 1e-9
+    # so are new step counts, rates, bounds and weights (traced, not compiled in)
+    settings = planning.LoopSettings(steps=200, learning_rate=0.04, newton_steps=10, travel_weight=0.01, room_fraction=0.9)
+    tuned = planning.plan_reorientation_details(other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG, settings=settings)
+    assert reorientation._optimize_loops._cache_size() == cache_size
+    assert abs(tuned.rotation + 12.0 * DEG) < 1e-9 and not np.array_equal(tuned.loop, again.loop)
 
 
 def test_redundant_arm():

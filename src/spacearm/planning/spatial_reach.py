@@ -229,6 +229,12 @@ def plan_spatial_reach(
         raise ConfigError(f"history_samples: expected at least 2, got {history_samples!r}")
     if int(loop_samples) < 1:
         raise ConfigError(f"loop_samples: expected at least 1, got {loop_samples!r}")
+    vectors = (
+        candidate_rotations(axes=-(-int(rotation_grid) // 4))[: int(rotation_grid)]
+        if rotations is None else np.asarray(rotations, float)
+    )
+    if vectors.ndim != 2 or vectors.shape[1] != 3 or not len(vectors) or not np.all(np.isfinite(vectors)):
+        raise ConfigError(f"rotations: expected (c, 3) finite rotation vectors, got shape {vectors.shape}")
     n = q0.size
     fractions = np.arange(lanes) / (lanes - 1)
 
@@ -271,12 +277,6 @@ def plan_spatial_reach(
     optimizer_ready = ahead.submit(compile_spatial_loop_optimizer, robot, settings)
     ahead.shutdown(wait=False)
 
-    vectors = (
-        candidate_rotations(axes=-(-int(rotation_grid) // 4))[: int(rotation_grid)]
-        if rotations is None else np.asarray(rotations, float)
-    )
-    if vectors.ndim != 2 or vectors.shape[1] != 3 or not len(vectors) or not np.all(np.isfinite(vectors)):
-        raise ConfigError(f"rotations: expected (c, 3) finite rotation vectors, got shape {vectors.shape}")
     vectors = vectors[np.argsort(np.linalg.norm(vectors, axis=1), kind="stable")]
     pick = None
     for first in range(0, len(vectors), lanes):
