@@ -20,7 +20,10 @@ The planner, for candidate repetition counts N (all candidates in one batch, one
    segments are straight, so the whole loop then stays inside the box);
 3. finishes with minimum-norm Gauss-Newton steps on the 3-vector residual
    (dc = -J^T (J J^T + mu 1)^-1 r): 3 equations in 2 H n unknowns, quadratic
-   convergence to rounding from the Adam result;
+   convergence to rounding from the Adam result. Both phases run in one loop whose
+   every step evaluates the residual and its 3-row Jacobian once (the Adam gradient
+   is 2 J^T r plus the cheap terms), so the chain passes and their adjoints are
+   compiled once;
 4. checks each candidate with `spacearm.integrate_joint_path` at 4 times the
    optimizer's Magnus steps (converged to ~1e-14 rad for these loops):
    the rotation error of the repeated loop and the joint limits; returns the valid
@@ -72,8 +75,7 @@ class SpatialLoopSettings:
         travel_weight: weight of the joint travel (rad) against the squared rotation
             error (rad^2) in the Adam phase, per unit of |phi / N|^2.
         limit_margin: the loop keeps this far inside finite joint limits, rad (m).
-        adam_magnus_steps: Magnus steps per segment in the Adam phase (cheap and rough).
-        magnus_steps: Magnus steps per segment in the Gauss-Newton phase (the default of
+        magnus_steps: Magnus steps per segment in the optimizer (the default of
             `spacearm.integrate_joint_path`); the final check uses 4 times as many.
         tolerance: accepted geodesic error of the final rotation, rad.
         seed: random seed of the starting loops.
@@ -89,7 +91,6 @@ class SpatialLoopSettings:
     newton_steps: int = 12
     travel_weight: float = 1e-3
     limit_margin: float = 0.05
-    adam_magnus_steps: int = 1
     magnus_steps: int = DEFAULT_STEPS
     tolerance: float = 1e-9
     seed: int = 0
@@ -142,13 +143,12 @@ class _LoopShape(NamedTuple):
 
     segments: int
     harmonics: int
-    adam_magnus_steps: int
     magnus_steps: int
 
 
 def _split(settings: SpatialLoopSettings) -> tuple[_LoopShape, dict]:
     """Static shape settings, and the rest as host arrays (traced: new values do not recompile)."""
-    shape = _LoopShape(settings.segments, settings.harmonics, settings.adam_magnus_steps, settings.magnus_steps)
+    shape = _LoopShape(settings.segments, settings.harmonics, settings.magnus_steps)
     options = {
         "learning_rate": np.asarray(settings.learning_rate, float),
         "travel_weight": np.asarray(settings.travel_weight, float),
@@ -163,6 +163,10 @@ def _split(settings: SpatialLoopSettings) -> tuple[_LoopShape, dict]:
 def _optimize(robot, q0, targets, coefficients, lower, upper, options, shape: _LoopShape):
     """Adam then Gauss-Newton for every candidate: ``targets (c, 3)`` per-loop rotation vectors.
 
+    One loop of ``adam_steps + newton_steps`` iterations, each with one evaluation of the
+    residual and its 3-row Jacobian (reverse mode): the Adam steps use the gradient
+    2 J^T r / |phi / N|^2 plus the travel and limit terms, the Gauss-Newton steps J and r.
+    The residual's chain passes and their adjoints are compiled once for both phases.
     Step counts, rates and weights are traced (``options``): only ``shape`` is static.
     """
     dtype = q0.dtype
@@ -170,49 +174,42 @@ def _optimize(robot, q0, targets, coefficients, lower, upper, options, shape: _L
     omega_map = functools.partial(bus_rate_map, robot)
     margin = options["limit_margin"].astype(dtype)
     travel_weight = options["travel_weight"].astype(dtype)
+    adam_steps = options["adam_steps"]
+    optimizer = optax.adam(options["learning_rate"].astype(dtype))
+    shape_c = coefficients.shape[1:]
+    eye = jnp.eye(3, dtype=dtype)
 
     def points(c):
-        return q0 + basis @ c  # (segments + 1, n)
+        return q0 + basis @ c.reshape(shape_c)  # (segments + 1, n)
 
-    def residual(c, target, steps=shape.magnus_steps):
-        D = path_rotation(omega_map, points(c), steps, DEFAULT_ORDER)
-        return log(jnp.swapaxes(expm(target), -1, -2) @ D)
-
-    def loss(c, target):
+    def penalty(c):
         p = points(c)
-        scale = jnp.sum(target * target) + 1e-12
-        r = residual(c, target, shape.adam_magnus_steps)
         over = jnp.maximum(p - (upper - margin), 0.0) + jnp.maximum((lower + margin) - p, 0.0)
-        return jnp.sum(r * r) / scale + travel_weight * _travel(p) + 100.0 * jnp.sum(over * over)
-
-    optimizer = optax.adam(options["learning_rate"].astype(dtype))
-
-    def adam(c, target):
-        def step(_, carry):
-            c, state = carry
-            g = jax.grad(loss)(c, target)
-            updates, state = optimizer.update(g, state, c)
-            return optax.apply_updates(c, updates), state
-
-        c, _ = jax.lax.fori_loop(0, options["adam_steps"], step, (c, optimizer.init(c)))
-        return c
-
-    def newton(c, target):
-        shape_c = c.shape
-
-        def step(_, c):
-            flat_residual = lambda x: residual(x.reshape(shape_c), target)  # noqa: E731
-            r = flat_residual(c.reshape(-1))
-            J = jax.jacrev(flat_residual)(c.reshape(-1))  # (3, 2 H n)
-            mu = 1e-12 * jnp.trace(J @ J.T)
-            dc = J.T @ jnp.linalg.solve(J @ J.T + mu * jnp.eye(3, dtype=J.dtype), r)
-            return c - dc.reshape(shape_c)
-
-        return jax.lax.fori_loop(0, options["newton_steps"], step, c)
+        return travel_weight * _travel(p) + 100.0 * jnp.sum(over * over)
 
     def one(c, target):
-        c = newton(adam(c, target), target)
-        return c, points(c)
+        inverse = jnp.swapaxes(expm(target), -1, -2)
+        scale = jnp.sum(target * target) + 1e-12
+
+        def residual(c):
+            return log(inverse @ path_rotation(omega_map, points(c), shape.magnus_steps, DEFAULT_ORDER))
+
+        def step(k, carry):
+            c, state = carry
+            r, pullback = jax.vjp(residual, c)
+            J = jax.vmap(pullback)(eye)[0]  # (3, 2 H n)
+            g = 2.0 * (J.T @ r) / scale + jax.grad(penalty)(c)
+            updates, moved = optimizer.update(g, state, c)
+            JJ = J @ J.T
+            gauss_newton = c - J.T @ jnp.linalg.solve(JJ + 1e-12 * jnp.trace(JJ) * eye, r)
+            adam = k < adam_steps
+            c = jnp.where(adam, optax.apply_updates(c, updates), gauss_newton)
+            state = jax.tree_util.tree_map(lambda a, b: jnp.where(adam, a, b), moved, state)
+            return c, state
+
+        c = c.reshape(-1)
+        c, _ = jax.lax.fori_loop(0, adam_steps + options["newton_steps"], step, (c, optimizer.init(c)))
+        return c.reshape(shape_c), points(c)
 
     return jax.vmap(one)(coefficients, targets)
 
