@@ -112,6 +112,11 @@ def test_joint_limits_are_respected_and_the_cache_is_reused():
     again = planning.plan_reorientation_details(other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG)
     assert reorientation._optimize_loops._cache_size() == cache_size
     assert abs(again.rotation + 12.0 * DEG) < 1e-9
+    # so are new step counts, rates, bounds and weights (traced, not compiled in)
+    settings = planning.LoopSettings(steps=200, learning_rate=0.04, newton_steps=10, travel_weight=0.01, room_fraction=0.9)
+    tuned = planning.plan_reorientation_details(other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG, settings=settings)
+    assert reorientation._optimize_loops._cache_size() == cache_size
+    assert abs(tuned.rotation + 12.0 * DEG) < 1e-9 and not np.array_equal(tuned.loop, again.loop)
 
 
 def test_redundant_arm():
@@ -235,6 +240,34 @@ def test_target_outside_the_maximum_reachable_space_is_refused():
         sa.plan_reach(robot, PHI_START, [1.0, 1.0], modes=("teleport",))
 
 
+def test_plan_reach_honours_every_argument_for_planar_robots():
+    """Each argument of `sa.plan_reach` changes the plan or is refused by name."""
+    robot = sa.umetani1990()
+    point_b, point_c = np.array([2.0, 1.0]), np.array([0.0, -3.0])
+    # history_samples: the straight leg's samples (plus the start)
+    assert sa.plan_reach(robot, PHI_START, point_b, history_samples=11).postures.shape == (11, 3)
+    # tolerance: the straight path ends ~1e-12 m from B; a tolerance below that refuses it
+    with pytest.raises(sa.ConfigError, match="tolerance"):
+        sa.plan_reach(robot, PHI_START, point_b, tolerance=1e-300)
+    # modes and rotation_grid: with one grid rotation (zero) C is not reachable by turning
+    with pytest.raises(sa.ConfigError, match="not reachable"):
+        sa.plan_reach(robot, PHI_START, point_c, rotation_grid=1, modes=("straight", "reorient"))
+    # settings: the loop of the plan has the settings' samples per pass
+    settings = planning.LoopSettings(samples_per_loop=40)
+    plan = sa.plan_reach(robot, PHI_START, point_c, settings=settings)
+    assert plan.mode == "reorient" and len(plan.joint_waypoints) == 40 * plan.loops + 1
+    for options, message in [
+        ({"settings": planning.SpatialLoopSettings()}, "settings: expected LoopSettings"),
+        ({"base_rotation": np.eye(3)}, "base_rotation"),
+        ({"rotations": np.zeros((1, 3))}, "rotations"),
+        ({"rotation_grid": 0}, "rotation_grid"),
+        ({"history_samples": 1}, "history_samples"),
+        ({"tolerance": 0.0}, "tolerance"),
+    ]:
+        with pytest.raises(sa.ConfigError, match=message):
+            sa.plan_reach(robot, PHI_START, point_b, **options)
+
+
 def test_reach_command_line(tmp_path):
     from spacearm.cli import main
 
@@ -248,7 +281,10 @@ def test_reach_command_line(tmp_path):
     assert main(["reach", str(robot_file), "--from", "0,-60,120", "--to", "2,1", "--out", str(out)]) == 0
     assert (out / "reach.png").stat().st_size > 0
     saved = np.load(out / "reach.npz")
-    np.testing.assert_allclose(saved["tips_m"][-1], [2.0, 1.0], atol=1e-6)
-    np.testing.assert_allclose(saved["postures_rad"][0], PHI_START, atol=1e-15)  # --from is in degrees
+    np.testing.assert_allclose(saved["tip"][-1], [2.0, 1.0], atol=1e-6)
+    np.testing.assert_allclose(saved["phi"][0], PHI_START, atol=1e-15)  # --from is in degrees
+    k = saved["phi"].shape[0]
+    assert k > 2 and saved["phi"].shape == (k, 3) and saved["tip"].shape == (k, 2) and saved["joints"].shape == (k, 2)
+    np.testing.assert_array_equal(saved["joints"], saved["phi"][:, 1:])
     assert main(["reach", str(robot_file), "--from", "0,-60,120", "--to", "9,0", "--out", str(out)]) == 2
     assert main(["reach", str(robot_file), "--from", "0,-60", "--to", "2,1", "--out", str(out)]) == 2

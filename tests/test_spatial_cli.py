@@ -1,10 +1,15 @@
 """`spacearm reach` and `sa.straight_tip_path` for spatial robot files."""
 
+import re
+
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import spacearm as sa
 from spacearm.cli import main
+
+from .conftest import count_compiles
 
 ARM = "configs/arm3dof-100kg.yaml"
 Q_DEG = np.array([10.0, 40.0, -70.0])
@@ -35,8 +40,30 @@ def test_reach_command_plans_a_spatial_target(arm, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "mode           straight" in out
     saved = np.load(tmp_path / "reach.npz")
-    assert np.linalg.norm(saved["end_tip_m"] - target) < 1e-9
+    # the whole history: joints (k, n), base_rotation (k, 3, 3), tip (k, 3)
+    k = saved["joints"].shape[0]
+    assert k > 2 and saved["joints"].shape == (k, 3)
+    assert saved["base_rotation"].shape == (k, 3, 3) and saved["tip"].shape == (k, 3)
+    np.testing.assert_allclose(saved["joints"][0], q, atol=1e-15)
+    np.testing.assert_allclose(saved["base_rotation"][0], np.eye(3), atol=1e-15)
+    assert np.linalg.norm(saved["tip"][-1] - target) < 1e-9
+    # the summary's bus rotation is the file's, start to end (scipy's rotation angle)
+    printed = float(re.search(r"bus rotation\s+([0-9.]+) deg", out).group(1))
+    R = saved["base_rotation"]
+    turn = np.degrees(Rotation.from_matrix(R[0].T @ R[-1]).magnitude())
+    assert turn > 1e-3 and abs(printed - turn) < 1e-6
     assert (tmp_path / "reach.png").stat().st_size > 0
+
+
+def test_reach_command_refuses_a_target_beyond_the_reachable_radius(tmp_path, capsys):
+    """Refused before planning (no program compiled; the UR5 answered after 2 minutes before)."""
+    args = ["reach", "configs/ur5-smallsat.yaml", "--from", "0,-60,90,-30,90,0", "--to", "5,0,0", "--out", str(tmp_path)]
+    with count_compiles() as compiles:
+        assert main(args) == 2
+    assert sum(compiles.values()) == 0, dict(compiles)
+    err = capsys.readouterr().err
+    assert "5 m from the system centroid, beyond the Maximum Reachable radius 2.2269 m" in err
+    assert not (tmp_path / "reach.npz").exists()
 
 
 @pytest.mark.parametrize(

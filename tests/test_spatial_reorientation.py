@@ -6,9 +6,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import dataclasses
+
 import spacearm as sa
 from spacearm.motion import attitude
 from spacearm.planning import SpatialLoopSettings, plan_spatial_reorientation_details
+
+from .conftest import count_compiles
 
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 FAST = SpatialLoopSettings(segments=16, loop_counts=(1, 2, 4), seeds=1, adam_steps=40)
@@ -49,3 +53,19 @@ def test_public_dispatch_and_limits(arm3):
     assert float(attitude.geodesic_distance(target, R_end)) < 1e-9
     with pytest.raises(sa.ConfigError, match="rotation"):
         sa.plan_reorientation(arm3, q0, np.diag([1.0, 1.0, -1.0]))
+
+
+@pytest.mark.slow  # compiles the planner: about a minute on 2 shared cores
+def test_rates_weights_and_step_counts_are_traced_not_compiled(arm3):
+    """Only the shape settings key the optimizer's program: new step counts, rates,
+    weights, margins and tolerances reuse it (and still change the result)."""
+    q0 = np.array([0.2, 0.6, -1.1])
+    target = np.array([0.02, -0.03, 0.04])
+    first = plan_spatial_reorientation_details(arm3, q0, target, FAST)
+    other = dataclasses.replace(FAST, adam_steps=25, newton_steps=9, learning_rate=0.03, travel_weight=2e-3,
+                                limit_margin=0.04, tolerance=1e-8)
+    with count_compiles() as compiles:
+        second = plan_spatial_reorientation_details(arm3, q0, target, other)
+    assert compiles["_optimize"] == 0, dict(compiles)
+    assert second.rotation_error < 1e-8
+    assert not np.array_equal(first.loop, second.loop)

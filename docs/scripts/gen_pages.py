@@ -54,6 +54,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.models.spatial.schema", "Models", "the spatial robot file (`arm:` key)"),
     ("spacearm.models.spatial.primitives", "Models", "the spatial primitives: one pass over the chain per posture"),
     ("spacearm.models.spatial.family", "Models", "the spatial family and its fast paths"),
+    ("spacearm.models.spatial.shell", "Models", "the virtual manipulator's shell: radii between which every tip lies"),
     ("spacearm.models.spatial.metrics", "Models", "spatial-only kernels: rotational, full and dynamic manipulability, H_m, H*, C(q)"),
     ("spacearm.models.spatial.fields", "Models", "named spatial design numbers (mount, bus, arm scale factors, link masses)"),
     ("spacearm.kinematics", "Kinematics", "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives"),

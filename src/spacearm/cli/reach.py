@@ -34,8 +34,9 @@ def register(subparsers) -> None:
             "Plan a motion that brings the tip to an inertial target (Umetani & Yoshida 1990, sec. 3.2, "
             "points B and C): a straight tip path when the target is in the current Straight-Path "
             "workspace, otherwise a cyclic joint maneuver that turns the base first. Writes reach.png "
-            "(and reach.npz with the whole history) into --out. Exit 2 for a target outside the "
-            "Maximum Reachable space."
+            "and reach.npz into --out: the whole history, joints (k, n), tip (k, 2 or 3), phase (k,) and "
+            "phi (k, n+1) planar or base_rotation (k, 3, 3) spatial. Exit 2 for a target outside the "
+            "Maximum Reachable space (the radius is named)."
         ),
     )
     parser.add_argument("robot", help="robot YAML file, e.g. configs/umetani1990.yaml or configs/ur5-smallsat.yaml")
@@ -108,9 +109,12 @@ def _run_planar(args: argparse.Namespace, robot) -> int:
         lines.append(f"animation      {animate_reach(robot, plan, out / 'reach.gif')}")
     write_npz(
         out / "reach.npz",
+        joints=plan.postures[:, 1:],
+        phi=plan.postures,
+        tip=plan.tips,
+        phase=plan.phase,
         postures_rad=plan.postures,
         tips_m=plan.tips,
-        phase=plan.phase,
         joint_waypoints_rad=plan.joint_waypoints,
         target_m=plan.target,
     )
@@ -123,7 +127,6 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
     from ..figures.spatial import draw_spatial_reach
     from ..io import write_npz
     from ..models.spatial.urdf import rpy_matrix
-    from ..motion.attitude import geodesic_distance
     from ..planning import plan_reach
 
     n = robot.n_joints
@@ -140,12 +143,12 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
     plan = plan_reach(robot, q, target, base_rotation=R0)
     out = Path(args.out)
-    figure_path = draw_spatial_reach(robot, q, plan, out / "reach.png", base_rotation=R0)
-    turn = float(geodesic_distance(np.asarray(plan.bus_rotation), np.eye(3)))
+    figure_path = draw_spatial_reach(robot, plan, out / "reach.png")
+    loop = f"by {plan.loops} pass(es) of a loop, then" if plan.loops else "along"
     lines = [
         f"mode           {plan.mode}",
         f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
-        f"bus rotation   {np.degrees(turn):.6f} deg by a loop of {len(plan.loop_waypoints) - 1} segment(s)",
+        f"bus rotation   {np.degrees(plan.bus_turn):.6f} deg from start to end ({loop} the straight path)",
         f"straight path  {plan.straight_length:.6f} m",
         "end joints     " + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
@@ -154,14 +157,13 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
     ]
     write_npz(
         out / "reach.npz",
+        joints=plan.joints,
+        base_rotation=plan.base_rotation,
+        tip=plan.tips,
+        phase=plan.phase,
         loop_waypoints=plan.loop_waypoints,
-        bus_rotation=plan.bus_rotation,
-        end_joints=plan.end_joints,
-        end_rotation=plan.end_rotation,
-        end_tip_m=plan.end_tip,
+        loop_rotation=plan.loop_rotation,
         target_m=target,
-        start_joints=q,
-        start_rotation=R0,
     )
     _write_replay(args, robot, out, lines)
     print("\n".join(lines))

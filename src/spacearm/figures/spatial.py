@@ -24,6 +24,7 @@ from ..models import load_robot
 from ..models.spatial import primitives
 from ..motion.attitude import log, spatial_joint_path_history
 from ..motion.spatial_paths import spatial_straight_tip_path
+from ..planning.spatial_reach import PHASE_LOOP, PHASE_STRAIGHT
 from . import figure
 
 CONFIG = Path(__file__).resolve().parents[3] / "configs" / "ur5-smallsat.yaml"
@@ -187,47 +188,34 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     return [path]
 
 
-def draw_spatial_reach(robot, q_start, plan, path, *, base_rotation=None, samples: int = 16) -> Path:
-    """Draw a `SpatialReachPlan` in 3-D (for ``spacearm reach``).
+def draw_spatial_reach(robot, plan, path) -> Path:
+    """Draw a `SpatialReachPlan` in 3-D (for ``spacearm reach``), from its history.
 
     The arm at the start, after the bus-turning loop (joints back at q0, bus turned) and
-    at the end; the tip along the loop and along the final straight path (sampled by
-    re-running the straight path to ``samples`` intermediate lengths, one batch).
+    at the end; the tip along the loop and along the final straight path.
 
     Args:
-        q_start: ``(n,)`` joints at the start. plan: the plan. path: the PNG to write.
-        base_rotation: ``(3, 3)`` bus attitude at the start (default identity).
+        robot: the design. plan: the plan. path: the PNG to write.
     """
-    R0 = np.eye(3) if base_rotation is None else np.asarray(base_rotation, float)
-    q0 = np.asarray(q_start, float)
+    joints, rotations, tips = (np.asarray(x, float) for x in (plan.joints, plan.base_rotation, plan.tips))
+    loop_rows = np.flatnonzero(plan.phase == PHASE_LOOP)
+    straight_rows = np.flatnonzero(plan.phase == PHASE_STRAIGHT)
     fig = plt.figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(projection="3d")
-    points = []
-    _draw(ax, robot, q0, R0, "C0", label="start")
-    points.append(np.vstack(arm_points(robot, q0, R0)))
-    R_after = R0
-    if len(plan.loop_waypoints) > 1:
-        R_loop, q_loop = spatial_joint_path_history(robot, q0, plan.loop_waypoints, base_rotation=R0, samples_per_segment=4, steps=1)
-        R_loop, q_loop = np.asarray(R_loop), np.asarray(q_loop)
-        loop_tips = np.array([arm_points(robot, q, R)[0][-1] for q, R in zip(q_loop, R_loop)])
-        ax.plot(*loop_tips.T, color="C2", lw=0.8, label="tip along the loop")
-        R_after = R_loop[-1]
-        _draw(ax, robot, q0, R_after, "C2", alpha=0.7, label="after the loop")
-        points += [loop_tips, np.vstack(arm_points(robot, q0, R_after))]
-    start_tip = arm_points(robot, q0, R_after)[0][-1]
-    offset = np.asarray(plan.end_tip) - start_tip
-    lengths = np.linspace(0.0, float(plan.straight_length), samples)
-    direction = offset / max(float(np.linalg.norm(offset)), 1e-300)
-    sampled = spatial_straight_tip_path(
-        robot, np.broadcast_to(q0, (samples, q0.size)), np.broadcast_to(direction, (samples, 3)), lengths,
-        base_rotation=np.broadcast_to(R_after, (samples, 3, 3)),
+    _draw(ax, robot, joints[0], rotations[0], "C0", label="start")
+    points = [np.vstack(arm_points(robot, joints[0], rotations[0])), tips]
+    if loop_rows.size:
+        ax.plot(*tips[loop_rows].T, color="C2", lw=0.8, label=f"tip along the loop ({plan.loops}x)")
+        after = loop_rows[-1]
+        _draw(ax, robot, joints[after], rotations[after], "C2", alpha=0.7, label="after the loop")
+        points.append(np.vstack(arm_points(robot, joints[after], rotations[after])))
+    ax.plot(*tips[straight_rows].T, "k-", lw=1.5, label="straight tip path")
+    _draw(ax, robot, joints[-1], rotations[-1], "C3", label="end")
+    points.append(np.vstack(arm_points(robot, joints[-1], rotations[-1])))
+    ax.scatter(*np.asarray(plan.target), color="C3", marker="x", s=40, label="target")
+    ax.set_title(
+        f"reach ({plan.mode}): bus turned {np.degrees(plan.bus_turn):.2f} deg, tip error {plan.error:.1e} m", fontsize=10
     )
-    tips = np.asarray(sampled.end_tip)
-    ax.plot(*tips.T, "k-", lw=1.5, label="straight tip path")
-    _draw(ax, robot, np.asarray(plan.end_joints), np.asarray(plan.end_rotation), "C3", label="end")
-    points += [tips, np.vstack(arm_points(robot, plan.end_joints, plan.end_rotation))]
-    ax.scatter(*np.asarray(plan.end_tip), color="C3", marker="x", s=40)
-    ax.set_title(f"reach ({plan.mode}): tip error {plan.error:.1e} m", fontsize=10)
     _equal(ax, np.vstack(points))
     ax.legend(fontsize=8, loc="upper left")
     written = save_figure(fig, Path(path), dpi=130, bbox_inches="tight")

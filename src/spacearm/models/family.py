@@ -83,6 +83,18 @@ class RobotFamily:
         """``(m, n)`` Jacobian of the same arm with its base held fixed."""
         raise NotImplementedError
 
+    # Planning hooks (spacearm.planning) ---------------------------------------------------
+
+    def tip_shell(self, robot) -> tuple[float, float]:
+        """Host-side ``(inner, outer)`` radii about the system centroid between which every
+        tip position lies, whatever the joints and the base attitude, m (one design).
+
+        The virtual manipulator's bound (Vafa & Dubowsky 1990): the outer radius is the
+        sum of the virtual link lengths (the planar K_0 + .. + K_n of eq. 1, exact there).
+        A target outside it is unreachable; computed without compiling a program.
+        """
+        raise NotImplementedError
+
 
     # The base attitude and the integrator state -----------------------------------------
 

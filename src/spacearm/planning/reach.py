@@ -28,8 +28,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from ..analysis import maximum_reachable_inner_radius, maximum_reachable_radius
 from ..kinematics import tip_position
+from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.robot import SpatialRobot
 from ..motion import (
@@ -46,7 +46,8 @@ from .reorientation import (
     compile_loop_optimizer,
     plan_reorientation_details,
 )
-from .spatial_reach import plan_spatial_reach
+from .spatial_reach import SpatialReachPlan, plan_spatial_reach
+from .spatial_reorientation import SpatialLoopSettings
 
 __all__ = ["ReachPlan", "plan_reach", "reachable_bounds", "MODE_STRAIGHT", "MODE_REORIENT", "MODE_REPOSITION",
            "PHASE_REPOSITION", "PHASE_LOOP", "PHASE_STRAIGHT"]
@@ -103,11 +104,11 @@ def reachable_bounds(robot: PlanarRobot) -> tuple[float, float]:
     """Inner and outer radius of the Maximum Reachable space (Area 3) about the system centroid, m.
 
     Outer K0 + .. + Kn (sec. 3.1 (3-a)); inner max(0, 2 max_k K_k - sum_k K_k), the hole
-    when one coefficient outweighs the rest (both from `spacearm.analysis`). Joint
-    limits are not taken into account here (they can only shrink the space).
+    when one coefficient outweighs the rest (the family's ``tip_shell``). Joint limits
+    are not taken into account here (they can only shrink the space).
     """
 
-    return float(maximum_reachable_inner_radius(robot)), float(maximum_reachable_radius(robot))
+    return family_of(robot).tip_shell(robot)
 
 
 def _rotate(points: np.ndarray, angle) -> np.ndarray:
@@ -206,6 +207,77 @@ def _reposition_joints(robot: PlanarRobot, q0: np.ndarray, radius: float) -> np.
 
 def plan_reach(
     robot: PlanarRobot | SpatialRobot,
+    start,
+    target,
+    *,
+    rotation_grid: int | None = None,
+    history_samples: int | None = None,
+    tolerance: float | None = None,
+    settings: LoopSettings | SpatialLoopSettings | None = None,
+    modes: tuple[str, ...] | None = None,
+    **family_options,
+) -> ReachPlan | SpatialReachPlan:
+    """Plan how the tip reaches an inertial target from a posture (sec. 3.2, points B and C).
+
+    One entry point for every robot family; the planner is the family's (planar below;
+    spatial robots: `plan_spatial_reach`, a `SpatialReachPlan`, with the keyword options
+    ``base_rotation``, ``rotations`` and ``loop_samples``). Every argument is honoured
+    for every family or refused with a `ConfigError` naming it.
+
+    1. A target outside the Maximum Reachable space (the family's
+       `spacearm.models.family.RobotFamily.tip_shell`) is refused at once.
+    2. Point B: if the straight tip path towards the target (J* inverted, base
+       following eq. 5) gets there before a singularity of J* or a joint limit, that
+       path is the plan.
+    3. Point C: otherwise, turn the base first. A base rotation Delta turns the
+       Straight-Path workspace about the system centroid, so the straight path from the
+       current posture towards R(-Delta) target tells, for every Delta of a grid in one
+       batched call, whether the target is reachable after the maneuver. The smallest
+       such Delta (with margin) is planned with `plan_reorientation_details`, then
+       the straight path runs from the posture after the loop.
+    4. Planar: when no rotation of the current workspace covers the target's distance
+       from the centroid, the joints first move straight in joint space to the nearest
+       posture whose tip lies at that distance, and the loop turns the tip onto the target.
+
+    Args:
+        robot: one design.
+        start: planar ``(n+1,)`` start posture [phi0, phi1..phin], rad; spatial ``(n,)`` joints.
+        target: planar ``(2,)``, spatial ``(3,)`` inertial target (origin at the system centroid), m.
+        rotation_grid: number of base rotations tried in step 3 (planar default 180 angles;
+            spatial default 256 rotation vectors).
+        history_samples: samples of the straight path in the history (planar default 101,
+            spatial 32).
+        tolerance: accepted distance of the final tip from the target, m (default 1e-6
+            in float64, 1e-3 in float32).
+        settings: the reorientation loop's `LoopSettings` (planar) or
+            `SpatialLoopSettings` (spatial).
+        modes: the strategies allowed, tried in the order above ("straight",
+            "reorient", and for planar robots "reposition"); e.g. ``("reposition",)``
+            forces the third.
+
+    Returns:
+        a `ReachPlan` (planar) or `SpatialReachPlan` (spatial).
+
+    Raises:
+        ConfigError: bad input; the target outside the Maximum Reachable space; or no
+            plan found.
+    """
+    family = family_of(robot).name
+    planner = _REACH_PLANNERS.get(family)
+    if planner is None:
+        raise ConfigError(f"robot: no reach planner for the {family!r} family")
+    options = {
+        "rotation_grid": rotation_grid,
+        "history_samples": history_samples,
+        "tolerance": tolerance,
+        "settings": settings,
+        "modes": modes,
+    }
+    return planner(robot, start, target, **{k: v for k, v in options.items() if v is not None}, **family_options)
+
+
+def _plan_planar_reach(
+    robot: PlanarRobot,
     phi_start,
     target,
     *,
@@ -216,54 +288,27 @@ def plan_reach(
     modes: tuple[str, ...] = (MODE_STRAIGHT, MODE_REORIENT, MODE_REPOSITION),
     **spatial_options,
 ) -> ReachPlan:
-    """Plan how the tip reaches an inertial target from a posture (sec. 3.2, points B and C).
-
-    Spatial robots: ``plan_reach(robot, q_start, target_xyz, base_rotation=R0)`` returns a
-    `SpatialReachPlan`
-    (`plan_spatial_reach`; its keyword options
-    pass through). The rest of this docstring is the planar case.
-
-    1. Point B: if the straight tip path towards the target (J* inverted, base
-       following eq. 5) gets there before a singularity of J* or a joint limit, that
-       path is the plan.
-    2. Point C: otherwise, turn the base first. A base rotation Delta turns the
-       Straight-Path workspace about the system centroid, so the straight path from the
-       current posture towards R(-Delta) target tells, for every Delta of a grid in one
-       batched call, whether the target is reachable after the maneuver. The smallest
-       such Delta (with margin) is planned with `plan_reorientation_details`, then
-       the straight path runs from the posture after the loop.
-    3. When no rotation of the current workspace covers the target's distance from the
-       centroid, the joints first move straight in joint space to the nearest posture
-       whose tip lies at that distance, and the loop turns the tip onto the target.
-
-    Args:
-        robot: one design.
-        phi_start: ``(n+1,)`` start posture, rad.
-        target: ``(2,)`` inertial target (origin at the system centroid), m.
-        rotation_grid: number of base rotations tried in step 2.
-        history_samples: samples of the straight path in the history.
-        tolerance: accepted distance of the final tip from the target, m (default 1e-6
-            in float64, 1e-3 in float32).
-        settings: `LoopSettings` for the reorientation loop.
-        modes: the strategies allowed, tried in the order above ("straight",
-            "reorient", "reposition"); e.g. ``("reposition",)`` forces the third.
-
-    Returns:
-        a `ReachPlan`.
-
-    Raises:
-        ConfigError: bad input; the target outside the Maximum Reachable space (radius
-            K0 + .. + Kn about the system centroid); or no plan found.
-    """
-    if isinstance(robot, SpatialRobot):  # 3-D: straight, or turn the bus first (planning/spatial_reach.py)
-        return plan_spatial_reach(robot, phi_start, target, **spatial_options)
+    """The planar reach planner (`plan_reach`)."""
+    if spatial_options:
+        name = sorted(spatial_options)[0]
+        raise ConfigError(
+            f"{name}: not an option of planar reach plans (a planar posture starts with its base attitude phi0)"
+        )
+    if not isinstance(settings, LoopSettings):
+        raise ConfigError(f"settings: expected LoopSettings for a planar robot, got {type(settings).__name__}")
+    if int(rotation_grid) < 1:
+        raise ConfigError(f"rotation_grid: expected a positive number of base rotations, got {rotation_grid!r}")
+    if int(history_samples) < 2:
+        raise ConfigError(f"history_samples: expected at least 2, got {history_samples!r}")
+    if tolerance is not None and not float(tolerance) > 0:
+        raise ConfigError(f"tolerance: expected a positive distance in m, got {tolerance!r}")
     phi = check_posture(robot, phi_start)
     if tolerance is None:
         tolerance = 1e-6 if jax.config.jax_enable_x64 else 1e-3
     target = np.asarray(target, dtype=float)
     if target.shape != (2,) or not np.all(np.isfinite(target)):
         raise ConfigError(f"target: expected two finite numbers (x, y) in m, got {np.asarray(target).tolist()!r}")
-    inner, outer = reachable_bounds(robot)
+    inner, outer = family_of(robot).tip_shell(robot)
     distance_from_centroid = float(np.linalg.norm(target))
     if distance_from_centroid > outer * (1.0 - 1e-12) or distance_from_centroid < inner * (1.0 + 1e-12):
         hole = f", outside its hole of radius {inner:.6g} m" if inner > 0 else ""
@@ -389,4 +434,4 @@ def plan_reach(
     return finish(MODE_REPOSITION, waypoints, parts, postures[-1], delta, loop.loops)
 
 
-# Command line --------------------------------------------------------------------------
+_REACH_PLANNERS = {"planar": _plan_planar_reach, "spatial": plan_spatial_reach}

@@ -30,6 +30,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -39,6 +40,7 @@ import optax
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from ..models.planar.closed_forms import momentum_inertias
+from ..models.family import family_of
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.robot import SpatialRobot
 from ..motion import integrate_joint_path
@@ -50,7 +52,7 @@ __all__ = ["LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reor
 
 @dataclasses.dataclass(frozen=True)
 class LoopSettings:
-    """Static settings of the reorientation planner (hashable: part of the compile key).
+    """Settings of the reorientation planner (only the counts that fix shapes are compiled in).
 
     Attributes:
         samples_per_loop: waypoints per loop (straight joint-space segments between them).
@@ -113,7 +115,7 @@ def rotation_curl(robot: PlanarRobot, joint_angles: jax.Array) -> jax.Array:
 # Loop parametrization ------------------------------------------------------------------
 
 
-def _loop_basis(settings: LoopSettings) -> np.ndarray:
+def _loop_basis(settings) -> np.ndarray:
     """``(samples_per_loop + 1, 2 M)``: (1 - cos 2 pi m s), sin 2 pi m s at s = j / k.
 
     Every basis function is zero at s = 0 and s = 1, so q(s) = q0 + basis @ C is a
@@ -142,9 +144,30 @@ def _loop_rotation(robot: PlanarRobot, q0: jax.Array, points: jax.Array) -> jax.
     return integrate_joint_path(robot, phi_start, points, nodes=10, pieces=1)[0]
 
 
+class _LoopShape(NamedTuple):
+    """The settings that fix the optimizer's shapes (the only static part of its compile key)."""
+
+    samples_per_loop: int
+    harmonics: int
+    loop_counts: tuple[int, ...]
+    directions: int
+
+
+def _split(settings: LoopSettings) -> tuple[_LoopShape, dict]:
+    """Static shape settings, and the rest as host arrays (traced: new values do not recompile)."""
+    shape = _LoopShape(settings.samples_per_loop, settings.harmonics, tuple(settings.loop_counts), settings.directions)
+    floats = ("learning_rate", "max_excursion", "limit_margin", "room_fraction", "travel_weight")
+    options = {name: np.asarray(getattr(settings, name), float) for name in floats}
+    options.update(steps=np.asarray(settings.steps, np.int32), newton_steps=np.asarray(settings.newton_steps, np.int32))
+    return shape, options
+
+
 @functools.partial(jax.jit, static_argnames=("settings",))
-def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, settings: LoopSettings):
+def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, options: dict, settings: _LoopShape):
     """Optimize one loop per (repetition count, centre direction) candidate.
+
+    ``settings`` holds the shape settings (static); ``options`` the step counts, rate,
+    bounds and weights (traced: new values do not recompile).
 
     Returns a dict of per-candidate arrays (leading axis: candidates): ``points``
     ``(C, k+1, n)``, ``loops`` ``(C,)``, ``rotation`` (total, rad), ``travel`` (total, rad),
@@ -152,6 +175,7 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
     """
     n = q0.shape[0]
     dtype = q0.dtype
+    opt = {name: value.astype(dtype) if name not in ("steps", "newton_steps") else value for name, value in options.items()}
     basis = jnp.asarray(_loop_basis(settings), dtype)
     lower = jnp.asarray(robot.joint_lower, dtype)
     upper = jnp.asarray(robot.joint_upper, dtype)
@@ -171,7 +195,7 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
     counts_j = jnp.asarray(counts, dtype)
     magnitude = jnp.maximum(jnp.abs(delta), 1e-9)
     radius = jnp.sqrt(magnitude / (counts_j * jnp.pi * sigma))
-    radius = jnp.minimum(radius, 0.5 * settings.max_excursion)
+    radius = jnp.minimum(radius, 0.5 * opt["max_excursion"])
 
     def initial(alpha, r):
         c = jnp.cos(alpha) * e1 + jnp.sin(alpha) * e2
@@ -187,8 +211,8 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
     # joint limits, shrunk by `room_fraction` so the final Newton scaling has room. The box
     # contains q0 and is convex, so the loop q0 + c x(s) stays inside for every scale c
     # up to largest_scale(x).
-    room_up = settings.room_fraction * jnp.clip(upper - settings.limit_margin - q0, 0.0, settings.max_excursion)
-    room_down = settings.room_fraction * jnp.clip(q0 - (lower + settings.limit_margin), 0.0, settings.max_excursion)
+    room_up = opt["room_fraction"] * jnp.clip(upper - opt["limit_margin"] - q0, 0.0, opt["max_excursion"])
+    room_down = opt["room_fraction"] * jnp.clip(q0 - (lower + opt["limit_margin"]), 0.0, opt["max_excursion"])
 
     def largest_scale(offsets):
         ratio_up = jnp.where(offsets > 0, room_up / jnp.where(offsets > 0, offsets, 1.0), jnp.inf)
@@ -204,9 +228,13 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
         rotation = count * _loop_rotation(robot, q0, points)
         rot_err = (rotation - delta) / magnitude
         travel = count * _path_length(points) / (2.0 * jnp.pi * jnp.sqrt(magnitude / (jnp.pi * sigma)))
-        return rot_err**2 + settings.travel_weight * travel**2
+        return rot_err**2 + opt["travel_weight"] * travel**2
 
-    schedule = optax.cosine_decay_schedule(settings.learning_rate, settings.steps, alpha=0.02)
+    def schedule(count):  # optax.cosine_decay_schedule(learning_rate, steps, alpha=0.02), traced
+        decay_steps = jnp.maximum(options["steps"], 1).astype(dtype)
+        fraction = jnp.minimum(count.astype(dtype), decay_steps) / decay_steps
+        return opt["learning_rate"] * (0.98 * 0.5 * (1.0 + jnp.cos(jnp.pi * fraction)) + 0.02)
+
     optimizer = optax.adam(schedule)
 
     def solve(alpha, r, count):
@@ -214,24 +242,24 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, setting
         state = optimizer.init(params)
         grad_fn = jax.grad(objective)
 
-        def step(carry, _):
+        def step(_, carry):
             params, state = carry
             grad = grad_fn(params, r, count)
             updates, state = optimizer.update(grad, state, params)
-            return (project(optax.apply_updates(params, updates), r), state), None
+            return project(optax.apply_updates(params, updates), r), state
 
-        (params, _), _ = jax.lax.scan(step, (params, state), None, length=settings.steps)
+        params, _ = jax.lax.fori_loop(0, options["steps"], step, (params, state))
 
         # Newton on the scale factor c of the loop about q0: count * R(c) = delta.
         def rotation_at(scale):
             return count * _loop_rotation(robot, q0, points_of(params, r, scale))
 
-        def newton(scale, _):
+        def newton(_, scale):
             value, slope = jax.value_and_grad(rotation_at)(scale)
             safe = jnp.where(jnp.abs(slope) > 1e-300, slope, 1.0)
-            return jnp.clip(scale - (value - delta) / safe, 0.25, 4.0), None
+            return jnp.clip(scale - (value - delta) / safe, 0.25, 4.0)
 
-        scale, _ = jax.lax.scan(newton, jnp.asarray(1.0, dtype), None, length=settings.newton_steps)
+        scale = jax.lax.fori_loop(0, options["newton_steps"], newton, jnp.asarray(1.0, dtype))
         points = points_of(params, r, scale)
         rotation = count * _loop_rotation(robot, q0, points)
         violation = jnp.max(
@@ -302,7 +330,8 @@ def compile_loop_optimizer(robot: PlanarRobot, settings: LoopSettings = LoopSett
     """
     dtype = jnp.result_type(float)
     q0, delta = jax.ShapeDtypeStruct((robot.n_links,), dtype), jax.ShapeDtypeStruct((), dtype)
-    _optimize_loops.lower(shapes_of(robot), q0, delta, settings).compile()
+    shape, options = _split(settings)
+    _optimize_loops.lower(shapes_of(robot), q0, delta, shapes_of(options), shape).compile()
 
 
 def plan_reorientation_details(
@@ -319,7 +348,8 @@ def plan_reorientation_details(
         robot: one design.
         phi_start: ``(n+1,)`` start posture [phi0, q0], rad (phi0 does not matter).
         delta_phi0: requested base rotation, rad (any sign and size).
-        settings: `LoopSettings` (static; a new value compiles once).
+        settings: `LoopSettings` (only the loop's sample, harmonic, repetition and
+            direction counts are compiled in; the rest is traced).
         tolerance: largest accepted |rotation error| of the integrated waypoints, rad
             (default 1e-9 in float64, 1e-4 in float32).
 
@@ -343,7 +373,8 @@ def plan_reorientation_details(
         still = np.stack([q0, q0])
         return ReorientationLoop(still, still, 0, 0.0, 0.0, 0.0, 0.0)
     dtype = jnp.result_type(float)
-    result = _optimize_loops(robot, jnp.asarray(q0, dtype), jnp.asarray(delta, dtype), settings)
+    shape, options = _split(settings)
+    result = _optimize_loops(robot, jnp.asarray(q0, dtype), jnp.asarray(delta, dtype), options, shape)
     result = jax.tree_util.tree_map(np.asarray, result)
     error = np.abs(result["rotation"] - delta)
     feasible = (
@@ -408,9 +439,14 @@ def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0,
         ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the
         first and last rows equal phi_start[1:].
     """
-    if isinstance(robot, SpatialRobot):
-        return plan_spatial_reorientation(robot, phi_start, delta_phi0, **options)
+    planner = _REORIENTATION_PLANNERS.get(family_of(robot).name)
+    if planner is None:
+        raise ConfigError(f"robot: no reorientation planner for the {family_of(robot).name!r} family")
+    return planner(robot, phi_start, delta_phi0, **options)
+
+
+def _plan_planar_reorientation(robot: PlanarRobot, phi_start, delta_phi0, **options) -> np.ndarray:
     return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
 
 
-# Reaching a target ---------------------------------------------------------------------
+_REORIENTATION_PLANNERS = {"planar": _plan_planar_reorientation, "spatial": plan_spatial_reorientation}

@@ -20,7 +20,10 @@ The planner, for candidate repetition counts N (all candidates in one batch, one
    segments are straight, so the whole loop then stays inside the box);
 3. finishes with minimum-norm Gauss-Newton steps on the 3-vector residual
    (dc = -J^T (J J^T + mu 1)^-1 r): 3 equations in 2 H n unknowns, quadratic
-   convergence to rounding from the Adam result;
+   convergence to rounding from the Adam result. Both phases run in one loop whose
+   every step evaluates the residual and its 3-row Jacobian once (the Adam gradient
+   is 2 J^T r plus the cheap terms), so the chain passes and their adjoints are
+   compiled once;
 4. checks each candidate with `spacearm.integrate_joint_path` at 4 times the
    optimizer's Magnus steps (converged to ~1e-14 rad for these loops):
    the rotation error of the repeated loop and the joint limits; returns the valid
@@ -34,22 +37,32 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
 
+from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from ..models.spatial.robot import SpatialRobot
 from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, geodesic_distance, log, path_rotation
 from ..motion.joint_paths import integrate_joint_path
 
-__all__ = ["SpatialLoopSettings", "SpatialReorientation", "plan_spatial_reorientation", "plan_spatial_reorientation_details", "repeat_loop"]
+__all__ = [
+    "SpatialLoopSettings", "SpatialReorientation", "plan_spatial_reorientation", "plan_spatial_reorientation_details",
+    "repeat_loop", "compile_spatial_loop_optimizer",
+]
 
 
 @dataclasses.dataclass(frozen=True)
 class SpatialLoopSettings:
-    """Static settings of the spatial reorientation planner (hashable: part of the compile key).
+    """Settings of the spatial reorientation planner.
+
+    Only ``segments``, ``harmonics`` and the Magnus step counts fix the optimizer's
+    shapes (a new value compiles once); the step counts of the optimizer, its rate,
+    weights and margin are traced, the rest is host-side.
 
     Attributes:
         segments: straight joint segments per loop.
@@ -62,8 +75,7 @@ class SpatialLoopSettings:
         travel_weight: weight of the joint travel (rad) against the squared rotation
             error (rad^2) in the Adam phase, per unit of |phi / N|^2.
         limit_margin: the loop keeps this far inside finite joint limits, rad (m).
-        adam_magnus_steps: Magnus steps per segment in the Adam phase (cheap and rough).
-        magnus_steps: Magnus steps per segment in the Gauss-Newton phase (the default of
+        magnus_steps: Magnus steps per segment in the optimizer (the default of
             `spacearm.integrate_joint_path`); the final check uses 4 times as many.
         tolerance: accepted geodesic error of the final rotation, rad.
         seed: random seed of the starting loops.
@@ -79,7 +91,6 @@ class SpatialLoopSettings:
     newton_steps: int = 12
     travel_weight: float = 1e-3
     limit_margin: float = 0.05
-    adam_magnus_steps: int = 1
     magnus_steps: int = DEFAULT_STEPS
     tolerance: float = 1e-9
     seed: int = 0
@@ -106,10 +117,10 @@ class SpatialReorientation:
     candidates: np.ndarray
 
 
-def _basis(settings: SpatialLoopSettings) -> np.ndarray:
+def _basis(segments: int, harmonics: int) -> np.ndarray:
     """``(segments + 1, 2 H)``: cos(2 pi h s) - 1 and sin(2 pi h s) at the waypoints."""
-    s = np.arange(settings.segments + 1) / settings.segments
-    h = np.arange(1, settings.harmonics + 1)
+    s = np.arange(segments + 1) / segments
+    h = np.arange(1, harmonics + 1)
     basis = np.concatenate([np.cos(2 * np.pi * h * s[:, None]) - 1.0, np.sin(2 * np.pi * h * s[:, None])], axis=1)
     basis[-1] = 0.0  # closed exactly
     return basis
@@ -127,58 +138,113 @@ def _travel(points):
     return jnp.sum(jnp.sqrt(sq + 1e-30))
 
 
-@functools.partial(jax.jit, static_argnames=("settings",))
-def _optimize(robot, q0, targets, coefficients, lower, upper, settings: SpatialLoopSettings):
-    """Adam then Gauss-Newton for every candidate: ``targets (c, 3)`` per-loop rotation vectors."""
-    basis = jnp.asarray(_basis(settings), q0.dtype)
+class _LoopShape(NamedTuple):
+    """The settings that fix the optimizer's array shapes (the only static part of its compile key)."""
+
+    segments: int
+    harmonics: int
+    magnus_steps: int
+
+
+def _split(settings: SpatialLoopSettings) -> tuple[_LoopShape, dict]:
+    """Static shape settings, and the rest as host arrays (traced: new values do not recompile)."""
+    shape = _LoopShape(settings.segments, settings.harmonics, settings.magnus_steps)
+    options = {
+        "learning_rate": np.asarray(settings.learning_rate, float),
+        "travel_weight": np.asarray(settings.travel_weight, float),
+        "limit_margin": np.asarray(settings.limit_margin, float),
+        "adam_steps": np.asarray(settings.adam_steps, np.int32),
+        "newton_steps": np.asarray(settings.newton_steps, np.int32),
+    }
+    return shape, options
+
+
+@functools.partial(jax.jit, static_argnames=("shape",))
+def _optimize(robot, q0, targets, coefficients, lower, upper, options, shape: _LoopShape):
+    """Adam then Gauss-Newton for every candidate: ``targets (c, 3)`` per-loop rotation vectors.
+
+    One loop of ``adam_steps + newton_steps`` iterations, each with one evaluation of the
+    residual and its 3-row Jacobian (reverse mode): the Adam steps use the gradient
+    2 J^T r / |phi / N|^2 plus the travel and limit terms, the Gauss-Newton steps J and r.
+    The residual's chain passes and their adjoints are compiled once for both phases.
+    Step counts, rates and weights are traced (``options``): only ``shape`` is static.
+    """
+    dtype = q0.dtype
+    basis = jnp.asarray(_basis(shape.segments, shape.harmonics), dtype)
     omega_map = functools.partial(bus_rate_map, robot)
+    margin = options["limit_margin"].astype(dtype)
+    travel_weight = options["travel_weight"].astype(dtype)
+    adam_steps = options["adam_steps"]
+    optimizer = optax.adam(options["learning_rate"].astype(dtype))
+    shape_c = coefficients.shape[1:]
+    eye = jnp.eye(3, dtype=dtype)
 
     def points(c):
-        return q0 + basis @ c  # (segments + 1, n)
+        return q0 + basis @ c.reshape(shape_c)  # (segments + 1, n)
 
-    def residual(c, target, steps=settings.magnus_steps):
-        D = path_rotation(omega_map, points(c), steps, DEFAULT_ORDER)
-        return log(jnp.swapaxes(expm(target), -1, -2) @ D)
-
-    def loss(c, target):
+    def penalty(c):
         p = points(c)
-        scale = jnp.sum(target * target) + 1e-12
-        r = residual(c, target, settings.adam_magnus_steps)
-        over = jnp.maximum(p - (upper - settings.limit_margin), 0.0) + jnp.maximum((lower + settings.limit_margin) - p, 0.0)
-        return jnp.sum(r * r) / scale + settings.travel_weight * _travel(p) + 100.0 * jnp.sum(over * over)
-
-    optimizer = optax.adam(settings.learning_rate)
-
-    def adam(c, target):
-        def step(carry, _):
-            c, state = carry
-            g = jax.grad(loss)(c, target)
-            updates, state = optimizer.update(g, state, c)
-            return (optax.apply_updates(c, updates), state), None
-
-        (c, _), _ = jax.lax.scan(step, (c, optimizer.init(c)), None, length=settings.adam_steps)
-        return c
-
-    def newton(c, target):
-        shape = c.shape
-
-        def step(c, _):
-            flat_residual = lambda x: residual(x.reshape(shape), target)  # noqa: E731
-            r = flat_residual(c.reshape(-1))
-            J = jax.jacrev(flat_residual)(c.reshape(-1))  # (3, 2 H n)
-            mu = 1e-12 * jnp.trace(J @ J.T)
-            dc = J.T @ jnp.linalg.solve(J @ J.T + mu * jnp.eye(3, dtype=J.dtype), r)
-            return c - dc.reshape(shape), None
-
-        c, _ = jax.lax.scan(step, c, None, length=settings.newton_steps)
-        return c
+        over = jnp.maximum(p - (upper - margin), 0.0) + jnp.maximum((lower + margin) - p, 0.0)
+        return travel_weight * _travel(p) + 100.0 * jnp.sum(over * over)
 
     def one(c, target):
-        c = newton(adam(c, target), target)
-        r = residual(c, target)
-        return c, jnp.sqrt(jnp.sum(r * r)), points(c)
+        inverse = jnp.swapaxes(expm(target), -1, -2)
+        scale = jnp.sum(target * target) + 1e-12
+
+        def residual(c):
+            return log(inverse @ path_rotation(omega_map, points(c), shape.magnus_steps, DEFAULT_ORDER))
+
+        def step(k, carry):
+            c, state = carry
+            r, pullback = jax.vjp(residual, c)
+            J = jax.vmap(pullback)(eye)[0]  # (3, 2 H n)
+            g = 2.0 * (J.T @ r) / scale + jax.grad(penalty)(c)
+            updates, moved = optimizer.update(g, state, c)
+            JJ = J @ J.T
+            gauss_newton = c - J.T @ jnp.linalg.solve(JJ + 1e-12 * jnp.trace(JJ) * eye, r)
+            adam = k < adam_steps
+            c = jnp.where(adam, optax.apply_updates(c, updates), gauss_newton)
+            state = jax.tree_util.tree_map(lambda a, b: jnp.where(adam, a, b), moved, state)
+            return c, state
+
+        c = c.reshape(-1)
+        c, _ = jax.lax.fori_loop(0, adam_steps + options["newton_steps"], step, (c, optimizer.init(c)))
+        return c.reshape(shape_c), points(c)
 
     return jax.vmap(one)(coefficients, targets)
+
+
+def compile_spatial_loop_optimizer(robot: SpatialRobot, settings: SpatialLoopSettings | None = None) -> None:
+    """Compile, without running, the loop optimizer `plan_spatial_reorientation_details`
+    runs for this design's shapes and ``settings``; a later plan finds the program.
+
+    XLA compiles outside Python's GIL, so a caller can compile this on a second core (in
+    a thread) while it does other work (``planning.plan_reach`` does).
+    """
+    settings = settings or SpatialLoopSettings()
+    shape, options = _split(settings)
+    n, count = robot.n_joints, len(settings.loop_counts) * settings.seeds
+    dtype = jnp.result_type(float)
+    s = lambda *dims: jax.ShapeDtypeStruct(dims, dtype)  # noqa: E731
+    _optimize.lower(
+        shapes_of(robot), s(n), s(count, 3), s(count, 2 * settings.harmonics, n), s(n), s(n), shapes_of(options), shape
+    ).compile()
+
+
+@jax.jit
+def _as_rotation(vector):
+    return expm(vector)
+
+
+@jax.jit
+def _loop_targets(target, counts):
+    """Per-candidate loop rotation vectors log(target) / N, ``(c, 3)``."""
+    return log(target)[None, :] / counts[:, None]
+
+
+@jax.jit
+def _rotation_errors(target, reached):
+    return geodesic_distance(target, reached)
 
 
 def _check_inputs(robot: SpatialRobot, q_start, target_rotation):
@@ -189,8 +255,8 @@ def _check_inputs(robot: SpatialRobot, q_start, target_rotation):
     if q0.shape != (n,):
         raise ConfigError(f"q_start: expected shape ({n},) for a {n}-joint arm, got {q0.shape}")
     target = np.asarray(target_rotation, dtype=float)
-    if target.shape == (3,):  # a rotation vector
-        target = np.asarray(expm(jnp.asarray(target)))
+    if target.shape == (3,) and np.all(np.isfinite(target)):  # a rotation vector
+        target = np.asarray(_as_rotation(target))
     if target.shape != (3, 3) or not np.all(np.isfinite(target)):
         raise ConfigError(f"target_rotation: expected a (3, 3) rotation matrix or a (3,) rotation vector, got shape {target.shape}")
     if np.max(np.abs(target.T @ target - np.eye(3))) > 1e-9 or np.linalg.det(target) < 0:
@@ -211,28 +277,33 @@ def plan_spatial_reorientation_details(
         q_start: ``(n,)`` joints at the start (inside the limits).
         target_rotation: ``(3, 3)`` rotation in the bus frame (or a ``(3,)`` rotation
             vector), to be reached to ``settings.tolerance`` (1e-9 rad).
-        settings: `SpatialLoopSettings`.
+        settings: `SpatialLoopSettings`; only the segment, harmonic and Magnus step
+            counts are compiled in, the other fields are traced or host-side.
 
     Raises:
         ConfigError: bad inputs, or no candidate loop reached the tolerance within the
             joint limits (the message gives the best error).
     """
     settings = settings or SpatialLoopSettings()
+    if not isinstance(settings, SpatialLoopSettings):
+        raise ConfigError(f"settings: expected SpatialLoopSettings for a spatial robot, got {type(settings).__name__}")
     q0, target, lower, upper = _check_inputs(robot, q_start, target_rotation)
     n = robot.n_joints
-    phi = np.asarray(log(jnp.asarray(target)))
+    dtype = jnp.result_type(float)
     counts = np.repeat(np.asarray(settings.loop_counts), settings.seeds)
     rng = np.random.default_rng(settings.seed)
     coefficients = settings.initial_size * rng.normal(size=(len(counts), 2 * settings.harmonics, n))
     finite = lambda x: np.where(np.isfinite(x), x, np.sign(x) * 1e3)  # noqa: E731
-    _, errors, loops = _optimize(
+    shape, options = _split(settings)
+    _, loops = _optimize(
         robot,
-        jnp.asarray(q0),
-        jnp.asarray(phi[None, :] / counts[:, None]),
-        jnp.asarray(coefficients),
-        jnp.asarray(finite(lower)),
-        jnp.asarray(finite(upper)),
-        settings,
+        jnp.asarray(q0, dtype),
+        _loop_targets(jnp.asarray(target, dtype), jnp.asarray(counts, dtype)),
+        jnp.asarray(coefficients, dtype),
+        jnp.asarray(finite(lower), dtype),
+        jnp.asarray(finite(upper), dtype),
+        options,
+        shape,
     )
     loops = np.array(loops)
     # Check every candidate through the public integrator, converged (one batch):
@@ -242,11 +313,10 @@ def plan_spatial_reorientation_details(
     reached = np.asarray(D)
     for power in range(2, int(counts.max()) + 1):
         reached = np.where((counts >= power)[:, None, None], reached @ np.asarray(D), reached)
-    errors = np.asarray(geodesic_distance(jnp.asarray(target), jnp.asarray(reached)))
+    errors = np.asarray(_rotation_errors(target, reached))
     inside = np.all((loops >= lower) & (loops <= upper), axis=(1, 2))
     travel = counts * np.sum(np.linalg.norm(np.diff(loops, axis=1), axis=2), axis=1)
-    results = np.stack([counts, np.where(inside, errors, np.inf), travel], axis=1)
-    table = results
+    table = np.stack([counts, np.where(inside, errors, np.inf), travel], axis=1)
     valid = np.flatnonzero(table[:, 1] <= settings.tolerance)
     if valid.size == 0:
         best = float(np.min(table[:, 1]))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 import functools
 
@@ -25,6 +26,7 @@ from .closed_forms import (
     manipulability,
     momentum_inertias,
     straight_path_field,
+    tip_coefficients,
     tip_position,
 )
 from .robot import PlanarRobot
@@ -86,6 +88,13 @@ class PlanarFamily(RobotFamily):
 
     def fixed_base_jacobian(self, robot: PlanarRobot, joints: jax.Array) -> jax.Array:
         return fixed_base_jacobian(robot, joints)
+
+    # Planning hooks (spacearm.planning) ---------------------------------------------------
+
+    def tip_shell(self, robot: PlanarRobot) -> tuple[float, float]:
+        """Area 3 about the system centroid: K0 + .. + Kn and its hole (sec. 3.1 (3-a))."""
+        K = np.abs(np.asarray(tip_coefficients(robot)))
+        return max(0.0, float(2.0 * np.max(K) - np.sum(K))), float(np.sum(K))
 
 
 PLANAR = PlanarFamily()

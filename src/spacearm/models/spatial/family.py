@@ -36,6 +36,7 @@ from .primitives import (
     tip,
 )
 from .robot import SpatialRobot
+from .shell import tip_shell
 
 __all__ = ["SPATIAL", "SpatialFamily"]
 
@@ -113,6 +114,12 @@ class SpatialFamily(RobotFamily):
     def arm_inertia(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H*, the arm inertia at zero momentum."""
         return arm_inertia(robot, joints)
+
+    # Planning hooks (spacearm.planning) ---------------------------------------------------
+
+    def tip_shell(self, robot: SpatialRobot) -> tuple[float, float]:
+        """The virtual manipulator's shell (`spacearm.models.spatial.shell.tip_shell`)."""
+        return tip_shell(robot)
 
 
 SPATIAL = SpatialFamily()
