@@ -10,7 +10,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["nondominated_mask", "nondominated", "hypervolume", "hypervolume_2d", "hypervolume_history"]
+__all__ = ["nondominated_mask", "nondominated", "hypervolume", "hypervolume_2d", "hypervolume_history",
+           "reference_from_population"]
 
 
 def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
@@ -120,3 +121,22 @@ def hypervolume_history(batches: Sequence[np.ndarray], reference: Sequence[float
         front = merged[nondominated_mask(merged)]
         values.append(hypervolume(front, reference))
     return np.array(values)
+
+
+def reference_from_population(objectives: np.ndarray, margin: float) -> np.ndarray:
+    """A reference point below the nadir of a population's front, by ``margin`` of its range.
+
+    Args:
+        objectives: ``(N, m)`` the first population's objectives (maximized).
+        margin: share of the front's range (ideal - nadir) put below the nadir; a flat
+            objective gets the margin of its magnitude (or ``margin`` itself at zero).
+    """
+    f = np.asarray(objectives, dtype=np.float64)
+    f = f[np.all(np.isfinite(f), axis=1)]
+    if f.shape[0] == 0:
+        raise ValueError("reference_point: no finite objective values in the first population")
+    front = f[nondominated_mask(f)]
+    nadir, ideal = front.min(axis=0), front.max(axis=0)
+    span = ideal - nadir
+    span = np.where(span > 0, span, np.where(np.abs(nadir) > 0, np.abs(nadir), 1.0))
+    return nadir - margin * span
