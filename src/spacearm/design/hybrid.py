@@ -5,7 +5,7 @@ Pure gradient sets stall: dominated points have zero hypervolume gradient and si
 runs settle on local Pareto sets. The methods that win are hybrids (HIGA-MO: Wang,
 Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2023):
 
-1. **Exploration.** A space-filling start (a scrambled Sobol' sample of the unit box, two
+1. **Exploration.** A space-filling start (a Latin hypercube sample of the unit box, two
    populations' worth), then every generation an NSGA-II offspring batch (binary
    tournament on rank and crowding, simulated binary crossover, polynomial mutation;
    Deb et al., IEEE TEC 6(2), 2002) merged by non-dominated sorting and crowding.
@@ -65,7 +65,7 @@ class HybridSettings:
         reference_margin: the reference point, when the problem gives none, lies this
             share of the first population's front range below its nadir.
         crossover_eta, mutation_eta: distribution indices of SBX and polynomial mutation.
-        seed: random seed (Sobol' scramble, variation).
+        seed: random seed (Latin hypercube, variation).
     """
 
     population: int = 48
@@ -248,10 +248,11 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
     compile_seconds["value"] = time.perf_counter() - tic
     pulls, layer_gradients, gains = _programs(problem, population, m)
     tic = time.perf_counter()
-    jax.block_until_ready(pulls(jnp.full((population, d), 0.5), jnp.ones((population, m))))
+    jax.block_until_ready(pulls(jnp.asarray(np.full((population, d), 0.5)), jnp.asarray(np.ones((population, m)))))
     compile_seconds["gradient"] = time.perf_counter() - tic
     tic = time.perf_counter()
-    dummy_f, dummy_r, dummy_k = jnp.ones((population, m)), jnp.zeros(m), jnp.zeros(population, dtype=int)
+    dummy_f, dummy_r = jnp.asarray(np.ones((population, m))), jnp.asarray(np.zeros(m))
+    dummy_k = jnp.asarray(np.zeros(population, dtype=np.int64))
     jax.block_until_ready(layer_gradients(dummy_f, dummy_r, dummy_k))
     jax.block_until_ready(gains(dummy_f, dummy_f, dummy_r, dummy_k))
     compile_seconds["hypervolume"] = time.perf_counter() - tic
@@ -268,9 +269,9 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
         counts["value"] += z.shape[0]
         return f
 
-    # 1. Space-filling start: two populations of a scrambled Sobol' sample.
-    sobol = qmc.Sobol(d, scramble=True, seed=settings.seed).random(2 * population)
-    f_start = np.concatenate([value_of(sobol[:population]), value_of(sobol[population:])])
+    # 1. Space-filling start: two populations of a Latin hypercube sample.
+    start_designs = qmc.LatinHypercube(d, seed=settings.seed).random(2 * population)
+    f_start = np.concatenate([value_of(start_designs[:population]), value_of(start_designs[population:])])
     if reference is None:
         reference = reference_from_population(f_start, settings.reference_margin)
         reference_from = f"nadir of the first {2 * population} designs' front minus {settings.reference_margin} of its range"
@@ -278,7 +279,7 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
         reference_from = "problem"
     reference = np.asarray(reference, dtype=np.float64)
     keep = _survivors(f_start, population)
-    z, f = sobol[keep], f_start[keep]
+    z, f = start_designs[keep], f_start[keep]
     steps = np.full(population, settings.initial_step)
     front_f = f_start[nondominated_mask(f_start)]
 
@@ -298,7 +299,7 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
     for generation in range(1, settings.generations + 1):
         # 2a. Refinement: one hypervolume-gradient step per member, its own layer's gradient.
         ranks = nondominated_ranks(f)
-        weights = np.asarray(layer_gradients(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
+        weights = np.array(layer_gradients(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
         flat = ~np.any(weights != 0, axis=1)
         if flat.any():
             # Below the reference or a duplicate: climb every objective, each by its spread.
