@@ -148,7 +148,7 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     f = result.objectives
     # Every evaluated design is in the box and archived, with the values batch_function gives.
     assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
-    assert result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 2 * 16
+    assert result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 3 * 16  # start, then steps, children, densified
     np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
     hv = [c["hypervolume"] for c in result.checkpoints]
     assert np.all(np.diff(hv) >= 0)

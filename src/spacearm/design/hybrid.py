@@ -16,9 +16,9 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    vmapped). Dominated points follow their layer's gradient towards the front instead of
    freezing; on the front the hypervolume gradient itself spreads the points (a
    hypervolume-maximal set is spread by the front's slope). Each step has its own
-   length in the unit box, doubled after a step that raised its layer's hypervolume and
-   halved after one that did not (the step is then refused), so steps shrink to the
-   precision the front needs.
+   length in the unit box, doubled after a step that passed Armijo's sufficient-increase
+   test on its layer's hypervolume (linearized at the old point) and halved after one that
+   did not (the step is then refused), so steps shrink to the precision the front needs.
 3. **Stopping** from the front's own convergence: the archive's hypervolume gained less
    than ``tolerance`` (relative) over the last ``patience`` generations, or a budget of
    generations, evaluations or seconds ran out.
@@ -44,8 +44,8 @@ from scipy.stats import qmc
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, integer, number
 from .fronts import hypervolume, nondominated_mask, reference_from_population
-from .hypervolume import exact_hypervolume, layer_hypervolume_gradients
-from .search import SearchResult
+from .hypervolume import layer_hypervolume_gradients
+from .search import SearchResult, _densify
 
 __all__ = ["HybridSettings", "hybrid_search", "parse_hybrid", "reference_from_population", "nondominated_ranks"]
 
@@ -64,20 +64,23 @@ class HybridSettings:
         initial_step, min_step, max_step: gradient step lengths in the unit box.
         reference_margin: the reference point, when the problem gives none, lies this
             share of the first population's front range below its nadir.
+        densify: with two objectives, also evaluate a population of designs interpolated
+            between neighbouring archive-front designs every generation.
         crossover_eta, mutation_eta: distribution indices of SBX and polynomial mutation.
         seed: random seed (Latin hypercube, variation).
     """
 
     population: int = 48
-    generations: int = 200
+    generations: int = 500
     max_evaluations: int | None = None
     max_seconds: float | None = None
     patience: int = 10
-    tolerance: float = 1e-5
+    tolerance: float = 1e-7
     initial_step: float = 0.05
     min_step: float = 1e-5
     max_step: float = 0.3
     reference_margin: float = 0.1
+    densify: bool = True
     crossover_eta: float = 15.0
     mutation_eta: float = 20.0
     seed: int = 0
@@ -102,6 +105,10 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
         where = f"{source}: hybrid.{key}"
         if value is None and key in ("max_evaluations", "max_seconds"):
             changes[key] = None
+        elif key == "densify":
+            if not isinstance(value, bool):
+                raise ConfigError(f"{where}: must be true or false, got {value!r}")
+            changes[key] = value
         elif key in _INTEGER_KEYS:
             changes[key] = integer(where, value, least=_INTEGER_KEYS[key])
         else:
@@ -201,17 +208,7 @@ def _programs(problem, population: int, m: int):
     def layer_gradients(f, reference, ranks):
         return layer_hypervolume_gradients(f, reference, ranks)
 
-    @jax.jit
-    def gains(f_old, f_new, reference, ranks):
-        # Each point's layer hypervolume with that point moved, minus the layer's own.
-        def moved(i):
-            inside = ranks == ranks[i]
-            base = exact_hypervolume(f_old, reference, inside)
-            return exact_hypervolume(f_old.at[i].set(f_new[i]), reference, inside) - base
-
-        return jax.vmap(moved)(jnp.arange(f_old.shape[0]))
-
-    return pulls, layer_gradients, gains
+    return pulls, layer_gradients
 
 
 def hybrid_search(problem, settings: HybridSettings | None = None,
@@ -246,7 +243,7 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
     tic = time.perf_counter()
     jax.block_until_ready(evaluate(jnp.asarray(np.tile(problem.lower, (population, 1)))))
     compile_seconds["value"] = time.perf_counter() - tic
-    pulls, layer_gradients, gains = _programs(problem, population, m)
+    pulls, layer_gradients = _programs(problem, population, m)
     tic = time.perf_counter()
     jax.block_until_ready(pulls(jnp.asarray(np.full((population, d), 0.5)), jnp.asarray(np.ones((population, m)))))
     compile_seconds["gradient"] = time.perf_counter() - tic
@@ -254,14 +251,15 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
     dummy_f, dummy_r = jnp.asarray(np.ones((population, m))), jnp.asarray(np.zeros(m))
     dummy_k = jnp.asarray(np.zeros(population, dtype=np.int64))
     jax.block_until_ready(layer_gradients(dummy_f, dummy_r, dummy_k))
-    jax.block_until_ready(gains(dummy_f, dummy_f, dummy_r, dummy_k))
     compile_seconds["hypervolume"] = time.perf_counter() - tic
 
     start = time.perf_counter()
     designs, values, checkpoints = [], [], []
+    unit_designs = []  # parallel to values: the unit-box designs
     counts = dict(value=0, value_and_gradient=0)
 
     def value_of(z):
+        unit_designs.append(z)
         x = lower + width * z
         f = np.asarray(evaluate(jnp.asarray(x)))
         designs.append(x)
@@ -281,15 +279,18 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
     keep = _survivors(f_start, population)
     z, f = start_designs[keep], f_start[keep]
     steps = np.full(population, settings.initial_step)
-    front_f = f_start[nondominated_mask(f_start)]
+    first_front = nondominated_mask(f_start)
+    front_f, front_z = f_start[first_front], start_designs[first_front]
 
     recorded = [len(values)]
 
     def record():
-        nonlocal front_f
+        nonlocal front_f, front_z
         merged = np.concatenate([front_f, *values[recorded[0]:]])
+        merged_z = np.concatenate([front_z, *unit_designs[recorded[0]:]])
         recorded[0] = len(values)
-        front_f = merged[nondominated_mask(merged)]
+        keep = nondominated_mask(merged)
+        front_f, front_z = merged[keep], merged_z[keep]
         checkpoints.append(dict(evaluations=counts["value"] + counts["value_and_gradient"],
                                 seconds=time.perf_counter() - start, hypervolume=hypervolume(front_f, reference)))
 
@@ -312,8 +313,10 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
         direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
         z_new = np.clip(z + steps[:, None] * direction, 0.0, 1.0)
         f_new = value_of(z_new)
-        gain = np.asarray(gains(jnp.asarray(f), jnp.asarray(f_new), jnp.asarray(reference), jnp.asarray(ranks)))
-        better = (gain > 0) & np.all(np.isfinite(f_new), axis=1)
+        # Armijo's test on the layer hypervolume, linearized at the old point: the step's
+        # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
+        gain = np.sum(weights * (f_new - f), axis=1)
+        better = (gain >= 0.1 * steps * norm[:, 0]) & (norm[:, 0] > 0) & np.all(np.isfinite(f_new), axis=1)
         z, f = np.where(better[:, None], z_new, z), np.where(better[:, None], f_new, f)
         steps = np.clip(np.where(better, 2.0 * steps, 0.5 * steps), settings.min_step, settings.max_step)
         accepted_total += int(better.sum())
@@ -321,7 +324,15 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
         z_child = _variation(rng, z, f, settings)
         f_child = value_of(z_child)
         z_all, f_all = np.concatenate([z, z_child]), np.concatenate([f, f_child])
-        steps_all = np.concatenate([steps, np.full(population, settings.initial_step)])
+        if settings.densify and m == 2 and front_f.shape[0] >= 2:
+            # 2c. Two objectives: designs interpolated between neighbouring archive-front
+            # designs, where the gaps lose the most hypervolume (the Pareto set is a curve).
+            order = np.argsort(front_f[:, 0])
+            z_dense = np.clip(_densify(front_f[order], front_z[order], population), 0.0, 1.0)
+            z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
+            f_dense = value_of(z_dense)
+            z_all, f_all = np.concatenate([z_all, z_dense]), np.concatenate([f_all, f_dense])
+        steps_all = np.concatenate([steps, np.full(z_all.shape[0] - population, settings.initial_step)])
         keep = _survivors(np.where(np.isfinite(f_all), f_all, -np.inf), population)
         z, f, steps = z_all[keep], f_all[keep], steps_all[keep]
         record()
