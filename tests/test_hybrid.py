@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import yaml
 
+import spacearm as sa
 from spacearm import design
 from spacearm._core.errors import ConfigError
 from spacearm.cli import main as cli_main
@@ -183,7 +184,7 @@ def test_spatial_optimize_without_reference_writes_a_front_that_batch_function_r
     variables = list(config["variables"])
     assert rows[0] == variables + config["objectives"]
     table = np.array(rows[1:], dtype=float)
-    problem = load_design_problem(str(path))
+    problem = sa.load_problem(str(path))  # the public entry point reads spatial problem files too
     again = np.asarray(problem.batch_function()(jnp.asarray(table[:, :3])))
     np.testing.assert_allclose(table[:, 3:], again, rtol=1e-9, atol=0)
     assert np.all(nondominated_mask(table[:, 3:]))

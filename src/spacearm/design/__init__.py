@@ -60,10 +60,11 @@ from .problem import (
     DesignProblem as DesignProblem,
     SearchSettings as SearchSettings,
     Variable as Variable,
-    load_problem as load_problem,
     problem_from_mapping as problem_from_mapping,
     variable_names_for as variable_names_for,
 )
+# load_problem reads planar (fixed:) and spatial (robot:) problem files alike.
+from .spatial_problem import load_design_problem as load_problem
 from .run import TARGET_FRACTION as TARGET_FRACTION, run_problem as run_problem
 from .search import (
     SearchResult as SearchResult,

@@ -301,12 +301,13 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
         # 2a. Refinement: one hypervolume-gradient step per member, its own layer's gradient.
         ranks = nondominated_ranks(f)
         weights = np.array(layer_gradients(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
+        weights = np.nan_to_num(weights, nan=0.0, posinf=0.0, neginf=0.0)
         flat = ~np.any(weights != 0, axis=1)
         if flat.any():
             # Below the reference or a duplicate: climb every objective, each by its spread.
             spread = np.ptp(f, axis=0)
             weights[flat] = 1.0 / np.where(spread > 0, spread, 1.0)
-        grad = np.asarray(pulls(jnp.asarray(z), jnp.asarray(weights)))
+        grad = np.nan_to_num(np.asarray(pulls(jnp.asarray(z), jnp.asarray(weights))), nan=0.0, posinf=0.0, neginf=0.0)
         counts["value_and_gradient"] += population
         grad = np.where(((z <= 0.0) & (grad < 0)) | ((z >= 1.0) & (grad > 0)), 0.0, grad)  # projected
         norm = np.linalg.norm(grad, axis=1, keepdims=True)
