@@ -176,7 +176,7 @@ def test_spatial_optimize_without_reference_writes_a_front_that_batch_function_r
                                baselines={"nsga2": {"population": 8}})
     config["robot"] = str(Path(UR5).resolve())
     path = tmp_path / "arm.yaml"
-    path.write_text(yaml.safe_dump(config))
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
     out = tmp_path / "out"
     assert cli_main(["optimize", str(path), "--out", str(out), "--nsga2-factor", "0.2"]) == 0
     with open(out / "pareto.csv") as handle:
