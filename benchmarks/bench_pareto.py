@@ -48,7 +48,8 @@ def show(value, unit=" s"):
     return "never" if value is None else f"{value:.3g}{unit}"
 
 
-def bench(name: str, max_seconds: float | None, population: int | None, factor: float) -> dict:
+def bench(name: str, max_seconds: float | None, population: int | None, factor: float,
+          tolerance: float | None = None) -> dict:
     path = ROOT / "sweeps" / f"{name}.yaml"
     config = read_yaml(path, what="design problem file")
     problem = load_design_problem(path)
@@ -57,6 +58,8 @@ def bench(name: str, max_seconds: float | None, population: int | None, factor: 
         settings = dataclasses.replace(settings, max_seconds=max_seconds)
     if population is not None:
         settings = dataclasses.replace(settings, population=population)
+    if tolerance is not None:
+        settings = dataclasses.replace(settings, tolerance=tolerance)
     print(f"== {name}: {len(problem.variables)} variables, objectives {', '.join(problem.objectives)}", flush=True)
     hybrid = hybrid_search(problem, settings)
     reference = hybrid.extra["reference_point"]
@@ -96,9 +99,10 @@ def main() -> None:
     parser.add_argument("problems", nargs="*", default=list(PROBLEMS), help="shipped problem names (sweeps/NAME.yaml)")
     parser.add_argument("--max-seconds", type=float, default=None, help="cap the hybrid's run time (s)")
     parser.add_argument("--population", type=int, default=None, help="the hybrid's population (default: the file's)")
+    parser.add_argument("--tolerance", type=float, default=None, help="the hybrid's stopping tolerance")
     parser.add_argument("--factor", type=float, default=3.0, help="NSGA-II's wall time / the hybrid's (default 3)")
     args = parser.parse_args()
-    rows = [bench(name, args.max_seconds, args.population, args.factor) for name in args.problems]
+    rows = [bench(name, args.max_seconds, args.population, args.factor, args.tolerance) for name in args.problems]
     print("\nproblem              NSGA-II end HV   hybrid/best  NSGA-II/best  hybrid wall  to NSGA-II end  ratio  met")
     for row in rows:
         print(f"{row['problem']:<20}{row['nsga2_final']:>15.8g}{row['hybrid_share']:>13.4%}{row['nsga2_share']:>14.4%}"
