@@ -75,7 +75,7 @@ class HybridSettings:
     max_evaluations: int | None = None
     max_seconds: float | None = None
     patience: int = 10
-    tolerance: float = 1e-7
+    tolerance: float = 1e-9
     initial_step: float = 0.05
     min_step: float = 1e-5
     max_step: float = 0.3
