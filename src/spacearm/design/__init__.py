@@ -64,7 +64,7 @@ from .problem import (
     variable_names_for as variable_names_for,
 )
 # load_problem reads planar (fixed:) and spatial (robot:) problem files alike.
-from .spatial_problem import load_design_problem as load_problem
+from .spatial_problem import load_problem as load_problem
 from .run import TARGET_FRACTION as TARGET_FRACTION, run_problem as run_problem
 from .search import (
     SearchResult as SearchResult,

@@ -38,7 +38,8 @@ from ..models.spatial import fields as spatial_fields
 from .problem import DesignProblem, SearchSettings, Variable, VariableBounds, parse_baselines, parse_search, problem_from_mapping
 from .._core.schema import read_yaml
 
-__all__ = ["SpatialDesignProblem", "SPATIAL_OBJECTIVES", "spatial_problem_from_mapping", "load_design_problem"]
+__all__ = ["SpatialDesignProblem", "SPATIAL_OBJECTIVES", "spatial_problem_from_mapping", "load_design_problem",
+           "load_problem"]
 
 # Objective name -> (joint_average metric, sign): all maximized.
 SPATIAL_OBJECTIVES = {
@@ -223,3 +224,15 @@ def load_design_problem(source: str | os.PathLike | Mapping[str, Any], *, name: 
     if isinstance(config, Mapping) and "robot" in config:
         return spatial_problem_from_mapping(config, source=label, base_dir=folder)
     return problem_from_mapping(config, source=label)
+
+
+def load_problem(source: str | os.PathLike | Mapping[str, Any]) -> DesignProblem | SpatialDesignProblem:
+    """A design problem of either family from its YAML file or mapping (``spacearm.load_problem``).
+
+    The same as `load_design_problem` with its defaults: a ``robot:`` key makes a spatial
+    problem, ``fixed:`` a planar one.
+
+    Raises:
+        ConfigError: for a missing or malformed file and any invalid field.
+    """
+    return load_design_problem(source)
