@@ -259,7 +259,7 @@ def test_a_run_compiles_each_program_once_and_times_nothing_apart(tmp_path):
     search's own calls: no gradient program is compiled only to time it."""
     problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR, search=dict(TINY_SEARCH, seed=5)))
     with count_compiles() as compiles:
-        summary = design.run_problem(problem, tmp_path, baselines=False, log=lambda line: None)
+        summary = design.run_problem(problem, tmp_path, method="scalarized", baselines=False, log=lambda line: None)
     heavy = {name: count for name, count in compiles.items() if "evaluate" in name or "run_chunk" in name}
     assert heavy and max(heavy.values()) == 1, dict(compiles)
     assert not [name for name in compiles if "summed" in name], dict(compiles)
@@ -293,11 +293,12 @@ def test_optimize_command_writes_front_summary_and_figures(tmp_path):
         wbar=CHEAP_WBAR,
         search={**TINY_SEARCH, "steps": 8},
         baselines={"grid": {"points": [9, 5], "chunk": 16}, "nsga2": {"population": 16, "evaluations": 32}},
+        hybrid={"population": 8, "generations": 3},
     )
     path = tmp_path / "tiny.yaml"
     path.write_text(yaml.safe_dump(config))
     out = tmp_path / "out"
-    assert cli_main(["optimize", str(path), "--out", str(out)]) == 0
+    assert cli_main(["optimize", str(path), "--out", str(out), "--nsga2-factor", "0.5"]) == 0
     with open(out / "pareto.csv") as handle:
         rows = list(csv.reader(handle))
     assert rows[0] == ["b0", "l1_over_L", "wbar", "S_G"]
@@ -306,10 +307,10 @@ def test_optimize_command_writes_front_summary_and_figures(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["reference_point"] == [0.0, 0.0]
     np.testing.assert_allclose(summary["hypervolume"], design.hypervolume_2d(front[:, 2:]), rtol=1e-12)
-    assert set(summary["methods"]) == {"gradient", "grid", "nsga2"}
+    assert set(summary["methods"]) == {"hybrid", "grid", "nsga2"}  # the hybrid search is the default
     assert summary["methods"]["grid"]["evaluations"] == 45
-    assert summary["methods"]["gradient"]["value_and_gradient_cost_ratio"] > 0
-    assert "value and gradient" in summary["evaluation_counting"]
+    assert summary["methods"]["hybrid"]["value_and_gradient_evaluations"] > 0
+    assert "value-and-gradient" in summary["evaluation_counting"]
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["config"] == config and manifest["float64"] is True
     for key in ("config_sha256", "packages", "git", "device_count", "command", "timings_s"):

@@ -13,7 +13,12 @@ trade-off computable.
 * Objectives (all maximized): ``wbar`` (eq. 12, from
   `spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
   pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space).
-* `pareto_search` optimizes many smoothed Chebyshev scalarizations at once: one
+* `hybrid_search` (the default of ``spacearm optimize``): an NSGA-II population refined
+  by set-based hypervolume-gradient steps on the whole front at once (each
+  non-dominated-sorting layer climbs its own hypervolume, computed exactly in JAX by
+  `exact_hypervolume` and differentiated by autodiff), stopping when the archive's
+  hypervolume stops growing; any problem, 2 to 4 objectives.
+* `pareto_search` (``--method scalarized``) optimizes many smoothed Chebyshev scalarizations at once: one
   optax optimizer (projected Adam on the unit box) vmapped over directions x starts,
   jitted in chunks of steps. Every evaluated design is archived; the front is the
   non-dominated subset of the archive (`nondominated`) and its quality is the
@@ -25,8 +30,9 @@ trade-off computable.
   figures (`spacearm.figures.design`).
 
 Modules: ``problem`` (variables, parametrization, YAML), ``objectives``, ``fronts``
-(non-dominated sets, hypervolume), ``search`` (the gradient search), ``baselines``
-(grid, NSGA-II), ``run`` (the whole run and its files).
+(non-dominated sets, hypervolume), ``hypervolume`` (the exact hypervolume in JAX and its
+gradient), ``hybrid`` (the default search), ``search`` (the scalarized gradient search),
+``baselines`` (grid, NSGA-II), ``run`` (the whole run and its files).
 
 Counting evaluations: one *evaluation* is one design's objective vector. The
 gradient search evaluates value and gradient together; each counts as one
@@ -43,6 +49,8 @@ from .fronts import (
     nondominated as nondominated,
     nondominated_mask as nondominated_mask,
 )
+from .hybrid import HybridSettings as HybridSettings, hybrid_search as hybrid_search
+from .hypervolume import exact_hypervolume as exact_hypervolume, hypervolume_gradient as hypervolume_gradient
 from .objectives import (
     OBJECTIVES as OBJECTIVES,
     guaranteed_area as guaranteed_area,
@@ -52,10 +60,11 @@ from .problem import (
     DesignProblem as DesignProblem,
     SearchSettings as SearchSettings,
     Variable as Variable,
-    load_problem as load_problem,
     problem_from_mapping as problem_from_mapping,
     variable_names_for as variable_names_for,
 )
+# load_problem reads planar (fixed:) and spatial (robot:) problem files alike.
+from .spatial_problem import load_problem as load_problem
 from .run import TARGET_FRACTION as TARGET_FRACTION, run_problem as run_problem
 from .search import (
     SearchResult as SearchResult,
@@ -79,6 +88,10 @@ __all__ = [
     "hypervolume_2d",
     "hypervolume_history",
     "pareto_search",
+    "hybrid_search",
+    "HybridSettings",
+    "exact_hypervolume",
+    "hypervolume_gradient",
     "value_and_grad_cost_ratio",
     "grid_search",
     "nsga2_search",

@@ -18,11 +18,14 @@ from .search import SearchResult
 __all__ = ["grid_search", "nsga2_search"]
 
 
-def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chunk: int | None = None) -> SearchResult:
+def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chunk: int | None = None,
+                reference: Sequence[float] | None = None) -> SearchResult:
     """Dense grid baseline: every design of the outer-product grid over the bounds.
 
     Evaluated in fixed-size chunks (the last one padded) with one compiled program.
+    ``reference``: the hypervolume reference point (default: the problem's).
     """
+    reference = problem.reference_point if reference is None else reference
     points = tuple(points or problem.grid_points or (21,) * len(problem.variables))
     chunk = int(chunk or problem.grid_chunk)
     axes = [np.linspace(v.lower, v.upper, p) for v, p in zip(problem.variables, points)]
@@ -42,7 +45,7 @@ def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chu
         values.append(np.asarray(compiled(jnp.asarray(padded)))[: block.shape[0]])
     run_seconds = time.perf_counter() - start
     objectives = np.concatenate(values)
-    hv = hypervolume(objectives, problem.reference_point)
+    hv = hypervolume(objectives, reference)
     return SearchResult(
         method="grid",
         designs=mesh,
@@ -62,6 +65,7 @@ def nsga2_search(
     evaluations: int = 4000,
     seed: int = 0,
     time_limit: float | None = None,
+    reference: Sequence[float] | None = None,
 ) -> SearchResult:
     """NSGA-II baseline (pymoo) on the same objective code, vectorized per generation.
 
@@ -72,7 +76,9 @@ def nsga2_search(
         population: NSGA-II population size.
         evaluations: stop after this many objective evaluations.
         time_limit: optional wall-time limit, s (stops at the next generation).
+        reference: the hypervolume reference point (default: the problem's).
     """
+    reference = problem.reference_point if reference is None else reference
     try:  # pymoo is the optional extra "optimize": imported when this baseline runs
         from pymoo.algorithms.moo.nsga2 import NSGA2  # noqa: PLC0415
         from pymoo.core.problem import Problem  # noqa: PLC0415
@@ -115,7 +121,7 @@ def nsga2_search(
     run_seconds = time.perf_counter() - clock["start"]
     designs = np.concatenate([entry[0] for entry in log])
     objectives = np.concatenate([entry[1] for entry in log])
-    hv = hypervolume_history([entry[1] for entry in log], problem.reference_point)
+    hv = hypervolume_history([entry[1] for entry in log], reference)
     checkpoints, count = [], 0
     for k, entry in enumerate(log):
         count += entry[1].shape[0]

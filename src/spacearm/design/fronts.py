@@ -10,14 +10,15 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["nondominated_mask", "nondominated", "hypervolume", "hypervolume_2d", "hypervolume_history"]
+__all__ = ["nondominated_mask", "nondominated", "hypervolume", "hypervolume_2d", "hypervolume_history",
+           "reference_from_population"]
 
 
 def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
     """``(N,)`` bool: True for points no other point dominates (all objectives maximized).
 
     Duplicates keep their first occurrence only. Two objectives: O(N log N) sweep;
-    more: pairwise comparison.
+    more: moocore's ``is_nondominated`` (pairwise comparison without it).
 
     Args:
         objectives: ``(N, m)`` objective values.
@@ -37,10 +38,20 @@ def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
         best_before = np.concatenate([[-np.inf], np.maximum.accumulate(f2)[:-1]])
         mask[order[f2 > best_before]] = True
         return mask
-    for i in np.flatnonzero(finite):
-        others = f[finite]
-        dominated = np.any(np.all(others >= f[i], axis=1) & np.any(others > f[i], axis=1))
-        mask[i] = not dominated
+    rows = np.flatnonzero(finite)
+    try:
+        import moocore  # noqa: PLC0415 - optional extra: its C filter is O(N log N) for three objectives
+    except ImportError:  # pragma: no cover - optional extra
+        moocore = None
+    if moocore is not None and rows.size:
+        mask[rows] = moocore.is_nondominated(f[rows], maximise=True, keep_weakly=True)
+    else:  # pragma: no cover - pairwise dominance, vectorized in blocks of rows
+        others = f[rows]
+        for begin in range(0, rows.size, 512):
+            block = others[begin:begin + 512]
+            geq = np.all(others[None, :, :] >= block[:, None, :], axis=2)
+            gt = np.any(others[None, :, :] > block[:, None, :], axis=2)
+            mask[rows[begin:begin + 512]] = ~np.any(geq & gt, axis=1)
     # Drop exact duplicates after the first.
     _, first = np.unique(f[mask], axis=0, return_index=True)
     keep = np.flatnonzero(mask)[np.sort(first)]
@@ -120,3 +131,22 @@ def hypervolume_history(batches: Sequence[np.ndarray], reference: Sequence[float
         front = merged[nondominated_mask(merged)]
         values.append(hypervolume(front, reference))
     return np.array(values)
+
+
+def reference_from_population(objectives: np.ndarray, margin: float) -> np.ndarray:
+    """A reference point below the nadir of a population's front, by ``margin`` of its range.
+
+    Args:
+        objectives: ``(N, m)`` the first population's objectives (maximized).
+        margin: share of the front's range (ideal - nadir) put below the nadir; a flat
+            objective gets the margin of its magnitude (or ``margin`` itself at zero).
+    """
+    f = np.asarray(objectives, dtype=np.float64)
+    f = f[np.all(np.isfinite(f), axis=1)]
+    if f.shape[0] == 0:
+        raise ValueError("reference_point: no finite objective values in the first population")
+    front = f[nondominated_mask(f)]
+    nadir, ideal = front.min(axis=0), front.max(axis=0)
+    span = ideal - nadir
+    span = np.where(span > 0, span, np.where(np.abs(nadir) > 0, np.abs(nadir), 1.0))
+    return nadir - margin * span

@@ -214,7 +214,7 @@ class DesignProblem(VariableBounds):
 # YAML ---------------------------------------------------------------------------------
 
 _TOP_KEYS = {"name", "description", "fixed", "variables", "objectives", "reference_point", "wbar",
-             "guaranteed", "search", "baselines"}
+             "guaranteed", "search", "baselines", "hybrid"}  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _FIXED_KEYS = {"base_mass", "base_inertia", "arm_mass", "reach", "links"}
 _SEARCH_KEYS = {f.name for f in dataclasses.fields(SearchSettings)}
 _NSGA_KEYS = {"population", "evaluations", "seed", "time_limit"}

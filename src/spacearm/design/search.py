@@ -22,7 +22,7 @@ import optax
 
 from .._core.batching import pad_leading
 from .._core.errors import ConfigError
-from .fronts import hypervolume, nondominated, nondominated_mask
+from .fronts import hypervolume, nondominated, nondominated_mask, reference_from_population
 from .problem import DesignProblem, SearchSettings
 
 __all__ = ["SearchResult", "pareto_search", "value_and_grad_cost_ratio"]
@@ -172,7 +172,8 @@ def _densify(front_f: np.ndarray, front_x: np.ndarray, count: int) -> np.ndarray
     return np.concatenate(rows)[:count]
 
 
-def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None) -> SearchResult:
+def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None,
+                  reference=None) -> SearchResult:
     """Gradient-based Pareto search: vmapped projected Adam over Chebyshev scalarizations.
 
     1. ``initial_samples`` random designs (value only) give a first front, ideal
@@ -202,6 +203,11 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
 
     Every design the optimizer visits is archived (the objective values come with the
     gradient for free); the front is the non-dominated part of the archive.
+
+    Args:
+        reference: the hypervolume reference point of the checkpoints; None takes the
+            problem's, or, when it gives none, `reference_from_population` of the initial
+            samples (margin 0.1).
 
     Returns:
         A `SearchResult` with every evaluated design in order.
@@ -278,7 +284,8 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         value_ready.result()
     compile_seconds = time.perf_counter() - start
 
-    reference = problem.reference_point
+    if reference is None:
+        reference = getattr(problem, "reference_point", None)
     two = m == 2
     designs, values, checkpoints = [], [], []
     start = time.perf_counter()
@@ -289,6 +296,9 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     designs.append(x_samples)
     values.append(f_samples)
     evaluations = settings.initial_samples
+    if reference is None:
+        reference = reference_from_population(f_samples, 0.1)
+    reference = [float(r) for r in reference]
     keep = nondominated_mask(f_samples)
     front_f, front_x = f_samples[keep], x_samples[keep]
     checkpoints.append(dict(evaluations=evaluations, seconds=time.perf_counter() - start,
@@ -378,7 +388,7 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         evaluations=evaluations,
         compile_seconds=compile_seconds,
         run_seconds=run_seconds,
-        extra=dict(directions=settings.directions, starts=settings.starts, steps=steps_done,
+        extra=dict(reference_point=reference, directions=settings.directions, starts=settings.starts, steps=steps_done,
                    gradient=settings.gradient, value_evaluations=settings.initial_samples + densified,
                    densify_evaluations=densified,
                    value_and_gradient_evaluations=evaluations - settings.initial_samples - densified,

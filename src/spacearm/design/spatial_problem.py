@@ -38,7 +38,8 @@ from ..models.spatial import fields as spatial_fields
 from .problem import DesignProblem, SearchSettings, Variable, VariableBounds, parse_baselines, parse_search, problem_from_mapping
 from .._core.schema import read_yaml
 
-__all__ = ["SpatialDesignProblem", "SPATIAL_OBJECTIVES", "spatial_problem_from_mapping", "load_design_problem"]
+__all__ = ["SpatialDesignProblem", "SPATIAL_OBJECTIVES", "spatial_problem_from_mapping", "load_design_problem",
+           "load_problem"]
 
 # Objective name -> (joint_average metric, sign): all maximized.
 SPATIAL_OBJECTIVES = {
@@ -46,9 +47,12 @@ SPATIAL_OBJECTIVES = {
     "gci": ("conditioning", 1.0),                   # global conditioning index, mean 1/kappa(J*_v)
     "low_disturbance": ("base_disturbance", -1.0),  # minus the mean ||C_w||_F, rad/rad
     "w_d_avg": ("dynamic_manipulability", 1.0),     # mean dynamic manipulability
+    "low_total_mass": ("total_mass", -1.0),         # minus the bus mass plus every arm mass, kg
 }
+# Metrics of the design itself, not averaged over postures: name -> f(robot).
+_DESIGN_METRICS = {"total_mass": lambda robot: robot.base_mass + spatial_fields.arm_mass(robot)}
 _TOP_KEYS = {"name", "description", "robot", "variables", "objectives", "reference_point", "average", "search",
-             "baselines"}
+             "baselines", "hybrid"}  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _AVERAGE_KEYS = {"samples", "randomizations", "seed"}
 
 
@@ -62,7 +66,8 @@ class SpatialDesignProblem(VariableBounds):
         robot_file: the robot file, as named in the problem file.
         variables: design fields with bounds (field units: m, rad, kg or a factor).
         objectives: names from `SPATIAL_OBJECTIVES`, all maximized.
-        reference_point: hypervolume reference point, one value per objective.
+        reference_point: hypervolume reference point, one value per objective, or None
+            (the search then takes one below the nadir of its first population).
         samples, randomizations, seed: the fixed QMC rule of every average.
     """
 
@@ -71,7 +76,7 @@ class SpatialDesignProblem(VariableBounds):
     robot_file: str
     variables: tuple[Variable, ...]
     objectives: tuple[str, ...]
-    reference_point: tuple[float, ...]
+    reference_point: tuple[float, ...] | None
     samples: int = 2048
     randomizations: int = 8
     seed: int = 0
@@ -103,7 +108,10 @@ class SpatialDesignProblem(VariableBounds):
             values = []
             for name in self.objectives:
                 metric, sign = SPATIAL_OBJECTIVES[name]
-                values.append(sign * joint_average(robot, metric, **options).value)
+                if metric in _DESIGN_METRICS:
+                    values.append(sign * _DESIGN_METRICS[metric](robot))
+                else:
+                    values.append(sign * joint_average(robot, metric, **options).value)
             return jnp.stack(values)
 
         return evaluate
@@ -152,7 +160,8 @@ def spatial_problem_from_mapping(config: Mapping[str, Any], *, source: str = "pr
         lower, upper = number(f"{where}[0]", bounds[0]), number(f"{where}[1]", bounds[1])
         if not lower < upper:
             raise ConfigError(f"{where}: the lower bound must be below the upper bound, got [{lower}, {upper}]")
-        if field in ("base.mass", "base.inertia", "arm.mass", "arm.mass_ratio", "arm.length") and lower <= 0:
+        if (field in ("base.mass", "base.inertia", "arm.mass", "arm.mass_ratio", "arm.length")
+                or field.endswith(".length")) and lower <= 0:
             raise ConfigError(f"{where}: must stay positive, got lower bound {lower}")
         variables.append(Variable(field, lower, upper))
     for i, first in enumerate(variables):
@@ -167,11 +176,13 @@ def spatial_problem_from_mapping(config: Mapping[str, Any], *, source: str = "pr
                        for i, v in enumerate(raw_objectives))
     if len(objectives) < 2 or len(set(objectives)) != len(objectives):
         raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
+    # Optional: when absent, the search takes it below the nadir of its first population.
     reference = config.get("reference_point")
-    if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
-        raise ConfigError(f"{source}: reference_point: one number per objective is required (objectives maximized; "
-                          "low_disturbance is minus the mean ||C_w||_F)")
-    reference = tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
+    if reference is not None:
+        if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
+            raise ConfigError(f"{source}: reference_point: one number per objective, or none (objectives "
+                              "maximized; low_disturbance is minus the mean ||C_w||_F)")
+        reference = tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
 
     average = config.get("average", {}) or {}
     if not isinstance(average, Mapping):
@@ -213,3 +224,15 @@ def load_design_problem(source: str | os.PathLike | Mapping[str, Any], *, name: 
     if isinstance(config, Mapping) and "robot" in config:
         return spatial_problem_from_mapping(config, source=label, base_dir=folder)
     return problem_from_mapping(config, source=label)
+
+
+def load_problem(source: str | os.PathLike | Mapping[str, Any]) -> DesignProblem | SpatialDesignProblem:
+    """A design problem of either family from its YAML file or mapping (``spacearm.load_problem``).
+
+    The same as `load_design_problem` with its defaults: a ``robot:`` key makes a spatial
+    problem, ``fixed:`` a planar one.
+
+    Raises:
+        ConfigError: for a missing or malformed file and any invalid field.
+    """
+    return load_design_problem(source)

@@ -1,4 +1,11 @@
-"""Figures of a design optimization (``spacearm optimize``): the front, the designs, convergence."""
+"""Figures of a design optimization (``spacearm optimize``): the front, the designs, convergence.
+
+Two objectives: the front in objective space and the designs in variable space. Three or
+more: pairwise projections of the front, each colored by a third objective
+(``front.png``), and a parallel-coordinates plot of the front's designs and objectives
+(``designs.png``). Always: the archive hypervolume against evaluations and against wall
+time, compile included (``convergence.png``).
+"""
 
 from __future__ import annotations
 
@@ -7,6 +14,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 
 from ..design import TARGET_FRACTION, DesignProblem, SearchResult
 from ..io import save_figure
@@ -21,6 +29,7 @@ _LABELS = {
 _UNITS = {"b0": "b0 [m]"}
 _STYLE = {
     "gradient": dict(color="tab:red", label="gradient (Chebyshev, vmapped Adam)"),
+    "hybrid": dict(color="tab:red", label="hybrid (evolution + hypervolume gradient)"),
     "nsga2": dict(color="tab:blue", label="NSGA-II (pymoo)"),
     "grid": dict(color="0.35", label="dense grid"),
 }
@@ -30,11 +39,14 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
                  out_dir: Path) -> list[Path]:
     """The front in objective space, the front designs in variable space, convergence.
 
-    Drawn for two objectives (``front.png``, ``designs.png``, ``convergence.png``); for
-    more, ``convergence.png`` only. Fits `spacearm.design.run.ProblemOutput`.
+    ``front.png``, ``designs.png``, ``convergence.png`` (see the module docstring). Fits
+    `spacearm.design.run.ProblemOutput`.
     """
+    main = summary.get("method", "gradient")
     if len(problem.objectives) != 2:
-        return [_convergence(problem, results, summary, out_dir)]
+        return [_pairwise_front(problem, results, summary, out_dir, main),
+                _parallel_coordinates(problem, results[main], out_dir),
+                _convergence(problem, results, summary, out_dir)]
     written = []
     names = problem.objectives
     # 1. Objective space.
@@ -44,14 +56,14 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
         step = max(1, grid.objectives.shape[0] // 6000)
         ax.scatter(grid.objectives[::step, 0], grid.objectives[::step, 1], s=2, color="0.85",
                    label=f"grid designs ({grid.evaluations}, every {step}th shown)", rasterized=True)
-    for method in ("grid", "nsga2", "gradient"):
+    for method in ("grid", "nsga2", main):
         if method in results:
             result = results[method]
             front = result.objectives[result.front()]
             hv = result.checkpoints[-1]["hypervolume"]
             style = dict(_STYLE[method])
             label = f"{style.pop('label')} front: {front.shape[0]} pts, HV {hv:.6f}"
-            if method == "gradient":
+            if method == main:
                 ax.plot(front[:, 0], front[:, 1], ".", ms=3, label=label, **style)
             elif method == "grid":
                 ax.plot(front[:, 0], front[:, 1], "-", lw=1.0, label=label, **style)
@@ -59,7 +71,8 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
                 ax.plot(front[:, 0], front[:, 1], "x", ms=4, label=label, **style)
     ax.set_xlabel(_LABELS.get(names[0], names[0]))
     ax.set_ylabel(_LABELS.get(names[1], names[1]))
-    ax.set_title(f"{problem.name}: Pareto front (both maximized, reference point {tuple(problem.reference_point)})")
+    reference = tuple(round(r, 6) for r in summary["reference_point"])
+    ax.set_title(f"{problem.name}: Pareto front (both maximized, reference point {reference})")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
@@ -67,7 +80,7 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     plt.close(fig)
 
     # 2. Variable space.
-    gradient = results["gradient"]
+    gradient = results[main]
     index = gradient.front()
     designs, objectives = gradient.designs[index], gradient.objectives[index]
     d = len(problem.variables)
@@ -78,7 +91,7 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
             ax.plot(results["grid"].designs[gf, 0], results["grid"].designs[gf, 1], "s", ms=3, mfc="none",
                     color="0.6", label="grid front designs")
         points = ax.scatter(designs[:, 0], designs[:, 1], c=objectives[:, 1], s=8, cmap="viridis",
-                            label="gradient front designs")
+                            label=f"{main} front designs")
         fig.colorbar(points, ax=ax, label=_LABELS.get(names[1], names[1]))
         for v, set_limits in zip(problem.variables, (ax.set_xlim, ax.set_ylim)):
             pad = 0.02 * (v.upper - v.lower)  # designs on a bound stay visible
@@ -98,8 +111,8 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
                 nf = results["nsga2"].front()
                 ax.plot(results["nsga2"].objectives[nf, 1], results["nsga2"].designs[nf, j], "x", ms=3,
                         color=_STYLE["nsga2"]["color"], label="NSGA-II front")
-            ax.plot(objectives[:, 1], designs[:, j], ".", ms=3, color=_STYLE["gradient"]["color"],
-                    label="gradient front")
+            ax.plot(objectives[:, 1], designs[:, j], ".", ms=3, color=_STYLE[main]["color"],
+                    label=f"{main} front")
             ax.set_ylim(variable.lower, variable.upper)
             ax.set_xlabel(_LABELS.get(names[1], names[1]), fontsize=8)
             ax.set_ylabel(_UNITS.get(variable.name, variable.name))
@@ -117,36 +130,101 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     return written
 
 
+def _pairwise_front(problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path,
+                    main: str) -> Path:
+    """Every pair of objectives, the main search's front colored by a third objective,
+    NSGA-II's front as grey crosses."""
+    names = problem.objectives
+    m = len(names)
+    pairs = [(i, j) for i in range(m) for j in range(i + 1, m)]
+    fig, axes = plt.subplots(1, len(pairs), figsize=(5.0 * len(pairs), 4.4), squeeze=False)
+    result = results[main]
+    front = result.objectives[result.front()]
+    for ax, (i, j) in zip(axes[0], pairs):
+        third = next(k for k in range(m) if k not in (i, j))
+        if "nsga2" in results:
+            other = results["nsga2"].objectives[results["nsga2"].front()]
+            ax.plot(other[:, i], other[:, j], "x", ms=3, color="0.6", label=f"NSGA-II front ({other.shape[0]})")
+        points = ax.scatter(front[:, i], front[:, j], c=front[:, third], s=9, cmap="viridis",
+                            label=f"{main} front ({front.shape[0]})")
+        fig.colorbar(points, ax=ax, label=_LABELS.get(names[third], names[third]))
+        ax.set_xlabel(_LABELS.get(names[i], names[i]))
+        ax.set_ylabel(_LABELS.get(names[j], names[j]))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower left")
+    fig.suptitle(f"{problem.name}: Pareto front, pairwise projections (all maximized)")
+    fig.tight_layout()
+    path = save_figure(fig, out_dir / "front.png", dpi=130)
+    plt.close(fig)
+    return path
+
+
+def _parallel_coordinates(problem, result: SearchResult, out_dir: Path) -> Path:
+    """The front's designs: every variable (scaled to its bounds) and objective (scaled to
+    the front's range), one line per design, colored by the first objective."""
+    index = result.front()
+    designs, objectives = result.designs[index], result.objectives[index]
+    scaled_x = (designs - problem.lower) / (problem.upper - problem.lower)
+    span = np.ptp(objectives, axis=0)
+    scaled_f = (objectives - objectives.min(axis=0)) / np.where(span > 0, span, 1.0)
+    columns = np.concatenate([scaled_x, scaled_f], axis=1)
+    labels = list(problem.variable_names) + list(problem.objectives)
+    fig, ax = plt.subplots(figsize=(max(8.0, 1.1 * len(labels)), 4.8))
+    colors = plt.get_cmap("viridis")(scaled_f[:, 0])
+    order = np.argsort(scaled_f[:, 0])
+    for k in order:
+        ax.plot(np.arange(len(labels)), columns[k], "-", lw=0.7, alpha=0.6, color=colors[k])
+    ax.axvline(len(problem.variable_names) - 0.5, color="k", lw=0.8)
+    ax.set_xticks(np.arange(len(labels)))
+    ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("variables: share of the bounds; objectives: share of the front's range")
+    ax.set_title(f"{problem.name}: {index.size} Pareto-optimal designs, colored by {problem.objectives[0]}")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path = save_figure(fig, out_dir / "designs.png", dpi=130)
+    plt.close(fig)
+    return path
+
+
 def _convergence(problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path) -> Path:
-    """Archive hypervolume against evaluations and run time, per method."""
+    """Archive hypervolume against evaluations and against wall time (compile included)."""
     fig, (ax_e, ax_t) = plt.subplots(1, 2, figsize=(12.0, 4.8))
-    best = max(r.checkpoints[-1]["hypervolume"] for r in results.values())
-    for method in ("nsga2", "gradient"):
+    best = summary["best_known_hypervolume"] or max(r.checkpoints[-1]["hypervolume"] for r in results.values())
+    lowest = 1.0
+    for method in ("nsga2", "gradient", "hybrid"):
         if method in results:
-            cp = results[method].checkpoints
+            result = results[method]
+            cp = result.checkpoints
             ev = [c["evaluations"] for c in cp]
-            sec = [c["seconds"] for c in cp]
+            sec = [result.compile_seconds + c["seconds"] for c in cp]
             hv = [c["hypervolume"] / best for c in cp]
+            lowest = min(lowest, hv[len(hv) // 4] if hv else 1.0)
             ax_e.plot(ev, hv, "-", **_STYLE[method])
             ax_t.plot(sec, hv, "-", **_STYLE[method])
     if "grid" in results:
+        grid = results["grid"]
         nested = summary["methods"]["grid"].get("nested_grids", [])
         ev = [r["evaluations"] for r in nested]
         hv = [r["hypervolume"] / best for r in nested]
-        sec = [r["seconds"] for r in nested]
+        sec = [grid.compile_seconds + r["seconds"] for r in nested]
         ax_e.plot(ev, hv, "o--", color="0.35", label="nested grids (coarse to dense)")
         ax_t.plot(sec, hv, "o--", color="0.35", label="nested grids (time per design x size)")
-        target = TARGET_FRACTION * results["grid"].checkpoints[-1]["hypervolume"] / best
+        target = TARGET_FRACTION * grid.checkpoints[-1]["hypervolume"] / best
         for ax in (ax_e, ax_t):
             ax.axhline(target, color="k", lw=0.8, ls=":", label=f"target: {TARGET_FRACTION:.1%} of dense grid")
+    against = summary.get("against_nsga2")
+    if against:
+        level = against["nsga2_final_hypervolume"] / best
+        for ax in (ax_e, ax_t):
+            ax.axhline(level, color="tab:blue", lw=0.8, ls=":", label="NSGA-II's final hypervolume")
     for ax in (ax_e, ax_t):
         ax.set_xscale("log")
-        ax.set_ylim(0.98, 1.0015)
-        ax.set_ylabel("archive hypervolume / best final")
+        ax.set_ylim(max(0.9, min(lowest, 0.995)), 1.0005)
+        ax.set_ylabel("archive hypervolume / best known")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, loc="lower right")
     ax_e.set_xlabel("objective evaluations (value + gradient counts as one)")
-    ax_t.set_xlabel("run time [s] (compile excluded)")
+    ax_t.set_xlabel("wall time [s], compile included")
     fig.suptitle(f"{problem.name}: convergence")
     fig.tight_layout()
     path = save_figure(fig, out_dir / "convergence.png", dpi=130)

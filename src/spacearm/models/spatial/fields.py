@@ -28,6 +28,10 @@ field                      value      what it sets
 ``links.<name>.mass``      kg         the mass of the body whose first URDF link is ``<name>``
                                       (the root link too); its inertia scales with it (the radius
                                       of gyration is kept; a body of zero mass keeps its inertia)
+``links.<name>.length``    factor     that body's geometry times the value: the placement of the
+                                      next joint, the body's centroid offset and the tip offset
+                                      if the body carries the tip times s, its inertia about the
+                                      centroid times s^2 (mass kept); 1 is the identity
 =========================  =========  ==========================================================
 
 The "arm" is everything read from the URDF: the root body (root link and its rigid
@@ -66,7 +70,8 @@ FIELD_HELP = (
     "mount.xyz[i] (m) | mount.rpy[i] (rad) | mount.rpy_deg[i] | base.mass (kg) | base.inertia (a factor on "
     "the 3x3) | base.com[i] (m) | arm.mass (a factor on every arm mass and inertia) | arm.mass_ratio "
     "(arm mass / bus mass) | arm.length (a factor on the arm's geometry; inertias with its square) | "
-    "links.<name>.mass (kg; the body's inertia scales with it)"
+    "links.<name>.mass (kg; the body's inertia scales with it) | links.<name>.length (a factor on that body's "
+    "geometry: next joint, centroid, tip; its inertia with the square)"
 )
 FACTOR_FIELDS = ("base.inertia", "arm.mass", "arm.length")
 _INDEXED = re.compile(r"^(mount\.xyz|mount\.rpy|mount\.rpy_deg|base\.com)\[(-?\d+)\]$")
@@ -107,18 +112,19 @@ def check_field(where: str, field: Any, robot: SpatialRobot) -> str:
     if match:
         name, what = match.groups()
         bodies = _body_names(robot)
-        if what != "mass":
-            raise ConfigError(f"{where}.field: links.{name}.{what}: a link field is 'mass' (links.{name}.mass)")
+        if what not in ("mass", "length"):
+            raise ConfigError(f"{where}.field: links.{name}.{what}: a link field is 'mass' or 'length' "
+                              f"(links.{name}.mass, links.{name}.length)")
         if name not in bodies:
             merged = _merged_into(robot)
             if name in merged:
                 raise ConfigError(f"{where}.field: link '{name}' is merged into body '{merged[name]}' (fixed "
-                                  f"joint); use links.{merged[name]}.mass")
+                                  f"joint); use links.{merged[name]}.{what}")
             raise ConfigError(f"{where}.field: unknown link '{name}'{did_you_mean(name, bodies)}; the arm's links: "
                               f"{', '.join(bodies)}")
         return field
     known = list(_PLAIN) + ["mount.xyz[0]", "mount.rpy[0]", "mount.rpy_deg[0]", "base.com[0]"]
-    known += [f"links.{name}.mass" for name in _body_names(robot)]
+    known += [f"links.{name}.{what}" for name in _body_names(robot) for what in ("mass", "length")]
     raise ConfigError(f"{where}.field: unknown design field '{field}' for a spatial robot"
                       f"{did_you_mean(field, known)}; fields: {FIELD_HELP}")
 
@@ -203,6 +209,8 @@ def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) ->
             joint_lower=robot.joint_lower * limit_scale,
             joint_upper=robot.joint_upper * limit_scale,
         )
+    elif _LINK.match(field).group(2) == "length":
+        changes.update(_body_length(xp, robot, _body_names(robot).index(_LINK.match(field).group(1)), value))
     else:
         name = _LINK.match(field).group(1)
         body = _body_names(robot).index(name)
@@ -222,6 +230,31 @@ def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) ->
                                        for k in range(robot.n_joints)], axis=-3),
             )
     return _rebuild(robot, changes)
+
+
+def _body_length(xp, robot: SpatialRobot, body: int, s) -> dict:
+    """The leaves ``links.<name>.length = s`` changes for body ``body`` (0 = the root body):
+    the next joint's placement (joint ``body + 1``), the centroid and, on the last body
+    (which carries the tip), the tip offset times s; the inertia about the centroid times s^2."""
+    n = robot.n_joints
+    changes: dict[str, Any] = {}
+    if body < n:
+        translation = robot.joint_translation
+        changes["joint_translation"] = xp.stack(
+            [translation[..., k, :] * (_column(s, 1) if k == body else 1.0) for k in range(n)], axis=-2)
+    else:
+        changes["tip_translation"] = robot.tip_translation * _column(s, 1)
+    if body == 0:
+        changes.update(root_com=robot.root_com * _column(s, 1), root_inertia=robot.root_inertia * _column(s * s, 2))
+    else:
+        com, inertia = robot.link_com, robot.link_inertia
+        changes.update(
+            link_com=xp.stack([com[..., k, :] * (_column(s, 1) if k == body - 1 else 1.0) for k in range(n)],
+                              axis=-2),
+            link_inertia=xp.stack([inertia[..., k, :, :] * (_column(s * s, 2) if k == body - 1 else 1.0)
+                                   for k in range(n)], axis=-3),
+        )
+    return changes
 
 
 def _rebuild(robot: SpatialRobot, changes: dict) -> SpatialRobot:
@@ -254,13 +287,15 @@ def field_writes(field: str, robot: SpatialRobot) -> set[str]:
         return {"links.mass[root]"} | {f"links.mass[{i}]" for i in range(n)}
     if field == "arm.length":
         return {"arm.geometry"}
-    body = _body_names(robot).index(_LINK.match(field).group(1))
-    return {f"links.mass[{'root' if body == 0 else body - 1}]"}
+    name, what = _LINK.match(field).groups()
+    body = _body_names(robot).index(name)
+    # A body's length factor commutes with arm.length and with mass factors (all scale).
+    return {f"links.{what}[{'root' if body == 0 else body - 1}]"}
 
 
 def field_unit(field: str) -> str:
     """The unit of a field's values ("1" for a factor or a ratio)."""
-    if field in FACTOR_FIELDS or field == "arm.mass_ratio":
+    if field in FACTOR_FIELDS or field == "arm.mass_ratio" or field.endswith(".length"):
         return "1"
     if field.startswith(("mount.xyz", "base.com")):
         return "m"
@@ -293,6 +328,12 @@ def field_columns(robot: SpatialRobot, fields) -> dict[str, np.ndarray]:
             columns["arm_over_base"] = mass / np.asarray(robot.base_mass)
         elif field == "arm.length":
             columns["arm_path_length_m"] = np.asarray(path_length(robot))
+        elif _LINK.match(field).group(2) == "length":
+            name = _LINK.match(field).group(1)
+            body = _body_names(robot).index(name)
+            columns[f"{re.sub(r'[^A-Za-z0-9_]', '_', name)}_length_m"] = np.asarray(
+                np.linalg.norm(np.asarray(robot.joint_translation)[..., body, :], axis=-1) if body < robot.n_joints
+                else np.linalg.norm(np.asarray(robot.tip_translation), axis=-1))
         else:
             name = _LINK.match(field).group(1)
             body = _body_names(robot).index(name)

@@ -1,0 +1,195 @@
+"""The hybrid design search, the optimize command's output, and the spatial design fields
+and objectives it searches over (``links.<name>.length``, ``low_total_mass``)."""
+
+import csv
+import json
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import yaml
+
+import spacearm as sa
+from spacearm import design
+from spacearm._core.errors import ConfigError
+from spacearm.cli import main as cli_main
+from spacearm.design.fronts import hypervolume, nondominated_mask, reference_from_population
+from spacearm.design.hybrid import HybridSettings, hybrid_search, nondominated_ranks, parse_hybrid
+from spacearm.design.spatial_problem import load_design_problem
+from spacearm.models import load_robot
+from spacearm.models.spatial import fields
+
+from .conftest import count_compiles
+from .test_design import CHEAP_WBAR, reference_config
+
+UR5 = "configs/ur5-smallsat.yaml"
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return load_robot(UR5)
+
+
+# Fields --------------------------------------------------------------------------------
+
+
+def test_length_factor_one_is_the_identity(ur5):
+    for name in ("base_link", "upper_arm_link", "wrist_3_link"):
+        scaled = fields.set_field(ur5, f"links.{name}.length", 1.0)
+        for key in ("joint_translation", "tip_translation", "root_com", "link_com", "root_inertia", "link_inertia",
+                    "link_mass", "root_mass"):
+            np.testing.assert_array_equal(np.asarray(getattr(scaled, key)), np.asarray(getattr(ur5, key)), key)
+
+
+def test_length_factor_scales_one_body(ur5):
+    """upper_arm_link is body 2: the elbow (joint 3) placement, its centroid times s, its
+    inertia times s^2, its mass kept; every other body untouched. The last body carries the tip."""
+    s = 1.3
+    scaled = fields.set_field(ur5, "links.upper_arm_link.length", s)
+    expected = np.array(ur5.joint_translation)
+    expected[2] *= s
+    np.testing.assert_allclose(np.asarray(scaled.joint_translation), expected, rtol=1e-15)
+    com, inertia = np.array(ur5.link_com), np.array(ur5.link_inertia)
+    com[1] *= s
+    inertia[1] *= s * s
+    np.testing.assert_allclose(np.asarray(scaled.link_com), com, rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(scaled.link_inertia), inertia, rtol=1e-15)
+    np.testing.assert_array_equal(np.asarray(scaled.link_mass), np.asarray(ur5.link_mass))
+    np.testing.assert_array_equal(np.asarray(scaled.tip_translation), np.asarray(ur5.tip_translation))
+    tip = fields.set_field(ur5, "links.wrist_3_link.length", s)
+    np.testing.assert_allclose(np.asarray(tip.tip_translation), s * np.asarray(ur5.tip_translation), rtol=1e-15)
+    np.testing.assert_array_equal(np.asarray(tip.joint_translation), np.asarray(ur5.joint_translation))
+    # The whole arm: every body's length factor together is arm.length (no prismatic joints here).
+    each = ur5
+    for name in fields._body_names(ur5):
+        each = fields.set_field(each, f"links.{name}.length", s)
+    whole = fields.set_field(ur5, "arm.length", s)
+    for key in ("joint_translation", "tip_translation", "root_com", "link_com", "root_inertia", "link_inertia"):
+        np.testing.assert_allclose(np.asarray(getattr(each, key)), np.asarray(getattr(whole, key)), rtol=1e-14)
+
+
+def test_link_field_errors_name_the_field(ur5):
+    with pytest.raises(ConfigError, match="'mass' or 'length'"):
+        fields.check_field("axis", "links.upper_arm_link.width", ur5)
+    with pytest.raises(ConfigError, match="did you mean .upper_arm_link."):
+        fields.check_field("axis", "links.upper_arm_lnk.length", ur5)
+
+
+def _tiny_arm_problem(**changes):
+    config = dict(
+        name="tiny-ur5-arm", robot=UR5,
+        variables={"links.upper_arm_link.length": [0.7, 1.3], "links.forearm_link.mass": [1.0, 4.0],
+                   "base.mass": [200.0, 600.0]},
+        objectives=["w_avg", "low_disturbance", "low_total_mass"],
+        average={"samples": 64, "randomizations": 4, "seed": 0},
+    )
+    config.update(changes)
+    return config
+
+
+@pytest.fixture(scope="module")
+def tiny_arm():
+    return load_design_problem(_tiny_arm_problem(), base_dir=".")
+
+
+def test_low_total_mass_and_gradients_match_finite_differences(tiny_arm, ur5):
+    """low_total_mass = -(bus + every arm mass); every objective's gradient against central
+    differences (the QMC rule is fixed, so each objective is a smooth function of the design)."""
+    assert tiny_arm.reference_point is None
+    objective = jax.jit(tiny_arm.objective_function())
+    x = np.array([1.1, 2.0, 420.0])
+    f = np.asarray(objective(x))
+    arm = float(ur5.root_mass) + float(np.sum(ur5.link_mass)) - float(ur5.link_mass[2]) + 2.0
+    assert f[2] == pytest.approx(-(420.0 + arm), rel=1e-15)
+    jacobian = np.asarray(jax.jit(jax.jacrev(tiny_arm.objective_function()))(x))
+    steps = np.array([1e-5, 1e-5, 1e-3])
+    for j in range(3):
+        up, down = x.copy(), x.copy()
+        up[j] += steps[j]
+        down[j] -= steps[j]
+        difference = (np.asarray(objective(up)) - np.asarray(objective(down))) / (2 * steps[j])
+        np.testing.assert_allclose(jacobian[:, j], difference, rtol=1e-6, atol=1e-9 * np.abs(f).max())
+    assert jacobian[0, 0] > 0  # a longer upper arm reaches further: more w_avg
+    assert jacobian[2, 1] == pytest.approx(-1.0) and jacobian[2, 2] == pytest.approx(-1.0)
+
+
+# The search ----------------------------------------------------------------------------
+
+
+def test_nondominated_ranks_peel_layers():
+    f = np.array([[3.0, 1.0], [1.0, 3.0], [2.0, 0.5], [0.5, 2.0], [0.2, 0.2], [3.0, 1.0]])
+    np.testing.assert_array_equal(nondominated_ranks(f), [0, 0, 1, 1, 2, 0])
+
+
+def test_reference_from_population_lies_below_the_front_nadir():
+    f = np.array([[1.0, 4.0], [3.0, 2.0], [0.5, 0.5]])
+    np.testing.assert_allclose(reference_from_population(f, 0.1), [1.0 - 0.2, 2.0 - 0.2])
+
+
+def test_parse_hybrid_checks_its_section():
+    assert parse_hybrid("f.yaml", {"population": 12}).population == 12
+    with pytest.raises(ConfigError, match="f.yaml: hybrid.population"):
+        parse_hybrid("f.yaml", {"population": 2})
+    with pytest.raises(ConfigError, match="populaton"):
+        parse_hybrid("f.yaml", {"populaton": 12})
+
+
+@pytest.fixture(scope="module")
+def planar_hybrid():
+    problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR))
+    with count_compiles() as compiles:
+        result = hybrid_search(problem, HybridSettings(population=16, generations=6, seed=3))
+    return problem, result, dict(compiles)
+
+
+def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
+    problem, result, compiles = planar_hybrid
+    f = result.objectives
+    # Every evaluated design is in the box and archived, with the values batch_function gives.
+    assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
+    assert result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 3 * 16  # start, then steps, children, densified
+    np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
+    hv = [c["hypervolume"] for c in result.checkpoints]
+    assert np.all(np.diff(hv) >= 0)
+    assert hv[-1] == pytest.approx(hypervolume(f, problem.reference_point), rel=1e-14)
+    assert result.extra["accepted_gradient_steps"] > 0
+    # Each heavy program compiled once: the value program and the gradient (VJP) program.
+    heavy = {name: count for name, count in compiles.items() if "evaluate" in name or "pull" in name}
+    assert heavy and max(heavy.values()) == 1, compiles
+
+
+def test_hybrid_gradient_steps_raise_the_hypervolume_of_a_population(planar_hybrid):
+    """More generations of the same seed never end lower, and the hybrid beats its own
+    space-filling start."""
+    problem, result, _ = planar_hybrid
+    assert result.checkpoints[-1]["hypervolume"] > result.checkpoints[0]["hypervolume"]
+
+
+@pytest.mark.slow
+def test_spatial_optimize_without_reference_writes_a_front_that_batch_function_reproduces(tmp_path):
+    """A 3-objective spatial problem with no reference point (compiles two spatial programs:
+    about a minute on a loaded machine): the reference is chosen and written, pareto.csv holds
+    variables then objectives, and its objectives are batch_function() at its designs to 1e-9."""
+    config = _tiny_arm_problem(hybrid={"population": 8, "generations": 2},
+                               baselines={"nsga2": {"population": 8}})
+    config["robot"] = str(Path(UR5).resolve())
+    path = tmp_path / "arm.yaml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
+    out = tmp_path / "out"
+    assert cli_main(["optimize", str(path), "--out", str(out), "--nsga2-factor", "0.2"]) == 0
+    with open(out / "pareto.csv") as handle:
+        rows = list(csv.reader(handle))
+    variables = list(config["variables"])
+    assert rows[0] == variables + config["objectives"]
+    table = np.array(rows[1:], dtype=float)
+    problem = sa.load_problem(str(path))  # the public entry point reads spatial problem files too
+    again = np.asarray(problem.batch_function()(jnp.asarray(table[:, :3])))
+    np.testing.assert_allclose(table[:, 3:], again, rtol=1e-9, atol=0)
+    assert np.all(nondominated_mask(table[:, 3:]))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["reference_point_from"].startswith("nadir")
+    assert len(summary["reference_point"]) == 3 and summary["against_nsga2"]["nsga2_final_hypervolume"] > 0
+    for name in ("front.png", "designs.png", "convergence.png"):
+        assert (out / name).stat().st_size > 0
