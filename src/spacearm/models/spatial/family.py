@@ -28,6 +28,7 @@ from .primitives import (
     jacobians,
     mass_matrix,
     momentum_map,
+    posture_quantities,
     tip,
 )
 from .robot import SpatialRobot
@@ -68,6 +69,7 @@ class SpatialFamily(RobotFamily):
         "base_rate_matrix": base_twist_map,
         "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
+        "posture_quantities": posture_quantities,
     }
 
     def joint_count(self, robot: SpatialRobot) -> int:
