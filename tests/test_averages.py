@@ -38,6 +38,21 @@ def test_joint_box_one_turn_and_limits():
     np.testing.assert_allclose(np.asarray(upper), np.pi)
 
 
+def test_one_sided_limits_cover_one_turn_from_the_finite_limit():
+    """One rule for every joint-box search: the planar reach grid and the averages share it."""
+    planar = sa.umetani1990()
+    inf = np.inf
+    robot = planar.replace(joint_lower=jnp.array([-0.5, -inf]), joint_upper=jnp.array([inf, 1.0]))
+    lower, upper = joint_box(robot)
+    np.testing.assert_allclose(np.asarray(lower), [-0.5, 1.0 - 2 * np.pi], rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(upper), [-0.5 + 2 * np.pi, 1.0], rtol=1e-15)
+    # A one-sided joint covers every angle once: the reach radius equals the free arm's
+    # closed form (stretched at phi1 = 2 pi; a box stopping at pi would miss it, 26 % short).
+    one_sided = planar.replace(joint_lower=jnp.array([2.0, -inf]), joint_upper=jnp.array([inf, inf]))
+    _, outer, _, _ = sa.maximum_reachable_radii(one_sided)
+    np.testing.assert_allclose(float(outer), float(sa.maximum_reachable_radius(planar)), rtol=1e-9)
+
+
 @pytest.mark.parametrize("seed", [None, 4])
 def test_mean_manipulability_matches_planar_closed_form(seed):
     robot = sa.umetani1990() if seed is None else random_robot(np.random.default_rng(seed), 2)

@@ -45,8 +45,8 @@ import numpy as np
 
 from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_determinant, tip_position
 from ..models.family import family_of
-from ..models.planar.robot import PlanarRobot
 from ..motion.spatial_paths import spatial_straight_tip_path
+from .singularities import path_independent_radius as planar_path_independent_radius
 from .workspaces import maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius
 from .workspaces import maximum_reachable_radius as planar_maximum_reachable_radius
 from .joint_box import box_postures, check_joint_box, digital_shifts, joint_box, periodic_joints, sobol_direction_numbers, sobol_points
@@ -61,6 +61,7 @@ __all__ = [
     "singularity_measure",
     "singular_postures",
     "singular_radius",
+    "path_independent_radius",
     "guaranteed_workspace",
     "icosphere_directions",
     "StraightPathWorkspace",
@@ -217,21 +218,27 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
     return _reachable(robot, starts, steps, seed, rate)
 
 
+# Families with closed forms for Area 3's radii (free joints): (outer, inner).
+_REACH_CLOSED_FORMS = {"planar": (planar_maximum_reachable_radius, planar_maximum_reachable_inner_radius)}
+
+
 def maximum_reachable_radius(robot, **options) -> jax.Array:
     """Area 3's outer radius about the system centroid, m (the public ``sa.maximum_reachable_radius``).
 
     Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)), exactly as before.
     Spatial robots: the largest |tip| over the joint box, by `reachable_radii`.
     """
-    if isinstance(robot, PlanarRobot):
-        return planar_maximum_reachable_radius(robot)
+    closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
+    if closed is not None:
+        return closed[0](robot)
     return reachable_radii(robot, **options).outer
 
 
 def maximum_reachable_inner_radius(robot, **options) -> jax.Array:
     """Area 3's hole (smallest |tip| over the joint box), m; planar: the closed form."""
-    if isinstance(robot, PlanarRobot):
-        return planar_maximum_reachable_inner_radius(robot)
+    closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
+    if closed is not None:
+        return closed[1](robot)
     return reachable_radii(robot, **options).inner
 
 
@@ -454,6 +461,27 @@ def singular_radius(
     """
     postures = singular_postures(robot, jacobian, samples=samples, keep=keep, seed=seed)
     return _closest_singular(robot, postures, jacobian, candidates, descent_steps, newton_steps)
+
+
+# Families with a dedicated scan of the dynamic singular set for two joints (the planar
+# root tracing of det J*, `spacearm.analysis.singularities`).
+_PATH_INDEPENDENT_SCANS = {"planar": planar_path_independent_radius}
+
+
+def path_independent_radius(robot, **options) -> jax.Array:
+    """The path-independent workspace radius (Papadopoulos & Dubowsky), m, for any family.
+
+    The closest approach to the system centroid of a dynamic-singular tip position.
+    Planar two-link arms: the root tracing of det J* (options ``n_phi1``, ``n_phi2``,
+    ... of `spacearm.analysis.singularities.dynamic_singularities`; batches of designs
+    accepted). Other robots: `singular_radius` with ``jacobian="generalized"`` (one
+    design; its options), the radius alone.
+    """
+    family = family_of(robot)
+    scan = _PATH_INDEPENDENT_SCANS.get(family.name)
+    if scan is not None and family.joint_count(robot) == 2:
+        return scan(robot, **options)
+    return singular_radius(robot, "generalized", **options)[0]
 
 
 def guaranteed_workspace(robot, **options) -> GuaranteedWorkspace:

@@ -27,13 +27,11 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from .._core.schema import read_yaml
-    from ..design import run_problem
-    from ..design.spatial_problem import load_design_problem
+    from ..design import load_problem, run_problem
     from ..figures.design import plot_results
 
     config = read_yaml(args.file, what="design problem file")
-    problem = load_design_problem(config, name=os.fspath(args.file),
-                                  base_dir=os.path.dirname(os.path.abspath(args.file)))
+    problem = load_problem(config, name=os.fspath(args.file), base_dir=os.path.dirname(os.path.abspath(args.file)))
     out_dir = Path(args.out) if args.out else Path("results") / problem.name
     run_problem(problem, out_dir, baselines=not args.no_baselines, config=config, outputs=(plot_results,),
                 command=sys.argv, cost_ratio="measured" if args.cost_ratio else "search")

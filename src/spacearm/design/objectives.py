@@ -1,4 +1,10 @@
-"""The design objectives, all maximized: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2."""
+"""The design objectives, all maximized.
+
+Planar closed forms: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2. Joint-box
+averages (`AVERAGE_OBJECTIVES`, spatial robots): the mean translational w*, the global
+conditioning index, minus the mean base disturbance and the mean dynamic manipulability,
+evaluated together by `spacearm.analysis.averages.joint_averages`.
+"""
 
 from __future__ import annotations
 
@@ -12,9 +18,27 @@ from ..analysis import average_manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
 
-__all__ = ["OBJECTIVES", "guaranteed_area", "maximum_reachable_area", "objective"]
+__all__ = ["OBJECTIVES", "AVERAGE_OBJECTIVES", "SPATIAL_OBJECTIVES", "objectives_for", "guaranteed_area",
+           "maximum_reachable_area", "objective"]
 
 OBJECTIVES = ("wbar", "S_G", "S_M")
+
+# Objective name -> (joint_average metric, sign): all maximized.
+AVERAGE_OBJECTIVES = {
+    "w_avg": ("manipulability", 1.0),              # mean translational w*, m^3
+    "gci": ("conditioning", 1.0),                   # global conditioning index, mean 1/kappa(J*_v)
+    "low_disturbance": ("base_disturbance", -1.0),  # minus the mean ||C_w||_F, rad/rad
+    "w_d_avg": ("dynamic_manipulability", 1.0),     # mean dynamic manipulability
+}
+SPATIAL_OBJECTIVES = AVERAGE_OBJECTIVES
+
+# The objectives each robot family offers (the planar ones are the paper's closed forms).
+_BY_FAMILY = {"planar": OBJECTIVES, "spatial": tuple(AVERAGE_OBJECTIVES)}
+
+
+def objectives_for(family: str) -> tuple[str, ...]:
+    """The objective names a design problem over robots of ``family`` may use."""
+    return _BY_FAMILY.get(family, tuple(AVERAGE_OBJECTIVES))
 
 
 def guaranteed_area(robot: PlanarRobot, *, clamp: bool = True) -> jax.Array:

@@ -38,6 +38,10 @@ class RobotFamily:
         rotates_with_base: whether kernels take ``base_rotation`` (spatial: the
             primitives work in bus axes; the generic layer rotates the results).
         fast_paths: closed forms by public kernel name.
+        fields: the family's named design numbers (a module with ``FIELD_HELP``,
+            ``canonical_name``, ``check_field``, ``set_field``, ``field_stage``,
+            ``conflicting_number``, ``field_unit``, ``field_columns``): what sweep axes
+            and design variables set.
     """
 
     name: ClassVar[str] = "abstract"
@@ -46,6 +50,7 @@ class RobotFamily:
     posture_offset: ClassVar[int] = 0
     rotates_with_base: ClassVar[bool] = False
     fast_paths: Mapping[str, Callable[..., Any]] = {}
+    fields: ClassVar[Any] = None
 
     def joint_count(self, robot) -> int:
         """The number of joints n (static)."""

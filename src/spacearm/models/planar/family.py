@@ -11,6 +11,7 @@ import jax
 import jax.numpy as jnp
 
 from ..family import RobotFamily
+from . import fields as planar_fields
 from .closed_forms import (
     arm_jacobian,
     base_jacobian,
@@ -45,6 +46,7 @@ class PlanarFamily(RobotFamily):
         "fixed_base_manipulability": fixed_base_manipulability,
         "straight_path_field": straight_path_field,
     }
+    fields = planar_fields
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links

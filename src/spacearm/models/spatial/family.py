@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 
 from ..family import RobotFamily
+from . import fields as spatial_fields
 from ..._core.linalg import gram_root_determinant
 from .primitives import (
     arm_inertia,
@@ -71,6 +72,7 @@ class SpatialFamily(RobotFamily):
         "fixed_base_manipulability": _fixed_base_manipulability,
         "posture_quantities": posture_quantities,
     }
+    fields = spatial_fields
 
     def joint_count(self, robot: SpatialRobot) -> int:
         return robot.n_joints
