@@ -375,32 +375,10 @@ def singular_postures(
     return _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol)
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "candidates", "descent_steps", "newton_steps"))
-def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, descent_steps, newton_steps):
-    lower, upper = joint_box(robot)
-    wraps = _wraps(robot)
-    radius = jnp.where(postures.on_set, postures.radius, jnp.inf)
-    _, best = jax.lax.top_k(-radius, candidates)
-    q0 = postures.joints[best]
-    measure_grad = jax.vmap(jax.grad(lambda q: singularity_measure(robot, q, jacobian)))
-    radius_grad = jax.vmap(jax.grad(lambda q: _tip_radius_sq(robot, q)))
-    span = jnp.max(upper - lower)
-
-    def step(k, q):
-        g, normal = radius_grad(q), measure_grad(q)
-        nn = jnp.sum(normal * normal, axis=-1, keepdims=True)
-        tangent = g - jnp.sum(g * normal, axis=-1, keepdims=True) * normal / jnp.where(nn > 0, nn, 1.0)
-        size = jnp.linalg.norm(tangent, axis=-1, keepdims=True)
-        length = span * 0.02 * 0.5 ** (12.0 * k / descent_steps)  # geometric: 2 % of the box to ~5e-6
-        moved = q - length * tangent / jnp.where(size > 0, size, 1.0)
-        moved = _newton_project(robot, moved, jacobian, newton_steps, lower, upper, wraps)
-        better = _tip_radius_sq(robot, moved) < _tip_radius_sq(robot, q)
-        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= postures.tolerance
-        return jnp.where((better & on_set)[:, None], moved, q)
-
-    q = jax.lax.fori_loop(0, descent_steps, step, q0)
+def _closest_value(robot, q, tolerance, jacobian, lower, upper, wraps):
+    """The smallest radius over the rows of ``q`` on the set, differentiable in the design, and its posture."""
     q = jax.lax.stop_gradient(q)
-    on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= postures.tolerance
+    on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= tolerance
     radii = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, q)), jnp.inf)
     k = jnp.argmin(radii)
     best = q[k]
@@ -425,6 +403,71 @@ def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, d
         constraint = singularity_measure(robot, posture, jacobian)
         value = value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
     return jnp.where(jnp.isfinite(radii[k]), value, jnp.inf), best
+
+
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "candidates"))
+def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, projection_steps, newton_steps, seed):
+    """Sampling, projection and descent in ONE loop whose body holds the only Newton projection.
+
+    Iterations 0..P-1 project the ``keep`` samples nearest the set onto it, ``candidates``
+    rows at a time (``projection_steps`` Newton steps); iterations P..P+D-1 are the
+    descent steps on the ``candidates`` closest to the centroid (``newton_steps`` each).
+    The step counts and the seed are traced: they change no shape. The search runs on
+    the design with its gradient stopped; the returned radius is differentiable through
+    `_closest_value` (envelope theorem).
+    """
+    design = robot
+    robot = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
+    n = family_of(robot).joint_count(robot)
+    lower, upper = joint_box(robot)
+    wraps = _wraps(robot)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples, digital_shifts(seed, 1, n))[0]
+    joints = lower + (upper - lower) * unit
+    s = singularity_measure(robot, joints, jacobian)
+    tolerance = (1e-9 if n == family_of(robot).translational_rows else 1e-6) * jnp.median(jnp.abs(s))
+    _, nearest = jax.lax.top_k(-jnp.abs(s), keep)
+    chunks = -(-keep // candidates)
+    buffer = joints[nearest]
+    buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunks * candidates - keep, n))])
+    measure_grad = jax.vmap(jax.grad(lambda q: singularity_measure(robot, q, jacobian)))
+    radius_grad = jax.vmap(jax.grad(lambda q: _tip_radius_sq(robot, q)))
+    span = jnp.max(upper - lower)
+    descent_steps = jnp.asarray(descent_steps)
+
+    def tangent_step(k, q):
+        g, normal = radius_grad(q), measure_grad(q)
+        nn = jnp.sum(normal * normal, axis=-1, keepdims=True)
+        tangent = g - jnp.sum(g * normal, axis=-1, keepdims=True) * normal / jnp.where(nn > 0, nn, 1.0)
+        size = jnp.linalg.norm(tangent, axis=-1, keepdims=True)
+        length = span * 0.02 * 0.5 ** (12.0 * k / descent_steps)  # geometric: 2 % of the box to ~5e-6
+        return q - length * tangent / jnp.where(size > 0, size, 1.0)
+
+    def candidates_of(buffer):
+        on_set = jnp.abs(singularity_measure(robot, buffer, jacobian)) <= tolerance
+        radius = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, buffer)), jnp.inf)
+        radius = jnp.where(jnp.arange(radius.shape[0]) < keep, radius, jnp.inf)  # padding never chosen
+        _, best = jax.lax.top_k(-radius, candidates)
+        return buffer[best]
+
+    def body(t, state):
+        buffer, q = state
+        projecting = t < chunks
+        q = jax.lax.cond(t == chunks, lambda: candidates_of(buffer), lambda: q)
+        chunk = jax.lax.dynamic_slice_in_dim(buffer, jnp.minimum(t, chunks - 1) * candidates, candidates)
+        start = jax.lax.cond(projecting, lambda: chunk, lambda: tangent_step(t - chunks, q))
+        moved = _newton_project(robot, start, jacobian, jnp.where(projecting, projection_steps, newton_steps),
+                                lower, upper, wraps)
+        buffer = jnp.where(projecting, jax.lax.dynamic_update_slice_in_dim(buffer, moved, t * candidates, 0), buffer)
+        better = _tip_radius_sq(robot, moved) < _tip_radius_sq(robot, q)
+        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= tolerance
+        q = jnp.where(projecting, q, jnp.where((better & on_set)[:, None], moved, q))
+        return buffer, q
+
+    q0 = jnp.zeros((candidates, n), joints.dtype)
+    _, q = jax.lax.fori_loop(0, chunks + descent_steps, body, (buffer, q0))
+    q = jnp.where(descent_steps > 0, q, candidates_of(buffer))
+    lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
+    return _closest_value(design, q, tolerance, jacobian, lower, upper, wraps)
 
 
 def singular_radius(
@@ -459,8 +502,8 @@ def singular_radius(
         only with the singular posture held fixed (the motion of the set is not
         included). Joints at a limit at the minimum move with the limit.
     """
-    postures = singular_postures(robot, jacobian, samples=samples, keep=keep, seed=seed)
-    return _closest_singular(robot, postures, jacobian, candidates, descent_steps, newton_steps)
+    check_joint_box(robot)
+    return _singular_radius(robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed)
 
 
 # Families with a dedicated scan of the dynamic singular set for two joints (the planar
