@@ -47,6 +47,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.models.planar.schema", "Models", "the planar robot file, the Table 1 preset"),
     ("spacearm.models.planar.closed_forms", "Models", "design coefficients (virtual manipulator), eq. 1, 2, 5, 6, 10 in closed form"),
     ("spacearm.models.planar.family", "Models", "the planar primitives and the closed forms registered as fast paths"),
+    ("spacearm.models.planar.fields", "Models", "named planar design numbers (base, links, shares, arm mass and split)"),
     ("spacearm.models.spatial", "Models", "the spatial family: URDF arms on a free-floating bus"),
     ("spacearm.models.spatial.urdf", "Models", "the URDF reader (standard-library XML; fixed and locked joints merged)"),
     ("spacearm.models.spatial.robot", "Models", "the `SpatialRobot` pytree and its validation"),

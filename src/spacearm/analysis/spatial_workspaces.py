@@ -429,8 +429,10 @@ def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, 
     chunks = -(-keep // candidates)
     buffer = joints[nearest]
     buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunks * candidates - keep, n))])
-    measure_grad = jax.vmap(jax.grad(lambda q: singularity_measure(robot, q, jacobian)))
-    radius_grad = jax.vmap(jax.grad(lambda q: _tip_radius_sq(robot, q)))
+    # Forward mode: n tangents ride along one chain pass (reverse mode would add a
+    # second, backward scan per gradient to the program).
+    measure_grad = jax.vmap(jax.jacfwd(lambda q: singularity_measure(robot, q, jacobian)))
+    radius_grad = jax.vmap(jax.jacfwd(lambda q: _tip_radius_sq(robot, q)))
     span = jnp.max(upper - lower)
     descent_steps = jnp.asarray(descent_steps)
 
