@@ -30,7 +30,8 @@ below is a spherical shell (planar: an annulus) described by radii.
   branch, `kinematic_singularity_radius`), and
   the dynamic one `path_independent_radius`.
 
-Every search here is single-design (``vmap`` it for batches; the options are static).
+Every search here is single-design (``vmap`` it for batches). Sample counts are static
+(they are shapes); step counts and seeds are traced, so new values reuse the program.
 """
 
 from __future__ import annotations
@@ -176,13 +177,16 @@ def _adam_search(objective, u0, wraps, steps: int, rate: float):
     return u
 
 
-@functools.partial(jax.jit, static_argnames=("starts", "steps", "seed"))
-def _reachable(robot, starts: int, steps: int, seed: int, rate: float):
+@functools.partial(jax.jit, static_argnames=("starts",))
+def _reachable(robot, starts: int, steps, seed, rate):
     wraps = _wraps(robot)
     u0 = _start_points(robot, starts, seed)
+    # The search runs on the design with its gradient stopped (its step count is a traced
+    # loop bound); the radius below is differentiable at the optimizer (envelope theorem).
+    fixed = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
 
     def radius_sq(u):
-        return jnp.sum(tip_position(robot, box_postures(robot, u)) ** 2)
+        return jnp.sum(tip_position(fixed, box_postures(fixed, u)) ** 2)
 
     lower, upper = joint_box(robot)
     results = []
@@ -335,7 +339,7 @@ def _newton_project(robot, joints, jacobian, steps, lower, upper, wraps):
     return z[:, :n]
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "newton_steps", "seed", "tol"))
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep"))
 def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
     n = family_of(robot).joint_count(robot)
     lower, upper = joint_box(robot)
@@ -348,8 +352,6 @@ def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
     q = _newton_project(robot, joints[nearest], jacobian, newton_steps, lower, upper, wraps)
     residual = jnp.abs(singularity_measure(robot, q, jacobian))
     tip = tip_position(robot, _joints_to_posture(robot, q))
-    if tol is None:
-        tol = 1e-9 if n == family_of(robot).translational_rows else 1e-6
     tolerance = tol * scale
     return SingularPostures(q, residual, residual <= tolerance, jnp.linalg.norm(tip, axis=-1), tip, tolerance)
 
@@ -372,6 +374,8 @@ def singular_postures(
     example where the set meets a joint limit); discard them.
     """
     check_joint_box(robot)
+    if tol is None:
+        tol = 1e-9 if family_of(robot).joint_count(robot) == family_of(robot).translational_rows else 1e-6
     return _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol)
 
 
