@@ -450,28 +450,29 @@ def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, 
 
     def candidates_of(buffer):
         on_set = jnp.abs(singularity_measure(robot, buffer, jacobian)) <= tolerance
-        radius = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, buffer)), jnp.inf)
-        radius = jnp.where(jnp.arange(radius.shape[0]) < keep, radius, jnp.inf)  # padding never chosen
-        _, best = jax.lax.top_k(-radius, candidates)
-        return buffer[best]
+        radius_sq = jnp.where(on_set, _tip_radius_sq(robot, buffer), jnp.inf)
+        radius_sq = jnp.where(jnp.arange(radius_sq.shape[0]) < keep, radius_sq, jnp.inf)  # padding never chosen
+        _, best = jax.lax.top_k(-radius_sq, candidates)
+        return buffer[best], radius_sq[best]
 
     def body(t, state):
-        buffer, q = state
+        buffer, q, q_radius_sq = state
         projecting = t < chunks
-        q = jax.lax.cond(t == chunks, lambda: candidates_of(buffer), lambda: q)
+        q, q_radius_sq = jax.lax.cond(t == chunks, lambda: candidates_of(buffer), lambda: (q, q_radius_sq))
         chunk = jax.lax.dynamic_slice_in_dim(buffer, jnp.minimum(t, chunks - 1) * candidates, candidates)
         start = jax.lax.cond(projecting, lambda: chunk, lambda: tangent_step(t - chunks, q))
         moved = _newton_project(robot, start, jacobian, jnp.where(projecting, projection_steps, newton_steps),
                                 lower, upper, wraps)
         buffer = jnp.where(projecting, jax.lax.dynamic_update_slice_in_dim(buffer, moved, t * candidates, 0), buffer)
-        better = _tip_radius_sq(robot, moved) < _tip_radius_sq(robot, q)
+        moved_radius_sq = _tip_radius_sq(robot, moved)
         on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= tolerance
-        q = jnp.where(projecting, q, jnp.where((better & on_set)[:, None], moved, q))
-        return buffer, q
+        # The step at t == chunks exists only to pick the candidates when no descent is asked for.
+        accept = ~projecting & (descent_steps > 0) & (moved_radius_sq < q_radius_sq) & on_set
+        q = jnp.where(accept[:, None], moved, q)
+        return buffer, q, jnp.where(accept, moved_radius_sq, q_radius_sq)
 
-    q0 = jnp.zeros((candidates, n), joints.dtype)
-    _, q = jax.lax.fori_loop(0, chunks + descent_steps, body, (buffer, q0))
-    q = jnp.where(descent_steps > 0, q, candidates_of(buffer))
+    state = (buffer, jnp.zeros((candidates, n), joints.dtype), jnp.full((candidates,), jnp.inf, joints.dtype))
+    _, q, _ = jax.lax.fori_loop(0, chunks + jnp.maximum(descent_steps, 1), body, state)
     lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
     return _closest_value(design, q, tolerance, jacobian, lower, upper, wraps)
 
