@@ -82,7 +82,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.planning.spatial_reach", "Planning", "reaching a point in 3-D: turn the bus, then a straight path"),
     ("spacearm.design", "Design", "gradient Pareto search over design numbers"),
     ("spacearm.design.problem", "Design", "design problems: variables, objectives, settings, the problem file"),
-    ("spacearm.design.spatial_problem", "Design", "Pareto problems over spatial mount and bus designs"),
+    ("spacearm.design.spatial_problem", "Design", "former names of the spatial design problem (now `spacearm.design.problem`)"),
     ("spacearm.design.objectives", "Design", "the objective functions"),
     ("spacearm.design.fronts", "Design", "non-dominated sets and hypervolume"),
     ("spacearm.design.search", "Design", "the gradient Pareto search"),
