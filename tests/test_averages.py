@@ -45,6 +45,21 @@ def test_joint_box_one_turn_and_limits():
     np.testing.assert_allclose(np.asarray(upper), np.pi)
 
 
+def test_one_sided_limits_cover_one_turn_from_the_finite_limit():
+    """One rule for every joint-box search: the planar reach grid and the averages share it."""
+    planar = sa.umetani1990()
+    inf = np.inf
+    robot = planar.replace(joint_lower=jnp.array([-0.5, -inf]), joint_upper=jnp.array([inf, 1.0]))
+    lower, upper = joint_box(robot)
+    np.testing.assert_allclose(np.asarray(lower), [-0.5, 1.0 - 2 * np.pi], rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(upper), [-0.5 + 2 * np.pi, 1.0], rtol=1e-15)
+    # A one-sided joint covers every angle once: the reach radius equals the free arm's
+    # closed form (stretched at phi1 = 2 pi; a box stopping at pi would miss it, 26 % short).
+    one_sided = planar.replace(joint_lower=jnp.array([2.0, -inf]), joint_upper=jnp.array([inf, inf]))
+    _, outer, _, _ = sa.maximum_reachable_radii(one_sided)
+    np.testing.assert_allclose(float(outer), float(sa.maximum_reachable_radius(planar)), rtol=1e-9)
+
+
 @pytest.mark.parametrize("seed", [None, 4])
 def test_mean_manipulability_matches_planar_closed_form(seed):
     robot = sa.umetani1990() if seed is None else random_robot(np.random.default_rng(seed), 2)
@@ -142,9 +157,10 @@ def test_spatial_averages_and_gradient():
     e = jnp.zeros(3).at[2].set(1.0)
     fd = (mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e)) - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))) / 2e-6
     np.testing.assert_allclose(float(grad.mount_xyz[2]), float(fd), rtol=1e-5)
-    # The public dispatch returns the estimate with its error for spatial robots.
+    # The public dispatch returns an array for either family (joint_average adds the error).
     estimate = averages.average_manipulability(robot, rtol=1e-3)
-    assert float(estimate.relative_error) <= 1e-3
+    reference = averages.joint_average_manipulability(robot, rtol=1e-3)
+    assert np.shape(estimate) == () and float(estimate) == float(reference.value)
 
 
 @pytest.mark.parametrize("metric", ["conditioning", "base_disturbance", "dynamic_manipulability"])
@@ -167,3 +183,56 @@ def test_other_averages_are_differentiable(metric):
 def test_dynamic_manipulability_needs_a_spatial_robot():
     with pytest.raises(sa.ConfigError, match="spatial"):
         averages.average_dynamic_manipulability(sa.umetani1990())
+
+
+_ALL = ("manipulability", "conditioning", "base_disturbance", "dynamic_manipulability")
+
+
+def test_vector_estimator_fixed_rule_equals_each_metric_alone():
+    """One chain pass for four metrics on a fixed rule: the same numbers as four runs alone."""
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    options = dict(min_samples=2**11, max_samples=2**11, block=256, seed=3)
+    together = averages.joint_averages(robot, _ALL, **options)
+    for metric in _ALL:
+        alone = averages.joint_average(robot, metric, **options)
+        np.testing.assert_allclose(float(together[metric].value), float(alone.value), rtol=1e-14)
+        np.testing.assert_allclose(float(together[metric].error), float(alone.error), rtol=1e-10)
+        assert int(together[metric].samples) == 2**11
+    # Old per-metric loop (before the vector estimator), UR5 smallsat, 1024 samples, block 128:
+    ur5 = sa.load_robot("configs/ur5-smallsat.yaml")
+    fixed = averages.joint_averages(ur5, _ALL, min_samples=1024, max_samples=1024, block=128)
+    old = (0.03961456353673799, 0.26280499087925124, 0.04694221726346475, 0.1444978907953863)
+    np.testing.assert_allclose([float(fixed[m].value) for m in _ALL], old, rtol=1e-13)
+
+
+def test_vector_estimator_stops_when_every_metric_meets_its_tolerance():
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    metrics = ("manipulability", "conditioning", "base_disturbance")
+    together = averages.joint_averages(robot, metrics, rtol=1e-3, block=256, min_samples=2**11)
+    for metric in metrics:
+        alone = averages.joint_average(robot, metric, rtol=1e-3, block=256, min_samples=2**11)
+        estimate = together[metric]
+        assert float(estimate.relative_error) <= 1e-3
+        assert int(estimate.samples) >= int(alone.samples)  # the slowest metric sets the count
+        if int(estimate.samples) == int(alone.samples):
+            np.testing.assert_allclose(float(estimate.value), float(alone.value), rtol=1e-14)
+        assert abs(float(estimate.value) - float(alone.value)) <= 4.0 * (float(estimate.error) + float(alone.error))
+
+
+def test_adaptive_options_are_traced_and_the_custom_vjp_matches_finite_differences():
+    """The adaptive loop (min < max) keeps its custom VJP; a new rtol or budget reuses the program."""
+    robot = sa.load_robot("configs/arm3dof-100kg.yaml")
+    options = dict(rtol=1e-15, min_samples=2**10, max_samples=2**11, block=128)
+
+    def mean(r):
+        return averages.joint_averages(r, ("manipulability", "base_disturbance"), **options)["base_disturbance"].value
+
+    value, grad = jax.value_and_grad(mean)(robot)
+    fd = _finite_difference(mean, robot, "base_mass", 1e-2)
+    np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-6)
+    before = averages._estimate_batched._cache_size()
+    averages.joint_averages(robot, ("manipulability", "base_disturbance"), rtol=3e-3, min_samples=2**9,
+                            max_samples=2**12, block=128, seed=5)
+    averages.joint_averages(robot, ("manipulability", "base_disturbance"), rtol=1e-2, min_samples=2**10,
+                            max_samples=2**13, block=128, seed=6)
+    assert averages._estimate_batched._cache_size() == before + 1  # one program for both calls

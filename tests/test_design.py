@@ -162,7 +162,7 @@ def test_objective_gradients_match_finite_differences():
 
 
 def test_problem_yaml_errors_name_the_field():
-    with pytest.raises(sa.ConfigError, match="variables: unknown key 'b_0'.*did you mean 'b0'"):
+    with pytest.raises(sa.ConfigError, match=r"variables\.b_0.*unknown design field 'b_0'.*did you mean 'b0'"):
         design.problem_from_mapping(reference_config(variables={"b_0": [0.0, 3.0]}))
     with pytest.raises(sa.ConfigError, match=r"variables.b0: the lower bound must be below"):
         design.problem_from_mapping(reference_config(variables={"b0": [3.0, 0.0]}))
@@ -179,6 +179,45 @@ def test_problem_yaml_errors_name_the_field():
         design.problem_from_mapping(reference_config(wbar={"ordr": 4}))
     with pytest.raises(sa.ConfigError, match=r"wbar\.order: must be an integer >= 1, got 0"):
         design.problem_from_mapping(reference_config(wbar={"order": 0}))
+
+
+def test_load_problem_loads_both_families():
+    planar = sa.load_problem(ROOT / "sweeps" / "pareto-attachment.yaml")
+    spatial = sa.load_problem(ROOT / "sweeps" / "pareto-mount-ur5.yaml")
+    assert planar.family.name == "planar" and spatial.family.name == "spatial"
+    assert [v.field for v in planar.variables] == ["base.attach", "links[0].length_share"]
+    assert planar.variable_names == ("b0", "l1_over_L")  # table columns keep the names of the file
+    assert spatial.variable_names == ("mount.xyz[0]", "mount.xyz[1]", "mount.rpy[1]")
+    assert spatial.objectives == ("w_avg", "gci", "low_disturbance")
+    robot = spatial.robot(jnp.array([0.1, -0.2, 0.3]))
+    np.testing.assert_allclose(robot.mount_xyz[:2], [0.1, -0.2], rtol=1e-15)
+    np.testing.assert_allclose(robot.mount_rpy[1], 0.3, rtol=1e-15)
+
+
+def test_old_planar_names_are_aliases_of_the_design_fields():
+    """pareto-6var.yaml written with the sweep's field names: the same problem, the same numbers."""
+    config = yaml.safe_load((ROOT / "sweeps" / "pareto-6var.yaml").read_text())
+    renamed = dict(config)
+    renamed["variables"] = {design.problem.planar_fields.canonical_name(k): v for k, v in config["variables"].items()}
+    assert list(renamed["variables"]) == ["base.attach", "links[0].length_share", "links[0].mass_share",
+                                          "links[0].centroid", "links[1].centroid", "arm.mass_ratio_fixed_total"]
+    old, new = design.problem_from_mapping(config), design.problem_from_mapping(renamed)
+    x = jnp.array([1.1, 0.45, 0.55, 0.45, 0.6, 0.25])
+    a, b = old.robot(x), new.robot(x)
+    for leaf_a, leaf_b in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)):
+        np.testing.assert_array_equal(leaf_a, leaf_b)
+    # The fields agree with the parametrization written out: l1 = 0.45 L, m1 = 0.55 m_arm,
+    # a_i = ratio l_i, m_arm / m0 = 0.25 at w = 1200 kg, rods I = m l^2 / 12.
+    masses = np.array([0.55, 0.45]) * 1200.0 * 0.25 / 1.25
+    lengths = np.array([0.45, 0.55]) * 4.0
+    np.testing.assert_allclose(b.link_mass, masses, rtol=1e-14)
+    np.testing.assert_allclose(b.link_a, [0.45 * lengths[0], 0.6 * lengths[1]], rtol=1e-14)
+    np.testing.assert_allclose(b.link_inertia, masses * lengths**2 / 12.0, rtol=1e-14)
+    np.testing.assert_allclose(b.base_mass, 1200.0 / 1.25, rtol=1e-14)
+    # A field and its alias together set the same number: refused.
+    config["variables"]["base.attach"] = [0.0, 1.0]
+    with pytest.raises(sa.ConfigError, match="b0 and base.attach set the same design number"):
+        design.problem_from_mapping(config)
 
 
 # The search ---------------------------------------------------------------------------

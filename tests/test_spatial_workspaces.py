@@ -27,6 +27,14 @@ def test_reachable_radius_gradient_is_the_envelope():
         np.testing.assert_allclose(np.asarray(getattr(grad, field)), np.asarray(getattr(exact, field)), rtol=1e-7, atol=1e-12)
 
 
+def test_path_independent_radius_dispatches_by_family():
+    """sa.path_independent_radius: the planar root tracing for two links, singular_radius otherwise."""
+    planar = sa.umetani1990()
+    assert float(sa.path_independent_radius(planar)) == float(singularities.path_independent_radius(planar))
+    arm3 = random_robot(np.random.default_rng(11), 3)  # a planar arm with no n = 2 scan: the search
+    assert float(sa.path_independent_radius(arm3)) == float(sw.singular_radius(arm3, "generalized")[0])
+
+
 def test_public_dispatch_keeps_the_planar_closed_form():
     robot = sa.umetani1990()
     assert float(sw.maximum_reachable_radius(robot)) == float(workspaces.maximum_reachable_radius(robot))

@@ -5,7 +5,10 @@ from .manipulability_average import (
     check_average_options as check_average_options,
 )
 from .averages import average_manipulability as average_manipulability
-from .spatial_workspaces import maximum_reachable_radius as maximum_reachable_radius
+from .spatial_workspaces import (
+    maximum_reachable_radius as maximum_reachable_radius,
+    path_independent_radius as path_independent_radius,
+)
 from .manipulability_maps import (
     check_single_design as check_single_design,
     joint_grid as joint_grid,
@@ -41,7 +44,6 @@ from .reaction import (
 from .singularities import (
     SingularSet as SingularSet,
     dynamic_singularities as dynamic_singularities,
-    path_independent_radius as path_independent_radius,
 )
 from .straight_workspace import (
     evenly_spaced_directions as evenly_spaced_directions,

@@ -31,7 +31,15 @@ The loop is a ``lax.while_loop``, so it runs under ``jit`` and ``vmap`` (over de
 each design stops at its own sample count). The mean is differentiable in the design
 (a ``custom_vjp``: the backward pass sums the per-block gradients over exactly the
 blocks the forward pass used, so the gradient is that of the returned estimate); the
-error estimate and the sample count carry no gradient.
+error estimate and the sample count carry no gradient. The tolerance and the sample
+budget are traced: a new value does not compile a new program.
+
+Several metrics at once (`joint_averages`): one chain pass per posture gives J*, C
+and H* (`posture_quantities`), every requested metric is read off them, and one
+estimator runs over the vector of metrics until every one meets its tolerance. A
+fixed rule (``min_samples`` and ``max_samples`` give the same count, as in design
+problems) is a single pass over its points and plain means, differentiated by
+ordinary AD: no loop and no custom VJP.
 
 Accuracy, measured (tests/test_averages.py; RMS over 4 seeds against a reference):
 
@@ -54,15 +62,17 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._core.errors import ConfigError
-from .._core.linalg import symmetric_eigenvalues
+from .._core.linalg import gram_root_determinant, symmetric_eigenvalues
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
-from ..models.planar.robot import PlanarRobot
 from ..models.spatial.metrics import dynamic_manipulability
 from .manipulability_average import average_manipulability as planar_average_manipulability
 from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
@@ -70,6 +80,9 @@ from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_dire
 __all__ = [
     "JointAverage",
     "joint_average",
+    "joint_averages",
+    "posture_quantities",
+    "posture_metrics",
     "average_manipulability",
     "joint_average_manipulability",
     "global_conditioning_index",
@@ -101,10 +114,89 @@ class JointAverage:
 
 # Per-posture metrics: (robot, postures (..., p)) -> (...). ---------------------------
 
+# The per-posture matrices each metric reads; `posture_quantities` computes every
+# requested one from one pass over the chain (spatial: one forward and one backward scan).
+_NEEDS = {
+    "manipulability": ("jacobian",),
+    "conditioning": ("jacobian",),
+    "base_disturbance": ("base_rate",),
+    "dynamic_manipulability": ("jacobian", "arm_inertia"),
+}
 
-def _translational_jacobian(robot, posture):
+
+def posture_quantities(robot, posture: jax.Array, needs: tuple[str, ...]) -> dict[str, jax.Array]:
+    """J* (``"jacobian"``), C = -I_S^-1 I_M (``"base_rate"``) and H* (``"arm_inertia"``) at postures.
+
+    A family's ``posture_quantities`` fast path computes them together (the spatial one
+    in one chain pass per posture); otherwise each comes from its own kernel (the
+    planar closed forms). Spatial results are in bus axes.
+
+    Args:
+        robot: one design.
+        posture: ``(..., p)`` postures of the family.
+        needs: the names wanted (static).
+    """
     family = family_of(robot)
-    return generalized_jacobian(robot, posture)[..., : family.translational_rows, :]
+    fast = family.fast_paths.get("posture_quantities")
+    if fast is not None:
+        return fast(robot, posture, tuple(needs))
+    if "arm_inertia" in needs:
+        raise ConfigError(f"metric: the arm inertia H* is not available for {family.name} robots")
+    out = {}
+    if "jacobian" in needs:
+        out["jacobian"] = generalized_jacobian(robot, posture)
+    if "base_rate" in needs:
+        out["base_rate"] = base_rate_matrix(robot, posture)
+    return out
+
+
+def _manipulability_of(family, quantities):
+    return gram_root_determinant(quantities["jacobian"][..., : family.translational_rows, :])
+
+
+def _conditioning_of(family, quantities):
+    J = quantities["jacobian"][..., : family.translational_rows, :]
+    gram = J @ jnp.swapaxes(J, -1, -2)
+    eigenvalues = symmetric_eigenvalues(gram)  # ascending, closed form (no LAPACK per posture)
+    ratio = eigenvalues[..., 0] / eigenvalues[..., -1]
+    positive = ratio > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, ratio, 1.0)), 0.0)
+
+
+def _disturbance_of(family, quantities):
+    C = quantities["base_rate"]
+    # Spatial base coordinates are [v of the bus centroid; w] (3 angular rows); the
+    # planar base coordinate is the attitude phi0 alone.
+    angular = C[..., -3:, :] if family.rotates_with_base else C
+    return jnp.sqrt(jnp.sum(angular * angular, axis=(-2, -1)))
+
+
+def _dynamic_of(family, quantities):
+    J = quantities["jacobian"][..., :3, :]
+    H = quantities["arm_inertia"]
+    # J (H^T H)^-1 J^T = (J H^-1)(J H^-1)^T, with H symmetric positive definite.
+    K = jnp.swapaxes(jnp.linalg.solve(H, jnp.swapaxes(J, -1, -2)), -1, -2)
+    return gram_root_determinant(K)
+
+
+_FROM_QUANTITIES = {
+    "manipulability": _manipulability_of,
+    "conditioning": _conditioning_of,
+    "base_disturbance": _disturbance_of,
+    "dynamic_manipulability": _dynamic_of,
+}
+
+
+def posture_metrics(robot, posture: jax.Array, metrics: tuple[str, ...]) -> jax.Array:
+    """``(..., k)`` the metrics named in ``metrics`` (of `METRICS`) at postures ``(..., p)``.
+
+    Every metric is read off one `posture_quantities` call: J*, C and H* are computed
+    once per posture however many metrics use them.
+    """
+    family = family_of(robot)
+    needs = tuple(dict.fromkeys(need for name in metrics for need in _NEEDS[name]))
+    quantities = posture_quantities(robot, posture, needs)
+    return jnp.stack([_FROM_QUANTITIES[name](family, quantities) for name in metrics], axis=-1)
 
 
 def manipulability_metric(robot, posture):
@@ -114,21 +206,12 @@ def manipulability_metric(robot, posture):
 
 def inverse_condition_metric(robot, posture):
     """1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]; 0 at singular postures."""
-    J = _translational_jacobian(robot, posture)
-    gram = J @ jnp.swapaxes(J, -1, -2)
-    eigenvalues = symmetric_eigenvalues(gram)  # ascending, closed form (no LAPACK per posture)
-    ratio = eigenvalues[..., 0] / eigenvalues[..., -1]
-    positive = ratio > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, ratio, 1.0)), 0.0)
+    return posture_metrics(robot, posture, ("conditioning",))[..., 0]
 
 
 def base_disturbance_metric(robot, posture):
     """||C_w||_F: bus angular rate per joint rate (Frobenius), rad/rad (m/rad rows excluded)."""
-    C = base_rate_matrix(robot, posture)
-    # Spatial base coordinates are [v of the bus centroid; w] (3 angular rows); the
-    # planar base coordinate is the attitude phi0 alone.
-    angular = C[..., -3:, :] if family_of(robot).rotates_with_base else C
-    return jnp.sqrt(jnp.sum(angular * angular, axis=(-2, -1)))
+    return posture_metrics(robot, posture, ("base_disturbance",))[..., 0]
 
 
 def dynamic_manipulability_metric(robot, posture):
@@ -149,29 +232,36 @@ METRICS = {
 
 @dataclasses.dataclass(frozen=True)
 class _Plan:
-    """Static options of one estimator program (hashable: a jit/custom_vjp static argument)."""
+    """What fixes the shapes of one estimator program (a static argument): the metrics,
+    R, the block size B, and for a fixed rule its points per randomization (None: adaptive)."""
 
-    metric: str
-    rtol: float
+    metrics: tuple[str, ...]
     randomizations: int
     block: int
-    min_blocks: int
-    max_blocks: int
+    points: int | None = None
+
+
+class _Budget(NamedTuple):
+    """Traced options of the adaptive estimator: a new tolerance or sample budget does not recompile."""
+
+    rtol: jax.Array  # (k,) relative standard error per metric
+    min_blocks: jax.Array  # int32
+    max_blocks: jax.Array  # int32, a power of two
 
 
 def _block_sums(plan: _Plan, robot, shifts, block_index):
-    """``(R,)`` sums of the metric over block ``block_index`` of each randomization."""
+    """``(R, k)`` sums of the metrics over block ``block_index`` of each randomization."""
     n = family_of(robot).joint_count(robot)
     directions = jnp.asarray(sobol_direction_numbers(n))
     unit = sobol_points(directions, block_index * plan.block, plan.block, shifts)  # (R, B, n)
-    values = METRICS[plan.metric](robot, box_postures(robot, unit))
-    return jnp.sum(values, axis=-1)
+    values = posture_metrics(robot, box_postures(robot, unit), plan.metrics)  # (R, B, k)
+    return jnp.sum(values, axis=-2)
 
 
 def _summary(plan: _Plan, sums, blocks):
-    means = sums / (blocks * plan.block).astype(sums.dtype)
-    value = jnp.mean(means)
-    error = jnp.std(means, ddof=1) / jnp.sqrt(plan.randomizations)
+    means = sums / (blocks * plan.block).astype(sums.dtype)  # (R, k)
+    value = jnp.mean(means, axis=0)
+    error = jnp.std(means, axis=0, ddof=1) / jnp.sqrt(plan.randomizations)
     return value, error
 
 
@@ -179,7 +269,7 @@ def _is_power_of_two(k):
     return (k & (k - 1)) == 0
 
 
-def _forward(plan: _Plan, robot, shifts):
+def _forward(plan: _Plan, robot, shifts, budget: _Budget):
     dtype = jnp.result_type(float)
 
     def cond(state):
@@ -191,62 +281,141 @@ def _forward(plan: _Plan, robot, shifts):
         sums = sums + _block_sums(plan, robot, shifts, blocks)
         blocks = blocks + 1
         value, error = _summary(plan, sums, blocks)
-        checkpoint = _is_power_of_two(blocks) & (blocks >= plan.min_blocks)
-        done = (checkpoint & (error <= plan.rtol * jnp.abs(value))) | (blocks >= plan.max_blocks)
+        checkpoint = _is_power_of_two(blocks) & (blocks >= budget.min_blocks)
+        met = jnp.all(error <= budget.rtol * jnp.abs(value))  # every metric meets its tolerance
+        done = (checkpoint & met) | (blocks >= budget.max_blocks)
         return blocks, sums, done
 
-    state = (jnp.asarray(0, jnp.int32), jnp.zeros((plan.randomizations,), dtype), jnp.asarray(False))
+    state = (jnp.asarray(0, jnp.int32), jnp.zeros((plan.randomizations, len(plan.metrics)), dtype), jnp.asarray(False))
     blocks, sums, _ = jax.lax.while_loop(cond, body, state)
     value, error = _summary(plan, sums, blocks)
     return value, error, blocks
 
 
 @functools.partial(jax.custom_vjp, nondiff_argnums=(0,))
-def _estimate(plan: _Plan, robot, shifts):
-    value, error, blocks = _forward(plan, robot, shifts)
-    return value, error, blocks
+def _estimate(plan: _Plan, robot, shifts, budget: _Budget):
+    return _forward(plan, robot, shifts, budget)
 
 
-def _estimate_fwd(plan: _Plan, robot, shifts):
-    value, error, blocks = _forward(plan, robot, shifts)
+def _estimate_fwd(plan: _Plan, robot, shifts, budget: _Budget):
+    value, error, blocks = _forward(plan, robot, shifts, budget)
     return (value, error, blocks), (robot, shifts, blocks)
 
 
 def _estimate_bwd(plan: _Plan, residuals, cotangents):
     robot, shifts, blocks = residuals
-    g = cotangents[0]  # the error estimate and the block count carry no gradient
+    g = cotangents[0]  # (k,); the error estimates and the block count carry no gradient
     scale = g / (plan.randomizations * blocks * plan.block).astype(g.dtype)
 
     def body(state):
         k, accumulated = state
-        _, pullback = jax.vjp(lambda r: jnp.sum(_block_sums(plan, r, shifts, k)), robot)
-        (grad,) = pullback(scale)
+        _, pullback = jax.vjp(lambda r: jnp.sum(_block_sums(plan, r, shifts, k) * scale), robot)
+        (grad,) = pullback(jnp.ones((), scale.dtype))
         return k + 1, jax.tree_util.tree_map(jnp.add, accumulated, grad)
 
     zeros = jax.tree_util.tree_map(jnp.zeros_like, robot)
     _, gradient = jax.lax.while_loop(lambda s: s[0] < blocks, body, (jnp.asarray(0, jnp.int32), zeros))
-    return gradient, None  # the shifts are integers: no cotangent
+    return gradient, None, None  # the shifts are integers, the budget carries no gradient
 
 
 _estimate.defvjp(_estimate_fwd, _estimate_bwd)
 
 
+def _fixed_rule(plan: _Plan, robot, shifts):
+    """A fixed QMC rule: one pass over all R x points postures and plain means (ordinary AD)."""
+    n = family_of(robot).joint_count(robot)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, plan.points, shifts)  # (R, P, n)
+    values = posture_metrics(robot, box_postures(robot, unit), plan.metrics)  # (R, P, k)
+    means = jnp.mean(values, axis=-2)
+    value = jnp.mean(means, axis=0)
+    error = jnp.std(means, axis=0, ddof=1) / jnp.sqrt(plan.randomizations)
+    return value, error, jnp.asarray(plan.points // plan.block, jnp.int32)
+
+
+def _estimate_one(plan: _Plan, robot, shifts, budget: _Budget):
+    if plan.points is not None:
+        value, error, blocks = _fixed_rule(plan, robot, shifts)
+    else:
+        value, error, blocks = _estimate(plan, robot, shifts, budget)
+    samples = jnp.broadcast_to(blocks * plan.block * plan.randomizations, value.shape)
+    return JointAverage(value, error, samples)
+
+
 @functools.partial(jax.jit, static_argnames=("plan", "designs_per_chunk"))
-def _estimate_batched(robot, shifts, plan: _Plan, designs_per_chunk: int):
+def _estimate_batched(robot, shifts, budget: _Budget, plan: _Plan, designs_per_chunk: int):
     batch = robot.batch_shape
-
-    def single(design):
-        value, error, blocks = _estimate(plan, design, shifts)
-        return JointAverage(value, error, blocks * plan.block * plan.randomizations)
-
     if not batch:
-        return single(robot)
+        return _estimate_one(plan, robot, shifts, budget)
     size = 1
     for s in batch:
         size *= s
     flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch):])), robot)
-    out = jax.lax.map(single, flat, batch_size=min(designs_per_chunk, size))
-    return jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch), out)
+    out = jax.lax.map(lambda design: _estimate_one(plan, design, shifts, budget), flat,
+                      batch_size=min(designs_per_chunk, size))
+    return jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch + y.shape[1:]), out)
+
+
+def joint_averages(
+    robot,
+    metrics: Sequence[str],
+    *,
+    rtol: float | Sequence[float] = 1e-4,
+    randomizations: int = 8,
+    block: int = 1024,
+    min_samples: int = 2**14,
+    max_samples: int = 2**24,
+    seed: int = 0,
+    designs_per_chunk: int = 8,
+) -> dict[str, JointAverage]:
+    """Means of several posture metrics over the joint box from ONE set of postures.
+
+    One chain pass per posture feeds every metric (`posture_metrics`); one randomized
+    QMC estimator runs over the vector of metrics and stops when every metric meets
+    its tolerance (so each is at least as accurate as alone, on the same points).
+
+    A fixed rule (``min_samples`` and ``max_samples`` round to the same block count,
+    as design problems use) is one pass over all its points and plain means: no loop,
+    no custom VJP, ordinary AD. Otherwise the adaptive loop of `joint_average` runs
+    with ``rtol`` and the sample budget as traced values (new values do not recompile).
+
+    Args:
+        robot: a design of either family, or a batch of designs.
+        metrics: names from `METRICS`, each at most once.
+        rtol: target relative standard error, one for all or one per metric.
+        randomizations, block, min_samples, max_samples, seed, designs_per_chunk: as
+            in `joint_average`.
+
+    Returns:
+        ``{metric: JointAverage}`` with ``(...)`` fields (the batch shape).
+    """
+    metrics = tuple(metrics)
+    if not metrics or len(set(metrics)) != len(metrics):
+        raise ConfigError(f"metrics: a non-empty list of distinct names from {', '.join(METRICS)} is required")
+    for metric in metrics:
+        if metric not in METRICS:
+            raise ConfigError(f"metric: must be one of {', '.join(METRICS)}, got {metric!r}")
+    if "dynamic_manipulability" in metrics and not family_of(robot).rotates_with_base:
+        raise ConfigError("metric: dynamic_manipulability needs the arm inertia H*, which only spatial robots provide")
+    if randomizations < 2:
+        raise ConfigError(f"randomizations: must be at least 2 for an error estimate, got {randomizations}")
+    if block < 1 or block & (block - 1):
+        raise ConfigError(f"block: must be a power of two, got {block}")
+    tolerances = np.broadcast_to(np.asarray(rtol, dtype=np.float64), (len(metrics),))
+    if not np.all(tolerances > 0):
+        raise ConfigError(f"rtol: must be positive, got {rtol}")
+    check_joint_box(robot)
+    per_block = block * randomizations
+    max_blocks = max(1, max_samples // per_block)
+    max_blocks = 1 << (max_blocks.bit_length() - 1)  # a power of two: the last estimate is on a net
+    min_blocks = min(max_blocks, max(1, -(-min_samples // per_block)))
+    points = max_blocks * block if min_blocks == max_blocks else None
+    plan = _Plan(metrics, int(randomizations), int(block), points)
+    budget = _Budget(jnp.asarray(tolerances, jnp.result_type(float)), jnp.asarray(min_blocks, jnp.int32),
+                     jnp.asarray(max_blocks, jnp.int32))
+    shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
+    out = _estimate_batched(robot, shifts, budget, plan, designs_per_chunk)
+    return {metric: JointAverage(out.value[..., i], out.error[..., i], out.samples[..., i])
+            for i, metric in enumerate(metrics)}
 
 
 def joint_average(
@@ -268,12 +437,14 @@ def joint_average(
             leaf; each design stops at its own sample count).
         metric: one of `METRICS` ("manipulability", "conditioning",
             "base_disturbance", "dynamic_manipulability").
-        rtol: target relative standard error (one sigma) of the mean.
+        rtol: target relative standard error (one sigma) of the mean (traced: a new
+            value does not recompile).
         randomizations: R independent digital shifts (>= 2; the error estimate has
             R - 1 degrees of freedom).
         block: Sobol points per randomization per loop step (a power of two).
         min_samples, max_samples: bounds on the postures used in all (R x points);
             when ``max_samples`` is hit first the returned error says how far it got.
+            Equal bounds give a fixed rule (one pass, no loop).
         seed: seed of the digital shifts (a new seed does not recompile).
         designs_per_chunk: designs evaluated together under ``lax.map`` for batches.
 
@@ -281,29 +452,18 @@ def joint_average(
         `JointAverage` with ``(...)`` fields. ``value`` is differentiable in the
         design (``jax.grad``); under ``vmap`` or ``jit`` it works as well.
     """
-    if metric not in METRICS:
-        raise ConfigError(f"metric: must be one of {', '.join(METRICS)}, got {metric!r}")
-    if metric == "dynamic_manipulability" and not family_of(robot).rotates_with_base:
-        raise ConfigError("metric: dynamic_manipulability needs the arm inertia H*, which only spatial robots provide")
-    if randomizations < 2:
-        raise ConfigError(f"randomizations: must be at least 2 for an error estimate, got {randomizations}")
-    if block < 1 or block & (block - 1):
-        raise ConfigError(f"block: must be a power of two, got {block}")
-    if not rtol > 0:
-        raise ConfigError(f"rtol: must be positive, got {rtol}")
-    check_joint_box(robot)
-    per_block = block * randomizations
-    max_blocks = max(1, max_samples // per_block)
-    max_blocks = 1 << (max_blocks.bit_length() - 1)  # a power of two: the last estimate is on a net
-    min_blocks = min(max_blocks, max(1, -(-min_samples // per_block)))
-    plan = _Plan(metric, float(rtol), int(randomizations), int(block), int(min_blocks), int(max_blocks))
-    shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
-    return _estimate_batched(robot, shifts, plan, designs_per_chunk)
+    return joint_averages(robot, (metric,), rtol=rtol, randomizations=randomizations, block=block,
+                          min_samples=min_samples, max_samples=max_samples, seed=seed,
+                          designs_per_chunk=designs_per_chunk)[metric]
 
 
 def joint_average_manipulability(robot, **options) -> JointAverage:
     """Mean translational w* over the joint box (either family; m^2 planar, m^3 spatial), not normalized."""
     return joint_average(robot, "manipulability", **options)
+
+
+# Families whose average manipulability has a closed form (the planar eq. 12 w-bar).
+_CLOSED_FORM_AVERAGES = {"planar": planar_average_manipulability}
 
 
 def average_manipulability(robot, **options):
@@ -312,13 +472,14 @@ def average_manipulability(robot, **options):
     - Planar robots: the paper's w-bar exactly as before (eq. 12, normalized by L^2;
       `spacearm.analysis.manipulability_average.average_manipulability`, same
       options, same closed-form quadrature), a ``(...)`` array.
-    - Spatial robots: the mean translational w* over the joint box, m^3, as a
-      `JointAverage` (value, error, samples) to relative standard error ``rtol``
-      (default 1e-4); options of `joint_average`.
+    - Spatial robots: the mean translational w* over the joint box, m^3, a ``(...)``
+      array to relative standard error ``rtol`` (default 1e-4); options of
+      `joint_average`, which also returns the error estimate and the sample count.
     """
-    if isinstance(robot, PlanarRobot):
-        return planar_average_manipulability(robot, **options)
-    return joint_average(robot, "manipulability", **options)
+    family = family_of(robot).name
+    if family in _CLOSED_FORM_AVERAGES:
+        return _CLOSED_FORM_AVERAGES[family](robot, **options)
+    return joint_average(robot, "manipulability", **options).value
 
 
 def global_conditioning_index(robot, **options) -> JointAverage:

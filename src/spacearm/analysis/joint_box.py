@@ -5,10 +5,14 @@ The joint box of a design is the product of its joint ranges:
 - a joint with finite limits covers [lower, upper];
 - a revolute joint without limits (URDF ``continuous``, planar links without
   ``limit_deg``) covers one turn, [-pi, pi);
+- a revolute joint limited on one side only covers one turn from its finite limit:
+  [lower, lower + 2 pi) or [upper - 2 pi, upper);
 - a revolute joint whose limits span more than a turn (the UR5's +-2 pi) covers one
-  turn from its lower limit: every posture appears once, and every kinematic quantity
-  is periodic in a revolute angle, so averages and extremes are the same as over the
-  full range;
+  turn from its lower limit;
+
+(the last three because every posture of a revolute joint then appears exactly once,
+and every kinematic quantity is periodic in a revolute angle, so averages and extremes
+are the same as over the full range);
 - a prismatic joint must have finite limits (`ConfigError` otherwise).
 
 The box is written for any robot family (planar postures get phi0 = 0 in front,
@@ -124,16 +128,20 @@ def periodic_joints(robot) -> np.ndarray:
 def joint_box(robot) -> tuple[jax.Array, jax.Array]:
     """``(lower, upper)``, each ``(..., n)``: the box the joint-uniform measure covers.
 
-    Revolute joints: free ones [-pi, pi), wider ones one turn from the lower limit;
-    prismatic joints: their limits (m), which must be finite (`check_joint_box`).
+    The one rule for every search and average over the joints (module docstring).
+    Revolute joints: free ones [-pi, pi), one-sided ones one turn from the finite limit,
+    wider ones one turn from the lower limit; prismatic joints: their limits (m), which
+    must be finite (`check_joint_box`).
     """
     revolute = jnp.asarray(periodic_joints(robot))
     lower = jnp.asarray(robot.joint_lower)
     upper = jnp.asarray(robot.joint_upper)
-    lower = jnp.where(jnp.isfinite(lower), lower, -jnp.pi)
-    upper = jnp.where(jnp.isfinite(upper), upper, lower + 2.0 * jnp.pi)
-    upper = jnp.where(revolute, jnp.minimum(upper, lower + 2.0 * jnp.pi), upper)
-    return lower, upper
+    turn = 2.0 * jnp.pi
+    low_ok, high_ok = jnp.isfinite(lower), jnp.isfinite(upper)
+    box_lower = jnp.where(low_ok, lower, jnp.where(high_ok, upper - turn, -jnp.pi))
+    box_upper = jnp.where(high_ok, upper, box_lower + turn)
+    box_upper = jnp.where(revolute, jnp.minimum(box_upper, box_lower + turn), box_upper)
+    return box_lower, box_upper
 
 
 def check_joint_box(robot) -> None:

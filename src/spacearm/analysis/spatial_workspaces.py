@@ -30,7 +30,8 @@ below is a spherical shell (planar: an annulus) described by radii.
   branch, `kinematic_singularity_radius`), and
   the dynamic one `path_independent_radius`.
 
-Every search here is single-design (``vmap`` it for batches; the options are static).
+Every search here is single-design (``vmap`` it for batches). Sample counts are static
+(they are shapes); step counts and seeds are traced, so new values reuse the program.
 """
 
 from __future__ import annotations
@@ -45,8 +46,8 @@ import numpy as np
 
 from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_determinant, tip_position
 from ..models.family import family_of
-from ..models.planar.robot import PlanarRobot
 from ..motion.spatial_paths import spatial_straight_tip_path
+from .singularities import path_independent_radius as planar_path_independent_radius
 from .workspaces import maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius
 from .workspaces import maximum_reachable_radius as planar_maximum_reachable_radius
 from .joint_box import box_postures, check_joint_box, digital_shifts, joint_box, periodic_joints, sobol_direction_numbers, sobol_points
@@ -61,6 +62,7 @@ __all__ = [
     "singularity_measure",
     "singular_postures",
     "singular_radius",
+    "path_independent_radius",
     "guaranteed_workspace",
     "icosphere_directions",
     "StraightPathWorkspace",
@@ -175,13 +177,16 @@ def _adam_search(objective, u0, wraps, steps: int, rate: float):
     return u
 
 
-@functools.partial(jax.jit, static_argnames=("starts", "steps", "seed"))
-def _reachable(robot, starts: int, steps: int, seed: int, rate: float):
+@functools.partial(jax.jit, static_argnames=("starts",))
+def _reachable(robot, starts: int, steps, seed, rate):
     wraps = _wraps(robot)
     u0 = _start_points(robot, starts, seed)
+    # The search runs on the design with its gradient stopped (its step count is a traced
+    # loop bound); the radius below is differentiable at the optimizer (envelope theorem).
+    fixed = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
 
     def radius_sq(u):
-        return jnp.sum(tip_position(robot, box_postures(robot, u)) ** 2)
+        return jnp.sum(tip_position(fixed, box_postures(fixed, u)) ** 2)
 
     lower, upper = joint_box(robot)
     results = []
@@ -217,21 +222,27 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
     return _reachable(robot, starts, steps, seed, rate)
 
 
+# Families with closed forms for Area 3's radii (free joints): (outer, inner).
+_REACH_CLOSED_FORMS = {"planar": (planar_maximum_reachable_radius, planar_maximum_reachable_inner_radius)}
+
+
 def maximum_reachable_radius(robot, **options) -> jax.Array:
     """Area 3's outer radius about the system centroid, m (the public ``sa.maximum_reachable_radius``).
 
     Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)), exactly as before.
     Spatial robots: the largest |tip| over the joint box, by `reachable_radii`.
     """
-    if isinstance(robot, PlanarRobot):
-        return planar_maximum_reachable_radius(robot)
+    closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
+    if closed is not None:
+        return closed[0](robot)
     return reachable_radii(robot, **options).outer
 
 
 def maximum_reachable_inner_radius(robot, **options) -> jax.Array:
     """Area 3's hole (smallest |tip| over the joint box), m; planar: the closed form."""
-    if isinstance(robot, PlanarRobot):
-        return planar_maximum_reachable_inner_radius(robot)
+    closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
+    if closed is not None:
+        return closed[1](robot)
     return reachable_radii(robot, **options).inner
 
 
@@ -328,7 +339,7 @@ def _newton_project(robot, joints, jacobian, steps, lower, upper, wraps):
     return z[:, :n]
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "newton_steps", "seed", "tol"))
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep"))
 def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
     n = family_of(robot).joint_count(robot)
     lower, upper = joint_box(robot)
@@ -341,8 +352,6 @@ def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
     q = _newton_project(robot, joints[nearest], jacobian, newton_steps, lower, upper, wraps)
     residual = jnp.abs(singularity_measure(robot, q, jacobian))
     tip = tip_position(robot, _joints_to_posture(robot, q))
-    if tol is None:
-        tol = 1e-9 if n == family_of(robot).translational_rows else 1e-6
     tolerance = tol * scale
     return SingularPostures(q, residual, residual <= tolerance, jnp.linalg.norm(tip, axis=-1), tip, tolerance)
 
@@ -365,35 +374,15 @@ def singular_postures(
     example where the set meets a joint limit); discard them.
     """
     check_joint_box(robot)
+    if tol is None:
+        tol = 1e-9 if family_of(robot).joint_count(robot) == family_of(robot).translational_rows else 1e-6
     return _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol)
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "candidates", "descent_steps", "newton_steps"))
-def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, descent_steps, newton_steps):
-    lower, upper = joint_box(robot)
-    wraps = _wraps(robot)
-    radius = jnp.where(postures.on_set, postures.radius, jnp.inf)
-    _, best = jax.lax.top_k(-radius, candidates)
-    q0 = postures.joints[best]
-    measure_grad = jax.vmap(jax.grad(lambda q: singularity_measure(robot, q, jacobian)))
-    radius_grad = jax.vmap(jax.grad(lambda q: _tip_radius_sq(robot, q)))
-    span = jnp.max(upper - lower)
-
-    def step(k, q):
-        g, normal = radius_grad(q), measure_grad(q)
-        nn = jnp.sum(normal * normal, axis=-1, keepdims=True)
-        tangent = g - jnp.sum(g * normal, axis=-1, keepdims=True) * normal / jnp.where(nn > 0, nn, 1.0)
-        size = jnp.linalg.norm(tangent, axis=-1, keepdims=True)
-        length = span * 0.02 * 0.5 ** (12.0 * k / descent_steps)  # geometric: 2 % of the box to ~5e-6
-        moved = q - length * tangent / jnp.where(size > 0, size, 1.0)
-        moved = _newton_project(robot, moved, jacobian, newton_steps, lower, upper, wraps)
-        better = _tip_radius_sq(robot, moved) < _tip_radius_sq(robot, q)
-        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= postures.tolerance
-        return jnp.where((better & on_set)[:, None], moved, q)
-
-    q = jax.lax.fori_loop(0, descent_steps, step, q0)
+def _closest_value(robot, q, tolerance, jacobian, lower, upper, wraps):
+    """The smallest radius over the rows of ``q`` on the set, differentiable in the design, and its posture."""
     q = jax.lax.stop_gradient(q)
-    on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= postures.tolerance
+    on_set = jnp.abs(singularity_measure(robot, q, jacobian)) <= tolerance
     radii = jnp.where(on_set, jnp.sqrt(_tip_radius_sq(robot, q)), jnp.inf)
     k = jnp.argmin(radii)
     best = q[k]
@@ -418,6 +407,74 @@ def _closest_singular(robot, postures: SingularPostures, jacobian, candidates, d
         constraint = singularity_measure(robot, posture, jacobian)
         value = value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
     return jnp.where(jnp.isfinite(radii[k]), value, jnp.inf), best
+
+
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "candidates"))
+def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, projection_steps, newton_steps, seed):
+    """Sampling, projection and descent in ONE loop whose body holds the only Newton projection.
+
+    Iterations 0..P-1 project the ``keep`` samples nearest the set onto it, ``candidates``
+    rows at a time (``projection_steps`` Newton steps); iterations P..P+D-1 are the
+    descent steps on the ``candidates`` closest to the centroid (``newton_steps`` each).
+    The step counts and the seed are traced: they change no shape. The search runs on
+    the design with its gradient stopped; the returned radius is differentiable through
+    `_closest_value` (envelope theorem).
+    """
+    design = robot
+    robot = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
+    n = family_of(robot).joint_count(robot)
+    lower, upper = joint_box(robot)
+    wraps = _wraps(robot)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples, digital_shifts(seed, 1, n))[0]
+    joints = lower + (upper - lower) * unit
+    s = singularity_measure(robot, joints, jacobian)
+    tolerance = (1e-9 if n == family_of(robot).translational_rows else 1e-6) * jnp.median(jnp.abs(s))
+    _, nearest = jax.lax.top_k(-jnp.abs(s), keep)
+    chunks = -(-keep // candidates)
+    buffer = joints[nearest]
+    buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunks * candidates - keep, n))])
+    # Forward mode: n tangents ride along one chain pass (reverse mode would add a
+    # second, backward scan per gradient to the program).
+    measure_grad = jax.vmap(jax.jacfwd(lambda q: singularity_measure(robot, q, jacobian)))
+    radius_grad = jax.vmap(jax.jacfwd(lambda q: _tip_radius_sq(robot, q)))
+    span = jnp.max(upper - lower)
+    descent_steps = jnp.asarray(descent_steps)
+
+    def tangent_step(k, q):
+        g, normal = radius_grad(q), measure_grad(q)
+        nn = jnp.sum(normal * normal, axis=-1, keepdims=True)
+        tangent = g - jnp.sum(g * normal, axis=-1, keepdims=True) * normal / jnp.where(nn > 0, nn, 1.0)
+        size = jnp.linalg.norm(tangent, axis=-1, keepdims=True)
+        length = span * 0.02 * 0.5 ** (12.0 * k / descent_steps)  # geometric: 2 % of the box to ~5e-6
+        return q - length * tangent / jnp.where(size > 0, size, 1.0)
+
+    def candidates_of(buffer):
+        on_set = jnp.abs(singularity_measure(robot, buffer, jacobian)) <= tolerance
+        radius_sq = jnp.where(on_set, _tip_radius_sq(robot, buffer), jnp.inf)
+        radius_sq = jnp.where(jnp.arange(radius_sq.shape[0]) < keep, radius_sq, jnp.inf)  # padding never chosen
+        _, best = jax.lax.top_k(-radius_sq, candidates)
+        return buffer[best], radius_sq[best]
+
+    def body(t, state):
+        buffer, q, q_radius_sq = state
+        projecting = t < chunks
+        q, q_radius_sq = jax.lax.cond(t == chunks, lambda: candidates_of(buffer), lambda: (q, q_radius_sq))
+        chunk = jax.lax.dynamic_slice_in_dim(buffer, jnp.minimum(t, chunks - 1) * candidates, candidates)
+        start = jax.lax.cond(projecting, lambda: chunk, lambda: tangent_step(t - chunks, q))
+        moved = _newton_project(robot, start, jacobian, jnp.where(projecting, projection_steps, newton_steps),
+                                lower, upper, wraps)
+        buffer = jnp.where(projecting, jax.lax.dynamic_update_slice_in_dim(buffer, moved, t * candidates, 0), buffer)
+        moved_radius_sq = _tip_radius_sq(robot, moved)
+        on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= tolerance
+        # The step at t == chunks exists only to pick the candidates when no descent is asked for.
+        accept = ~projecting & (descent_steps > 0) & (moved_radius_sq < q_radius_sq) & on_set
+        q = jnp.where(accept[:, None], moved, q)
+        return buffer, q, jnp.where(accept, moved_radius_sq, q_radius_sq)
+
+    state = (buffer, jnp.zeros((candidates, n), joints.dtype), jnp.full((candidates,), jnp.inf, joints.dtype))
+    _, q, _ = jax.lax.fori_loop(0, chunks + jnp.maximum(descent_steps, 1), body, state)
+    lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
+    return _closest_value(design, q, tolerance, jacobian, lower, upper, wraps)
 
 
 def singular_radius(
@@ -452,8 +509,29 @@ def singular_radius(
         only with the singular posture held fixed (the motion of the set is not
         included). Joints at a limit at the minimum move with the limit.
     """
-    postures = singular_postures(robot, jacobian, samples=samples, keep=keep, seed=seed)
-    return _closest_singular(robot, postures, jacobian, candidates, descent_steps, newton_steps)
+    check_joint_box(robot)
+    return _singular_radius(robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed)
+
+
+# Families with a dedicated scan of the dynamic singular set for two joints (the planar
+# root tracing of det J*, `spacearm.analysis.singularities`).
+_PATH_INDEPENDENT_SCANS = {"planar": planar_path_independent_radius}
+
+
+def path_independent_radius(robot, **options) -> jax.Array:
+    """The path-independent workspace radius (Papadopoulos & Dubowsky), m, for any family.
+
+    The closest approach to the system centroid of a dynamic-singular tip position.
+    Planar two-link arms: the root tracing of det J* (options ``n_phi1``, ``n_phi2``,
+    ... of `spacearm.analysis.singularities.dynamic_singularities`; batches of designs
+    accepted). Other robots: `singular_radius` with ``jacobian="generalized"`` (one
+    design; its options), the radius alone.
+    """
+    family = family_of(robot)
+    scan = _PATH_INDEPENDENT_SCANS.get(family.name)
+    if scan is not None and family.joint_count(robot) == 2:
+        return scan(robot, **options)
+    return singular_radius(robot, "generalized", **options)[0]
 
 
 def guaranteed_workspace(robot, **options) -> GuaranteedWorkspace:

@@ -16,7 +16,8 @@ from ..kinematics import manipulability, tip_position
 from ..models.planar.robot import PlanarRobot
 from ..motion import straight_tip_path
 from .singularities import path_independent_radius
-from .workspaces import guaranteed_radius, joint_box, kinematic_singularity_radius, maximum_reachable_radius
+from .joint_box import joint_box
+from .workspaces import guaranteed_radius, kinematic_singularity_radius, maximum_reachable_radius
 
 __all__ = [
     "evenly_spaced_directions",

@@ -46,8 +46,6 @@ S_G, `normalized_workspace_areas` the areas of workspaces 1-3 and 5.
 
 from __future__ import annotations
 
-from __future__ import annotations
-
 import functools
 import itertools
 
@@ -56,6 +54,7 @@ import jax.numpy as jnp
 
 from ..models.planar.closed_forms import tip_coefficients, tip_position
 from ..models.planar.robot import PlanarRobot
+from .joint_box import joint_box
 
 __all__ = [
     "fixed_vehicle_radius",
@@ -233,13 +232,6 @@ def workspace_relations(robot: PlanarRobot, tol: float = 1e-9) -> dict[str, jax.
 # Maximum Reachable under joint limits ---------------------------------------------------
 
 
-def joint_box(robot: PlanarRobot):
-    """``(lower, upper)`` joint limits, free joints taken as one turn [-pi, pi)."""
-    lower = jnp.where(jnp.isfinite(robot.joint_lower), robot.joint_lower, -jnp.pi)
-    upper = jnp.where(jnp.isfinite(robot.joint_upper), robot.joint_upper, jnp.pi)
-    return lower, jnp.minimum(upper, lower + 2.0 * jnp.pi)
-
-
 @functools.partial(jax.jit, static_argnames=("points_per_axis", "zoom_levels"))
 def _reach_extremes(robot: PlanarRobot, points_per_axis: int, zoom_levels: int):
     n = robot.n_links
@@ -277,7 +269,8 @@ def maximum_reachable_radii(robot: PlanarRobot, points_per_axis: int | None = No
     reproduces `maximum_reachable_radius` and `maximum_reachable_inner_radius`.
 
     Args:
-        robot: a single design; free joints span [-pi, pi].
+        robot: a single design; the box of `spacearm.analysis.joint_box.joint_box`
+            (free joints span [-pi, pi), one-sided ones one turn from their limit).
         points_per_axis: grid points per joint (default: about 2e5 points in all).
 
     Returns:

@@ -37,15 +37,13 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
 
     from .._core.schema import read_yaml
-    from ..design import run_problem
+    from ..design import load_problem, run_problem
     from ..design.hybrid import parse_hybrid
-    from ..design.spatial_problem import load_design_problem
-    from .validate import check_problem_memory
     from ..figures.design import plot_results
+    from .validate import check_problem_memory
 
     config = read_yaml(args.file, what="design problem file")
-    problem = load_design_problem(config, name=os.fspath(args.file),
-                                  base_dir=os.path.dirname(os.path.abspath(args.file)))
+    problem = load_problem(config, name=os.fspath(args.file), base_dir=os.path.dirname(os.path.abspath(args.file)))
     check_problem_memory(os.fspath(args.file), problem)  # before the search allocates anything
     hybrid = parse_hybrid(os.fspath(args.file), config.get("hybrid"))
     if args.max_seconds is not None:

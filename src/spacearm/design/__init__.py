@@ -5,14 +5,18 @@ distance b0 raises the average manipulability w-bar (eq. 12) and shrinks the Gua
 Workspace (eq. 8), so "careful trade-off is necessary". This package makes the
 trade-off computable.
 
-* A `DesignProblem` declares design variables with bounds (YAML), holds the
-  fixed quantities (total reach L, total mass, base radius of gyration) through its
-  parametrization `DesignProblem.robot`, and maps a variable vector to a
-  `PlanarRobot` whose leaves are all traced, so every objective
-  is differentiable with respect to every variable.
-* Objectives (all maximized): ``wbar`` (eq. 12, from
+* A `DesignProblem` declares design variables with bounds (YAML): the design fields
+  of its robot family (`RobotFamily.fields`, the names sweep axes use) set on a base
+  design, a robot file (``robot:``) or, for planar arms, the reference values of
+  ``fixed:`` (total reach L, total mass, base radius of gyration held by the fields
+  chosen). `DesignProblem.robot` maps a variable vector to a robot whose leaves are all
+  traced, so every objective is differentiable with respect to every variable.
+  `load_problem` reads either family.
+* Objectives (all maximized): planar ``wbar`` (eq. 12, from
   `spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
-  pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space).
+  pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space); joint-box
+  averages ``w_avg``, ``gci``, ``low_disturbance``, ``w_d_avg`` (`AVERAGE_OBJECTIVES`),
+  all from one fixed QMC rule and one chain pass per posture.
 * `hybrid_search` (the default of ``spacearm optimize``): an NSGA-II population refined
   by set-based hypervolume-gradient steps on the whole front at once (each
   non-dominated-sorting layer climbs its own hypervolume, computed exactly in JAX by
@@ -52,6 +56,7 @@ from .fronts import (
 from .hybrid import HybridSettings as HybridSettings, hybrid_search as hybrid_search
 from .hypervolume import exact_hypervolume as exact_hypervolume, hypervolume_gradient as hypervolume_gradient
 from .objectives import (
+    AVERAGE_OBJECTIVES as AVERAGE_OBJECTIVES,
     OBJECTIVES as OBJECTIVES,
     guaranteed_area as guaranteed_area,
     maximum_reachable_area as maximum_reachable_area,
@@ -81,6 +86,7 @@ __all__ = [
     "problem_from_mapping",
     "variable_names_for",
     "OBJECTIVES",
+    "AVERAGE_OBJECTIVES",
     "guaranteed_area",
     "maximum_reachable_area",
     "nondominated",

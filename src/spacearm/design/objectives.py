@@ -1,4 +1,10 @@
-"""The design objectives, all maximized: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2."""
+"""The design objectives, all maximized.
+
+Planar closed forms: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2. Joint-box
+averages (`AVERAGE_OBJECTIVES`, spatial robots): the mean translational w*, the global
+conditioning index, minus the mean base disturbance and the mean dynamic manipulability,
+evaluated together by `spacearm.analysis.averages.joint_averages`.
+"""
 
 from __future__ import annotations
 
@@ -11,10 +17,33 @@ import jax.numpy as jnp
 from ..analysis import average_manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
+from ..models.spatial.fields import arm_mass
 
-__all__ = ["OBJECTIVES", "guaranteed_area", "maximum_reachable_area", "objective"]
+__all__ = ["OBJECTIVES", "AVERAGE_OBJECTIVES", "SPATIAL_OBJECTIVES", "objectives_for", "guaranteed_area",
+           "maximum_reachable_area", "objective", "DESIGN_OBJECTIVES",
+           "total_mass_objective"]
 
 OBJECTIVES = ("wbar", "S_G", "S_M")
+
+# Objective name -> (joint_average metric, sign): all maximized.
+AVERAGE_OBJECTIVES = {
+    "w_avg": ("manipulability", 1.0),              # mean translational w*, m^3
+    "gci": ("conditioning", 1.0),                   # global conditioning index, mean 1/kappa(J*_v)
+    "low_disturbance": ("base_disturbance", -1.0),  # minus the mean ||C_w||_F, rad/rad
+    "w_d_avg": ("dynamic_manipulability", 1.0),     # mean dynamic manipulability
+}
+SPATIAL_OBJECTIVES = AVERAGE_OBJECTIVES
+
+# Objectives of the design itself, not averaged over postures (closed forms of the design numbers).
+DESIGN_OBJECTIVES = ("low_total_mass",)  # minus the bus mass plus every arm mass, kg
+
+# The objectives each robot family offers (the planar ones are the paper's closed forms).
+_BY_FAMILY = {"planar": OBJECTIVES, "spatial": (*AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES)}
+
+
+def objectives_for(family: str) -> tuple[str, ...]:
+    """The objective names a design problem over robots of ``family`` may use."""
+    return _BY_FAMILY.get(family, (*AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES))
 
 
 def guaranteed_area(robot: PlanarRobot, *, clamp: bool = True) -> jax.Array:
@@ -49,12 +78,17 @@ def maximum_reachable_area(robot: PlanarRobot) -> jax.Array:
     return jnp.sum(K, axis=-1) ** 2 / robot.reach**2
 
 
+def total_mass_objective(robot) -> jax.Array:
+    """``(...)`` minus the launch mass of a spatial design: bus plus every arm body, kg (maximized)."""
+    return -(robot.base_mass + arm_mass(robot))
+
+
 def objective(name: str, *, wbar_options: Mapping[str, Any] | None = None,
               clamp_guaranteed: bool = True) -> Callable[[PlanarRobot], jax.Array]:
     """The objective ``name`` as ``f(robot) -> scalar`` (options checked by the problem's loader).
 
     Args:
-        name: one of `OBJECTIVES`.
+        name: one of `OBJECTIVES` or `DESIGN_OBJECTIVES`.
         wbar_options: keyword arguments of `spacearm.analysis.average_manipulability`.
         clamp_guaranteed: see `guaranteed_area`.
     """
@@ -65,4 +99,6 @@ def objective(name: str, *, wbar_options: Mapping[str, Any] | None = None,
         return lambda robot: guaranteed_area(robot, clamp=clamp_guaranteed)
     if name == "S_M":
         return maximum_reachable_area
+    if name == "low_total_mass":
+        return total_mass_objective
     raise ValueError(f"unknown objective {name!r}; known: {', '.join(OBJECTIVES)}")

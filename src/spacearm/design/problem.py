@@ -1,13 +1,34 @@
-"""A design problem: variables with bounds, the fixed quantities, the parametrization, and
-its YAML file (see ``sweeps/pareto-attachment.yaml``).
+"""A design problem: design variables with bounds, the objectives, and its YAML file, for
+any robot family (see ``sweeps/pareto-attachment.yaml`` and ``sweeps/pareto-mount-ur5.yaml``).
 
-`load_problem` checks everything a run uses (every section, every option of the
-w-bar quadrature, the baselines), so ``spacearm validate`` refuses what a run would.
+The design variables are the family's design fields (`RobotFamily.fields`, the names
+sweep axes use): a base design (``robot:`` a robot file, or for planar arms ``fixed:``,
+the reference values of a uniform-rod arm) with the variables set on it in the
+family's field order. `load_problem` checks everything a run uses (every section,
+every option of the w-bar quadrature, the baselines), so ``spacearm validate`` refuses
+what a run would.
+
+```yaml
+name: pareto-mount-ur5
+robot: ../configs/ur5-smallsat.yaml     # relative to this file
+variables:                              # design fields: [lower, upper]
+  mount.xyz[0]: [-0.4, 0.4]
+  mount.rpy[1]: [-0.6, 0.6]
+objectives: [w_avg, gci, low_disturbance]   # all maximized
+reference_point: [0.0, 0.0, -1.0]
+average: {samples: 2048, randomizations: 8, seed: 0}   # one fixed QMC rule for every design
+```
+
+Joint-box averages use one fixed randomized-QMC rule (`joint_averages` with
+``min_samples = max_samples``): the same points for every design, so each objective is a
+smooth, deterministic function of the design with an exact gradient for that rule, and
+all of them come from one chain pass per posture.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import inspect
 import math
 import os
@@ -21,13 +42,19 @@ import numpy as np
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, check_memory, choice, integer, number, read_yaml
 from ..analysis import check_average_options
+from ..analysis.averages import joint_averages
+from ..analysis.joint_box import check_joint_box
 from ..analysis.manipulability_average import average_manipulability as planar_average_manipulability
+from ..models import load_robot
+from ..models.family import family_of
 from ..models.planar import PlanarRobot
-from .objectives import OBJECTIVES, objective
+from ..models.planar import fields as planar_fields
+from .objectives import AVERAGE_OBJECTIVES, objective, objectives_for
 
 __all__ = [
     "Variable",
     "SearchSettings",
+    "VariableBounds",
     "DesignProblem",
     "problem_from_mapping",
     "load_problem",
@@ -43,11 +70,22 @@ WBAR_OPTIONS = tuple(name for name in inspect.signature(planar_average_manipulab
 
 @dataclasses.dataclass(frozen=True)
 class Variable:
-    """A design variable with box bounds (SI units or a dimensionless ratio)."""
+    """A design variable with box bounds, in its field's unit.
+
+    Attributes:
+        name: the name as the problem file gives it (table columns use it).
+        lower, upper: the bounds.
+        field: the design field it sets (the name itself unless the file used an alias).
+    """
 
     name: str
     lower: float
     upper: float
+    field: str = ""
+
+    def __post_init__(self):
+        if not self.field:
+            object.__setattr__(self, "field", self.name)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,7 +112,7 @@ class SearchSettings:
 
 
 class VariableBounds:
-    """Names and box bounds of a problem's ``variables`` (shared by planar and spatial problems)."""
+    """Names and box bounds of a problem's ``variables``."""
 
     variables: tuple[Variable, ...]
 
@@ -95,145 +133,205 @@ class VariableBounds:
 
 @dataclasses.dataclass(frozen=True)
 class DesignProblem(VariableBounds):
-    """A multi-objective design problem over a family of planar space robots.
-
-    The parametrization holds the total reach L, the total mass w = m0 + m_arm and
-    the base radius of gyration fixed; the variables are drawn from
-
-    * ``b0``: attachment distance base centroid -> joint 1, m;
-    * ``l{i}_over_L`` (i < n): link length share, the last link takes the rest;
-    * ``m{i}_over_arm`` (i < n): share of the arm mass in link i, the last takes the rest;
-    * ``a{i}_over_l{i}`` (i <= n): centroid position along link i;
-    * ``arm_over_base``: m_arm / m0 at fixed total mass (I0 scales with m0).
-
-    Links are rods with radius of gyration l_i / sqrt(12): I_i = m_i l_i^2 / 12 (a
-    uniform rod when a_i = l_i / 2, Table 1's case; for other a_i we keep the rod's
-    gyration and move the centroid, a modelling choice).
+    """A multi-objective design problem over the design fields of one base design (any family).
 
     Attributes:
         name: the problem name (results go to ``results/<name>/``).
-        n_links: number of arm links (static).
-        base_mass, base_inertia, arm_mass, reach: reference values (kg, kg m^2, kg, m).
-        defaults: value of every variable name for this n (those not optimized stay here).
-        variables: the optimized variables, in column order.
-        objectives: objective names, all maximized.
-        reference_point: hypervolume reference point, one value per objective.
-        wbar_options: keyword arguments for `spacearm.analysis.average_manipulability`.
-        clamp_guaranteed: see `guaranteed_area`.
+        base: the base design; fields not optimized keep its values.
+        variables: the optimized design fields, in column order.
+        objectives: objective names (`objectives_for` the family), all maximized.
+        reference_point: hypervolume reference point, one value per objective, or None
+            (the search then takes one below the nadir of its first population).
+        robot_file: the robot file as the problem names it ("" for a planar ``fixed:`` base).
+        fixed: the fixed quantities, for the run's summary.
+        wbar_options: keyword arguments of the planar w-bar (objective ``wbar``).
+        clamp_guaranteed: see `guaranteed_area` (objective ``S_G``).
+        samples, randomizations, seed: the fixed QMC rule of the joint-box averages.
     """
 
     name: str
-    n_links: int
-    base_mass: float
-    base_inertia: float
-    arm_mass: float
-    reach: float
-    defaults: Mapping[str, float]
+    base: Any
     variables: tuple[Variable, ...]
-    objectives: tuple[str, ...] = ("wbar", "S_G")
-    reference_point: tuple[float, ...] = (0.0, 0.0)
+    objectives: tuple[str, ...]
+    reference_point: tuple[float, ...] | None
+    robot_file: str = ""
+    fixed: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     wbar_options: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     clamp_guaranteed: bool = True
+    samples: int = 2048
+    randomizations: int = 8
+    seed: int = 0
     search: SearchSettings = dataclasses.field(default_factory=SearchSettings)
     grid_points: tuple[int, ...] | None = None
     grid_chunk: int = 2048
     nsga2: Mapping[str, Any] | None = None
     description: str = ""
 
-    def robot(self, x: jax.Array) -> PlanarRobot:
-        """The design for one variable vector.
+    @property
+    def family(self):
+        """The base design's `RobotFamily`."""
+        return family_of(self.base)
 
-        Args:
-            x: ``(d,)`` variable values in `variables` order (physical units).
-
-        Returns:
-            A `PlanarRobot` built without validation (leaves may be tracers);
-            vmap this method for a batch.
-        """
-        x = jnp.asarray(x)
-        values: dict[str, jax.Array] = {k: jnp.asarray(v, dtype=x.dtype) for k, v in self.defaults.items()}
-        for i, name in enumerate(self.variable_names):
-            values[name] = x[i]
-        n = self.n_links
-        total_mass = self.base_mass + self.arm_mass
-        ratio = values["arm_over_base"]
-        base_mass = total_mass / (1.0 + ratio)
-        arm_mass = total_mass - base_mass
-        base_inertia = self.base_inertia * base_mass / self.base_mass
-        length_share = [values[f"l{i}_over_L"] for i in range(1, n)]
-        length_share.append(1.0 - sum(length_share))
-        mass_share = [values[f"m{i}_over_arm"] for i in range(1, n)]
-        mass_share.append(1.0 - sum(mass_share))
-        lengths = self.reach * jnp.stack(length_share)
-        masses = arm_mass * jnp.stack(mass_share)
-        a = lengths * jnp.stack([values[f"a{i}_over_l{i}"] for i in range(1, n + 1)])
-        robot = object.__new__(PlanarRobot)
-        fields = dict(
-            base_mass=base_mass,
-            base_inertia=base_inertia,
-            base_attach=values["b0"],
-            link_mass=masses,
-            link_inertia=masses * lengths**2 / 12.0,
-            link_a=a,
-            link_b=lengths - a,
-            joint_lower=jnp.full((n,), -jnp.inf, dtype=x.dtype),
-            joint_upper=jnp.full((n,), jnp.inf, dtype=x.dtype),
-            name=self.name,
-        )
-        for key, value in fields.items():
-            object.__setattr__(robot, key, value)
-        return robot
+    @property
+    def n_links(self) -> int:
+        """Joints of the arm (planar: links)."""
+        return self.family.joint_count(self.base)
 
     def fixed_summary(self) -> dict:
         """The fixed quantities, for the run's summary."""
-        return dict(base_mass=self.base_mass, base_inertia=self.base_inertia, arm_mass=self.arm_mass,
-                    reach=self.reach, links=self.n_links,
-                    **{k: v for k, v in self.defaults.items() if k not in self.variable_names})
+        return dict(self.fixed)
+
+    def robot(self, x: jax.Array):
+        """The design for one ``(d,)`` variable vector (physical units, `variables` order).
+
+        Built without validation (leaves may be tracers); vmap this method for a batch.
+        """
+        return _design(self.base, tuple(v.field for v in self.variables), jnp.asarray(x))
+
+    def _program(self) -> _Program:
+        return _Program(tuple(v.field for v in self.variables), self.objectives,
+                        tuple(sorted(self.wbar_options.items())), self.clamp_guaranteed, self.samples,
+                        self.randomizations)
 
     def objective_function(self) -> Callable[[jax.Array], jax.Array]:
-        """``f(x)``: ``(d,)`` variables -> ``(m,)`` objectives (maximized); pure, differentiable."""
-        functions = [objective(name, wbar_options=self.wbar_options, clamp_guaranteed=self.clamp_guaranteed)
-                     for name in self.objectives]
+        """``f(x)``: ``(d,)`` variables -> ``(m,)`` objectives (maximized); pure, differentiable.
 
-        def evaluate(x: jax.Array) -> jax.Array:
-            robot = self.robot(x)
-            return jnp.stack([fn(robot) for fn in functions])
-
-        return evaluate
+        Every joint-box average comes from one `joint_averages` call on the fixed rule
+        (one chain pass per posture for all of them)."""
+        program, base, seed = self._program(), self.base, self.seed
+        return lambda x: _evaluate(program, base, jnp.asarray(x), seed)
 
     def batch_function(self) -> Callable[[jax.Array], jax.Array]:
-        """Jitted ``(B, d) -> (B, m)``, one per problem (memoized): the search, the grid
-        and NSGA-II share it, so each batch size compiles once per process."""
-        cached = self.__dict__.get("_batch_function")
-        if cached is None:
-            cached = jax.jit(jax.vmap(self.objective_function()))
-            object.__setattr__(self, "_batch_function", cached)
-        return cached
+        """``(B, d) -> (B, m)``, jitted once per process for every problem of the same shape:
+        the base design and the seed are traced arguments, so the search, the grid and
+        NSGA-II (and other problems differing only in numbers) share one program per batch size."""
+        program, base, seed = self._program(), self.base, self.seed
+        return lambda xs: _evaluate_batch(program, base, jnp.asarray(xs), seed)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Program:
+    """What fixes the shapes of a problem's objective program (a static argument)."""
+
+    fields: tuple[str, ...]
+    objectives: tuple[str, ...]
+    wbar_options: tuple[tuple[str, Any], ...]
+    clamp_guaranteed: bool
+    samples: int
+    randomizations: int
+
+
+def _design(base, fields_set: tuple[str, ...], x: jax.Array):
+    """``base`` with ``x[i]`` set on field ``fields_set[i]``, in the family's field order (unvalidated)."""
+    fields = family_of(base).fields
+    robot = jax.tree_util.tree_map(lambda leaf: jnp.asarray(leaf, dtype=x.dtype), base)
+    for i, field in sorted(enumerate(fields_set), key=lambda p: fields.field_stage(p[1])):
+        robot = fields.set_field(robot, field, x[i])
+    return robot
+
+
+def _evaluate(program: _Program, base, x: jax.Array, seed) -> jax.Array:
+    """``(m,)`` objectives of one ``(d,)`` variable vector set on ``base``."""
+    robot = _design(base, program.fields, x)
+    values: list[Any] = [None] * len(program.objectives)
+    averaged = [(i, *AVERAGE_OBJECTIVES[name]) for i, name in enumerate(program.objectives)
+                if name in AVERAGE_OBJECTIVES]
+    for i, name in enumerate(program.objectives):
+        if name not in AVERAGE_OBJECTIVES:
+            values[i] = objective(name, wbar_options=dict(program.wbar_options),
+                                  clamp_guaranteed=program.clamp_guaranteed)(robot)
+    if averaged:
+        means = joint_averages(robot, tuple(metric for _, metric, _ in averaged), randomizations=program.randomizations,
+                               block=max(1, program.samples // program.randomizations), min_samples=program.samples,
+                               max_samples=program.samples, seed=seed, designs_per_chunk=1)
+        for i, metric, sign in averaged:
+            values[i] = sign * means[metric].value
+    return jnp.stack(values)
+
+
+@functools.partial(jax.jit, static_argnames=("program",))
+def _evaluate_batch(program: _Program, base, xs: jax.Array, seed) -> jax.Array:
+    return jax.vmap(lambda x: _evaluate(program, base, x, seed))(xs)
 
 
 # YAML ---------------------------------------------------------------------------------
 
-_TOP_KEYS = {"name", "description", "fixed", "variables", "objectives", "reference_point", "wbar",
-             "guaranteed", "search", "baselines", "hybrid"}  # hybrid: read by spacearm.design.hybrid.parse_hybrid
+_TOP_KEYS = {"name", "description", "robot", "fixed", "variables", "objectives", "reference_point", "wbar",
+             "guaranteed", "average", "search", "baselines", "hybrid"}  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _FIXED_KEYS = {"base_mass", "base_inertia", "arm_mass", "reach", "links"}
+_AVERAGE_KEYS = {"samples", "randomizations", "seed"}
 _SEARCH_KEYS = {f.name for f in dataclasses.fields(SearchSettings)}
 _NSGA_KEYS = {"population", "evaluations", "seed", "time_limit"}
 _SEARCH_CHOICES = {"gradient": ("forward", "reverse"), "schedule": ("geometric", "cosine")}
+# Fields whose values must stay positive (a mass, a length, a factor on either).
+_POSITIVE = ("base.mass", "base.inertia", "arm.mass", "arm.mass_ratio", "arm.mass_ratio_fixed_total", "arm.length")
 
 
 def variable_names_for(n_links: int) -> tuple[str, ...]:
-    """All variable names the parametrization knows for an n-link arm."""
-    names = ["b0", "arm_over_base"]
-    names += [f"l{i}_over_L" for i in range(1, n_links)]
-    names += [f"m{i}_over_arm" for i in range(1, n_links)]
-    names += [f"a{i}_over_l{i}" for i in range(1, n_links + 1)]
-    return tuple(names)
+    """The names of the first planar problem files for an n-link arm (aliases of design fields)."""
+    return planar_fields.alias_names(n_links)
 
 
-def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") -> DesignProblem:
-    """Build a `DesignProblem` from its YAML mapping (see ``sweeps/pareto-attachment.yaml``).
+def _uniform_rod_arm(source: str, fixed: Mapping[str, Any]) -> tuple[PlanarRobot, dict]:
+    """The planar base of a ``fixed:`` section: n equal uniform rods (a = b = l / 2,
+    I = m l^2 / 12) sharing the reach and the arm mass, on the given base."""
+    links = integer(f"{source}: fixed.links", fixed.get("links", 2), least=2)
+    physical = {}
+    for key in ("base_mass", "base_inertia", "arm_mass", "reach"):
+        if key not in fixed:
+            raise ConfigError(f"{source}: fixed.{key}: missing required key")
+        physical[key] = number(f"{source}: fixed.{key}", fixed[key])
+        if physical[key] <= 0:
+            raise ConfigError(f"{source}: fixed.{key}: must be positive, got {physical[key]}")
+    length, mass = physical["reach"] / links, physical["arm_mass"] / links
+    base = PlanarRobot(
+        base_mass=np.float64(physical["base_mass"]), base_inertia=np.float64(physical["base_inertia"]),
+        base_attach=np.float64(0.0), link_mass=np.full(links, mass), link_inertia=np.full(links, mass * length**2 / 12.0),
+        link_a=np.full(links, length / 2), link_b=np.full(links, length / 2), joint_lower=np.full(links, -np.inf),
+        joint_upper=np.full(links, np.inf), name=source)
+    return base, dict(physical, links=links)
 
-    Checks every section a run uses, so a problem that loads also runs.
+
+def _planar_fixed(source: str, config: Mapping[str, Any]) -> tuple[PlanarRobot, dict, dict]:
+    """``fixed:``: the base design, the summary and the field values it sets (by name as written)."""
+    fixed = config.get("fixed")
+    if not isinstance(fixed, Mapping):
+        raise ConfigError(f"{source}: fixed: a mapping with base_mass, base_inertia, arm_mass, reach is required")
+    links = integer(f"{source}: fixed.links", fixed.get("links", 2), least=2)
+    check_keys(f"{source}: fixed: ", fixed, _FIXED_KEYS | set(variable_names_for(links)))
+    base, summary = _uniform_rod_arm(source, fixed)
+    values = {key: number(f"{source}: fixed.{key}", value) for key, value in fixed.items() if key not in _FIXED_KEYS}
+    return base, summary, values
+
+
+def _check_planar_ranges(source: str, box: Mapping[str, tuple[float, float, str]], n: int) -> None:
+    """Every design inside the box must be physical: positive shares summing below 1,
+    centroids on their links, b0 >= 0. ``box``: field -> (lower, upper, name as written)."""
+    for what, total in (("length_share", "L"), ("mass_share", "the arm mass")):
+        keys = [f"links[{i}].{what}" for i in range(n - 1) if f"links[{i}].{what}" in box]
+        for key in keys:
+            if box[key][0] <= 0:
+                raise ConfigError(f"{source}: {box[key][2]}: must stay above 0, got lower value {box[key][0]}")
+        if keys and sum(box[key][1] for key in keys) + (n - 1 - len(keys)) / n >= 1:
+            names = ", ".join(box[key][2] for key in keys)
+            raise ConfigError(f"{source}: {names}: the upper values must sum below 1 so the last link keeps a share "
+                              f"of {total}")
+    for i in range(n):
+        key = f"links[{i}].centroid"
+        if key in box and (box[key][0] < 0 or box[key][1] > 1):
+            raise ConfigError(f"{source}: {box[key][2]}: must stay within [0, 1]")
+    if "base.attach" in box and box["base.attach"][0] < 0:
+        raise ConfigError(f"{source}: {box['base.attach'][2]}: must not be negative")
+
+
+def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
+                         base_dir: str | os.PathLike | None = None) -> DesignProblem:
+    """Build a `DesignProblem` of either family from its YAML mapping; checks every section.
+
+    Args:
+        config: the parsed problem file.
+        source: a label for messages (the file name).
+        base_dir: where a relative ``robot:`` path starts (default: the current folder).
 
     Raises:
         ConfigError: naming the field and the reason.
@@ -245,89 +343,123 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem") 
     if not isinstance(name, str) or not name:
         raise ConfigError(f"{source}: name: a non-empty string is required")
     description = str(config.get("description", ""))
-    fixed = config.get("fixed")
-    if not isinstance(fixed, Mapping):
-        raise ConfigError(f"{source}: fixed: a mapping with base_mass, base_inertia, arm_mass, reach is required")
-    links = integer(f"{source}: fixed.links", fixed.get("links", 2), least=2)
-    known = variable_names_for(links)
-    check_keys(f"{source}: fixed: ", fixed, _FIXED_KEYS | set(known))
-    physical = {}
-    for key in ("base_mass", "base_inertia", "arm_mass", "reach"):
-        if key not in fixed:
-            raise ConfigError(f"{source}: fixed.{key}: missing required key")
-        physical[key] = number(f"{source}: fixed.{key}", fixed[key])
-        if physical[key] <= 0:
-            raise ConfigError(f"{source}: fixed.{key}: must be positive, got {physical[key]}")
-    defaults = {"arm_over_base": physical["arm_mass"] / physical["base_mass"]}
-    defaults.update({f"l{i}_over_L": 1.0 / links for i in range(1, links)})
-    defaults.update({f"m{i}_over_arm": 1.0 / links for i in range(1, links)})
-    defaults.update({f"a{i}_over_l{i}": 0.5 for i in range(1, links + 1)})
-    for key in known:
-        if key in fixed:
-            defaults[key] = number(f"{source}: fixed.{key}", fixed[key])
 
-    raw_variables = config.get("variables")
-    if not isinstance(raw_variables, Mapping) or not raw_variables:
-        raise ConfigError(f"{source}: variables: a mapping name: [lower, upper] with at least one entry is required")
-    check_keys(f"{source}: variables: ", raw_variables, known)
+    # The base design: a robot file, or a planar ``fixed:`` section.
+    if ("robot" in config) == ("fixed" in config):
+        raise ConfigError(f"{source}: give either robot: (a robot file) or fixed: (a planar arm's reference values)")
+    fixed_values: dict[str, float] = {}
+    robot_file = ""
+    if "robot" in config:
+        robot_entry = config["robot"]
+        if not isinstance(robot_entry, str):
+            raise ConfigError(f"{source}: robot: a robot file path is required")
+        folder = os.fspath(base_dir) if base_dir is not None else os.getcwd()
+        path = robot_entry if os.path.isabs(robot_entry) else os.path.join(folder, robot_entry)
+        if not os.path.isfile(path):
+            raise ConfigError(f"{source}: robot: no such robot file '{robot_entry}' (looked in {folder})")
+        base = load_robot(path)
+        robot_file = robot_entry
+    else:
+        base, fixed_summary, fixed_values = _planar_fixed(source, config)
+    family = family_of(base)
+    fields = family.fields
+    n = family.joint_count(base)
+
+    # Variables: the family's design fields (first-generation planar names accepted).
+    raw = config.get("variables")
+    if not isinstance(raw, Mapping) or not raw:
+        raise ConfigError(f"{source}: variables: a mapping field: [lower, upper] with at least one entry is required")
     variables = []
-    for key, bounds in raw_variables.items():
+    for key, bounds in raw.items():
         where = f"{source}: variables.{key}"
+        field = fields.check_field(where, fields.canonical_name(key), base)
         if not isinstance(bounds, (list, tuple)) or len(bounds) != 2:
             raise ConfigError(f"{where}: must be a list [lower, upper]")
         lower, upper = number(f"{where}[0]", bounds[0]), number(f"{where}[1]", bounds[1])
         if not lower < upper:
             raise ConfigError(f"{where}: the lower bound must be below the upper bound, got [{lower}, {upper}]")
-        variables.append(Variable(key, lower, upper))
-        defaults.setdefault(key, 0.5 * (lower + upper))
-    if "b0" not in defaults:
-        raise ConfigError(f"{source}: b0: give it in fixed (a value) or in variables (bounds)")
-    _check_ranges(source, defaults, variables, links)
+        if (field in _POSITIVE or field.endswith(".length")) and lower <= 0:
+            raise ConfigError(f"{where}: must stay positive, got lower bound {lower}")
+        variables.append(Variable(str(key), lower, upper, field))
+    for i, first in enumerate(variables):
+        for second in variables[i + 1:]:
+            if fields.conflicting_number(first.field, second.field, base):
+                raise ConfigError(f"{source}: variables: {first.name} and {second.name} set the same design number")
 
-    raw_objectives = config.get("objectives", ["wbar", "S_G"])
+    # Fixed field values (planar ``fixed:`` extras such as b0), then the physical box.
+    chosen = {v.field for v in variables}
+    settings = []
+    for key, value in fixed_values.items():
+        field = fields.check_field(f"{source}: fixed.{key}", fields.canonical_name(key), base)
+        if field not in chosen:
+            settings.append((field, value))
+    for field, value in sorted(settings, key=lambda p: fields.field_stage(p[0])):
+        base = fields.set_field(base, field, value)
+    if family.name == "planar":
+        box = {v.field: (v.lower, v.upper, v.name) for v in variables}
+        if "base.attach" not in box and "b0" not in fixed_values:
+            raise ConfigError(f"{source}: b0: give it in fixed (a value) or in variables (bounds)")
+        _check_planar_ranges(source, box, n)
+    try:
+        base = base.replace()  # validated
+    except ConfigError as error:
+        raise ConfigError(f"{source}: the base design is not a valid robot: {error}") from None
+    if "robot" in config:
+        fixed_summary = {"robot": robot_file}
+
+    # Objectives of the family, their options.
+    allowed = objectives_for(family.name)
+    raw_objectives = config.get("objectives", list(allowed[:2]) if family.name == "planar" else ["w_avg", "low_disturbance"])
     if not isinstance(raw_objectives, (list, tuple)):
-        raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(OBJECTIVES)})")
-    objectives = tuple(choice(f"{source}: objectives[{i}]", value, OBJECTIVES) for i, value in enumerate(raw_objectives))
+        raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
+    objectives = tuple(choice(f"{source}: objectives[{i}]", v, allowed) for i, v in enumerate(raw_objectives))
     if len(objectives) < 2 or len(set(objectives)) != len(objectives):
         raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
-    reference = config.get("reference_point", [0.0] * len(objectives))
-    if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
-        raise ConfigError(f"{source}: reference_point: one number per objective is required")
-    reference = tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
+    averaged = any(name in AVERAGE_OBJECTIVES for name in objectives)
+    # Optional where an objective has no natural zero: absent, the search takes it below
+    # the nadir of its first population (and writes it to the summary).
+    reference = config.get("reference_point", None if averaged else [0.0] * len(objectives))
+    if reference is not None:
+        if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
+            raise ConfigError(f"{source}: reference_point: one number per objective, or none (objectives maximized; "
+                              "low_disturbance is minus the mean ||C_w||_F)")
+        reference = tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
 
     wbar = config.get("wbar", {}) or {}
     if not isinstance(wbar, Mapping):
         raise ConfigError(f"{source}: wbar: must be a mapping of options for analysis.average_manipulability")
     check_keys(f"{source}: wbar: ", wbar, WBAR_OPTIONS)
     check_average_options(where=f"{source}: wbar.", **wbar)
-    if "wbar" in objectives and links != 2 and wbar.get("measure", "area") == "area":
+    if "wbar" in objectives and n != 2 and wbar.get("measure", "area") == "area":
         raise ConfigError(
-            f"{source}: wbar: the area average (eq. 12) is defined for 2 links, fixed.links is {links}; "
+            f"{source}: wbar: the area average (eq. 12) is defined for 2 links, "
+            f"{'fixed.links is' if 'fixed' in config else 'the robot has'} {n}; "
             "set wbar: {measure: joint}"
         )
     guaranteed = choice(f"{source}: guaranteed", config.get("guaranteed", "clamped"), ("clamped", "paper"))
 
+    average = config.get("average", {}) or {}
+    if not isinstance(average, Mapping):
+        raise ConfigError(f"{source}: average: must be a mapping (samples, randomizations, seed)")
+    check_keys(f"{source}: average: ", average, _AVERAGE_KEYS)
+    randomizations = integer(f"{source}: average.randomizations", average.get("randomizations", 8), least=2)
+    samples = integer(f"{source}: average.samples", average.get("samples", 2048), least=randomizations)
+    per = samples // randomizations
+    if samples % randomizations or per & (per - 1):
+        raise ConfigError(f"{source}: average.samples: must be randomizations x a power of two, got {samples}")
+    seed = integer(f"{source}: average.seed", average.get("seed", 0), least=0)
+    if averaged:
+        check_joint_box(base)
+        fixed_summary.update(samples=samples, randomizations=randomizations, seed=seed)
+
     search = parse_search(source, config.get("search", {}))
     grid_points, grid_chunk, nsga2 = parse_baselines(source, config.get("baselines", {}), len(variables),
-                                                     len(OBJECTIVES))
+                                                     len(objectives))
     return DesignProblem(
-        name=name,
-        n_links=links,
-        base_mass=physical["base_mass"],
-        base_inertia=physical["base_inertia"],
-        arm_mass=physical["arm_mass"],
-        reach=physical["reach"],
-        defaults=defaults,
-        variables=tuple(variables),
-        objectives=objectives,
-        reference_point=reference,
-        wbar_options=dict(wbar),
-        clamp_guaranteed=guaranteed == "clamped",
-        search=search,
-        grid_points=grid_points,
-        grid_chunk=grid_chunk,
-        nsga2=nsga2,
-        description=description,
+        name=name, base=base, variables=tuple(variables), objectives=objectives, reference_point=reference,
+        robot_file=robot_file, fixed=fixed_summary, wbar_options=dict(wbar), clamp_guaranteed=guaranteed == "clamped",
+        samples=samples, randomizations=randomizations, seed=seed, search=search, grid_points=grid_points,
+        grid_chunk=grid_chunk, nsga2=nsga2, description=description,
     )
 
 
@@ -398,28 +530,6 @@ def parse_baselines(source: str, baselines: Any, n_variables: int, n_objectives:
     return grid_points, grid_chunk, nsga2
 
 
-def _check_ranges(source: str, defaults: Mapping[str, float], variables: Sequence[Variable], n: int) -> None:
-    """Every design inside the box must be physical: positive shares, 0 <= a/l <= 1, b0 >= 0."""
-    box = {k: (v, v) for k, v in defaults.items()}
-    box.update({v.name: (v.lower, v.upper) for v in variables})
-    for prefix in ("l", "m"):
-        suffix = "_over_L" if prefix == "l" else "_over_arm"
-        names = [f"{prefix}{i}{suffix}" for i in range(1, n)]
-        for key in names:
-            if box[key][0] <= 0:
-                raise ConfigError(f"{source}: {key}: must stay above 0, got lower value {box[key][0]}")
-        if sum(box[key][1] for key in names) >= 1:
-            raise ConfigError(f"{source}: {', '.join(names)}: the upper values must sum below 1 so the last link keeps a share")
-    for i in range(1, n + 1):
-        key = f"a{i}_over_l{i}"
-        if box[key][0] < 0 or box[key][1] > 1:
-            raise ConfigError(f"{source}: {key}: must stay within [0, 1]")
-    if box["b0"][0] < 0:
-        raise ConfigError(f"{source}: b0: must not be negative")
-    if box["arm_over_base"][0] <= 0:
-        raise ConfigError(f"{source}: arm_over_base: must stay above 0")
-
-
 def _check_grid_size(where: str, points: Sequence[int], n_objectives: int) -> None:
     """Refuse a grid baseline whose designs would not fit in memory (the grid is built at once)."""
     count = math.prod(points)
@@ -427,12 +537,21 @@ def _check_grid_size(where: str, points: Sequence[int], n_objectives: int) -> No
     check_memory(where, need, f"{count:,} grid designs ({' x '.join(map(str, points))})", "use fewer points")
 
 
-def load_problem(path: str | os.PathLike | Mapping[str, Any]) -> DesignProblem:
-    """Load an optimization problem from a YAML file (or its parsed mapping).
+def load_problem(source: str | os.PathLike | Mapping[str, Any], *, name: str | None = None,
+                 base_dir: str | os.PathLike | None = None) -> DesignProblem:
+    """Load a design problem of either family from a YAML file (or its parsed mapping).
+
+    Args:
+        source: the problem file or its parsed mapping.
+        name: a label for messages (default: the file name).
+        base_dir: where a relative ``robot:`` path starts (default: the file's folder,
+            or the current folder for a mapping).
 
     Raises:
         ConfigError: for a missing or malformed file and any invalid field.
     """
-    if isinstance(path, Mapping):
-        return problem_from_mapping(path)
-    return problem_from_mapping(read_yaml(path, what="design problem file"), source=os.fspath(path))
+    if isinstance(source, Mapping):
+        return problem_from_mapping(source, source=name or "problem", base_dir=base_dir)
+    path = os.fspath(source)
+    folder = base_dir if base_dir is not None else os.path.dirname(os.path.abspath(path))
+    return problem_from_mapping(read_yaml(path, what="design problem file"), source=name or path, base_dir=folder)

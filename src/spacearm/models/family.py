@@ -51,6 +51,10 @@ class RobotFamily:
             loop instead of writing them out (a shorter compile for the same speed).
         straight_defaults: the family's defaults of the straight-path options
             (``max_step``, ``tol``, ``rtol``, ``sing_rate``, ``max_steps``).
+        fields: the family's named design numbers (a module with ``FIELD_HELP``,
+            ``canonical_name``, ``check_field``, ``set_field``, ``field_stage``,
+            ``conflicting_number``, ``field_unit``, ``field_columns``): what sweep axes
+            and design variables set.
     """
 
     name: ClassVar[str] = "abstract"
@@ -62,6 +66,7 @@ class RobotFamily:
     attitude: ClassVar[Group]
     straight_field_loops: ClassVar[bool] = True
     straight_defaults: ClassVar[Mapping[str, Any]] = {}
+    fields: ClassVar[Any] = None
 
     def joint_count(self, robot) -> int:
         """The number of joints n (static)."""

@@ -6,6 +6,7 @@ what a run would).
 from __future__ import annotations
 
 import dataclasses
+import json
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -21,7 +22,7 @@ from ..analysis import (
     normalized_workspace_areas,
     straight_path_workspace,
 )
-from ..analysis.averages import joint_average
+from ..analysis.averages import joint_average, joint_averages
 from ..analysis.joint_box import check_joint_box
 from ..analysis.spatial_workspaces import reachable_radii, singular_radius
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
@@ -285,15 +286,29 @@ def metric_columns(metrics: Sequence[MetricSpec]) -> list[str]:
 
 
 def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], dict]:
-    """The per-design function of a sweep's metrics: robot -> {column: scalar}, traceable."""
+    """The per-design function of a sweep's metrics: robot -> {column: scalar}, traceable.
+
+    Joint-box averages with the same options share one `joint_averages` call: one set
+    of postures and one chain pass per posture for all of them."""
     wanted = metric_columns(metrics)
+    groups: dict[str, list[MetricSpec]] = {}
+    for metric in metrics:
+        if metric.name in _AVERAGES:
+            groups.setdefault(json.dumps(metric.options, sort_keys=True), []).append(metric)
 
     def evaluate(robot: PlanarRobot) -> dict:
         values: dict = {}
         done: set = set()
+        for group in groups.values():
+            options = {"rtol": SWEEP_RTOL, **group[0].options}
+            kinds = tuple(_AVERAGES[m.name][0] for m in group)
+            averages = joint_averages(robot, kinds, **options, designs_per_chunk=1)
+            for metric, kind in zip(group, kinds):
+                column = _AVERAGES[metric.name][1]
+                values.update({column: averages[kind].value, f"{column}_error": averages[kind].error})
         for metric in metrics:
             entry = METRICS[metric.name]
-            if entry.fn in done:
+            if metric.name in _AVERAGES or entry.fn in done:
                 continue
             done.add(entry.fn)
             values.update(entry.fn(robot, metric.options))

@@ -40,7 +40,7 @@ from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
 from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
 from ..io import manifest as provenance
 from .designs import build_designs, design_columns
-from .metrics import METRICS, design_function, metric_columns
+from .metrics import METRICS, MetricSpec, design_function, metric_columns
 from .spec import SweepSpec
 from .table2 import REPORTS
 
@@ -103,6 +103,21 @@ class SweepResult:
     table: dict[str, np.ndarray]
     manifest: dict
     files: list[Path]
+
+
+@functools.lru_cache(maxsize=32)
+def _evaluator(metrics_key: str, per_step: int, mesh):
+    """The jitted chunk program of a sweep's metrics, built once per process for each
+    metric list, step size and device mesh (a second sweep of the same shape reuses it)."""
+    metrics = tuple(MetricSpec(name, options) for name, options in json.loads(metrics_key))
+    step = jax.vmap(functools.partial(jax.lax.map, design_function(metrics), batch_size=per_step))
+    # shard_map: each device runs its own rows with no collective inside. Under plain
+    # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
+    # needs the loop predicate reduced across devices every iteration, and that
+    # deadlocked with several CPU devices in one process.
+    return jax.jit(_shard_map(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)),
+                              mesh=mesh, in_specs=jax.sharding.PartitionSpec("designs"),
+                              out_specs=jax.sharding.PartitionSpec("designs")))
 
 
 def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, progress: bool = True,
@@ -172,14 +187,8 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
     per_device = chunk // devices
     per_step = min([DESIGNS_PER_STEP] + [METRICS[m.name].designs_per_step for m in spec.metrics
                                          if METRICS[m.name].designs_per_step])
-    step = jax.vmap(functools.partial(jax.lax.map, design_function(spec.metrics), batch_size=min(per_step, per_device)))
-    # shard_map: each device runs its own rows with no collective inside. Under plain
-    # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
-    # needs the loop predicate reduced across devices every iteration, and that
-    # deadlocked with several CPU devices in one process.
-    evaluate = jax.jit(_shard_map(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)),
-                                  mesh=mesh, in_specs=jax.sharding.PartitionSpec("designs"),
-                                  out_specs=jax.sharding.PartitionSpec("designs")))
+    evaluate = _evaluator(json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True),
+                          min(per_step, per_device), mesh)
     columns = metric_columns(spec.metrics)
 
     compile_s = 0.0

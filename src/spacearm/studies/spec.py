@@ -23,6 +23,7 @@ import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import jax
 import numpy as np
 import yaml
 
@@ -31,6 +32,7 @@ from .._core.schema import (
     check_keys, check_memory, describe_yaml_error, integer, is_number, number, quote, read_yaml,
 )
 from ..models import load_robot, robot_from_file_mapping
+from ..models.family import family_of
 from ..models.planar import PlanarRobot, robot_to_mapping
 from ..models.spatial import SpatialRobot
 from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field
@@ -199,19 +201,17 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
             raise ConfigError(f"{where}: robot: '{robot_entry}' is a folder, not a robot file")
         robot = load_robot(robot_path)
         robot_source = str(robot_entry)
-        robot_mapping = _spatial_mapping(robot_path, read_yaml(robot_path, what="robot file")) \
-            if isinstance(robot, SpatialRobot) else robot_to_mapping(robot)
+        robot_mapping = _resolved_robot(robot, robot_path, lambda: read_yaml(robot_path, what="robot file"))
     elif isinstance(robot_entry, Mapping):
         robot = robot_from_file_mapping(robot_entry, source=f"{where}: robot", base_dir=base_dir)
         robot_source = "inline"
-        robot_mapping = _spatial_mapping(base_dir / "robot.yaml", robot_entry) \
-            if isinstance(robot, SpatialRobot) else robot_to_mapping(robot)
+        robot_mapping = _resolved_robot(robot, base_dir / "robot.yaml", lambda: robot_entry)
     else:
         raise ConfigError(f"{where}: robot: must be a file path or an inline robot mapping")
 
-    family = "spatial" if isinstance(robot, SpatialRobot) else "planar"
+    family = family_of(robot).name
     # Numbers per design (float64 leaves), for the memory check of the batched designs.
-    size = 30 + 30 * robot.n_joints if family == "spatial" else 3 + 6 * robot.n_links
+    size = sum(int(np.size(leaf)) for leaf in jax.tree_util.tree_leaves(robot))
     axes_entry = config.get("axes")
     if not isinstance(axes_entry, Mapping) or not axes_entry:
         raise ConfigError(f"{where}: axes: must be a non-empty mapping of axis name -> {{field, values | range}}")
@@ -282,6 +282,18 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
     build_designs(spec)  # validates every sweep point before anything is written
     return spec
+
+
+def _resolved_robot(robot, path: Path, mapping) -> dict:
+    """The robot's mapping for the resolved config: a family's own normal form where it
+    writes one (planar: `robot_to_mapping`), else the file's mapping (``mapping()``) with
+    its URDF path made to work from the current folder."""
+    if family_of(robot).name in _NORMAL_FORMS:
+        return _NORMAL_FORMS[family_of(robot).name](robot)
+    return _spatial_mapping(path, mapping())
+
+
+_NORMAL_FORMS = {"planar": robot_to_mapping}
 
 
 def _spatial_mapping(path: Path, config: Mapping) -> dict:

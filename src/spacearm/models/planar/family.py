@@ -16,6 +16,7 @@ import functools
 from ..._core.groups import SO2
 from ..._core.magnus import composite_gauss, line_integral
 from ..family import RobotFamily
+from . import fields as planar_fields
 from .closed_forms import (
     arm_jacobian,
     base_jacobian,
@@ -51,6 +52,7 @@ class PlanarFamily(RobotFamily):
         "fixed_base_manipulability": fixed_base_manipulability,
         "straight_path_field": straight_path_field,
     }
+    fields = planar_fields
 
     attitude = SO2
     straight_field_loops = False  # the closed-form field: stages written out run faster

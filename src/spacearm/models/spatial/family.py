@@ -23,6 +23,7 @@ import functools
 from ..._core.groups import SO3
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import RobotFamily
+from . import fields as spatial_fields
 from ..._core.linalg import gram_root_determinant
 from .primitives import (
     arm_inertia,
@@ -32,6 +33,7 @@ from .primitives import (
     jacobians,
     mass_matrix,
     momentum_map,
+    posture_quantities,
     straight_path_maps,
     tip,
 )
@@ -74,7 +76,9 @@ class SpatialFamily(RobotFamily):
         "base_rate_matrix": base_twist_map,
         "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
+        "posture_quantities": posture_quantities,
     }
+    fields = spatial_fields
 
     attitude = SO3
     straight_field_loops = True  # the chain pass is a scan: roll the DOP853 stages

@@ -57,9 +57,11 @@ __all__ = [
     "FIELD_HELP",
     "FACTOR_FIELDS",
     "check_field",
+    "canonical_name",
     "set_field",
     "field_stage",
     "field_writes",
+    "conflicting_number",
     "field_unit",
     "field_columns",
     "arm_mass",
@@ -92,6 +94,11 @@ def _body_names(robot: SpatialRobot) -> tuple[str, ...]:
 def _merged_into(robot: SpatialRobot) -> dict[str, str]:
     """URDF links merged into a body (not its first link) -> the body's name."""
     return {name: group[0] for group in robot.labels.body_links for name in group[1:]}
+
+
+def canonical_name(name: Any) -> Any:
+    """The field's name (spatial fields have no older aliases)."""
+    return name
 
 
 def check_field(where: str, field: Any, robot: SpatialRobot) -> str:
@@ -291,6 +298,12 @@ def field_writes(field: str, robot: SpatialRobot) -> set[str]:
     body = _body_names(robot).index(name)
     # A body's length factor commutes with arm.length and with mass factors (all scale).
     return {f"links.{what}[{'root' if body == 0 else body - 1}]"}
+
+
+def conflicting_number(first: str, second: str, robot: SpatialRobot) -> str | None:
+    """A design number both fields set (the result would depend on their order), or None."""
+    shared = field_writes(first, robot) & field_writes(second, robot)
+    return sorted(shared)[0] if shared else None
 
 
 def field_unit(field: str) -> str:

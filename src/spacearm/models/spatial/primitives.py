@@ -55,6 +55,8 @@ __all__ = [
     "jacobians",
     "mass_matrix",
     "momentum_map",
+    "POSTURE_QUANTITIES",
+    "posture_quantities",
     "rpy_to_matrix",
     "straight_path_maps",
     "tip",
@@ -562,3 +564,48 @@ def momentum_map(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Arra
     i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
     angular = _sub(state.angular, _cross(base_com, state.momentum))
     return _pack(i_s), _rows(state.momentum, angular)
+
+
+def _posture_quantities_minor(robot, q, needs):
+    """J*, C and H* stacked by rows ``(rows, n, *batch)`` from ONE chain pass (only those in ``needs``)."""
+    state = _chain_pass(robot, q)
+    coupling, solved = _coupling(state)
+    parts = []
+    if "jacobian" in needs:
+        v, w = _fixed_columns(state)
+        r_t = _sub(state.tip, state.centroid)
+        v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+        parts.append(_rows(v_star, _sub(w, solved)))
+    if "base_rate" in needs:
+        r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
+        v_bus = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(r_g, solved))
+        parts.append(_rows(v_bus, _scale(-1.0, solved)))
+    if "arm_inertia" in needs:
+        parts.append(_mass_from(state) - _outer(state.momentum, state.momentum) / state.mass - _outer(coupling, solved))
+    return jnp.concatenate(parts, axis=0)
+
+
+POSTURE_QUANTITIES = ("jacobian", "base_rate", "arm_inertia")
+
+
+def posture_quantities(robot: SpatialRobot, q: jax.Array, needs: tuple[str, ...]) -> dict[str, jax.Array]:
+    """The per-posture matrices posture metrics need, from one chain pass per posture.
+
+    Args:
+        robot: one design.
+        q: ``(..., n)`` joint positions.
+        needs: a subset of `POSTURE_QUANTITIES` (static): ``"jacobian"`` J* ``(..., 6, n)``,
+            ``"base_rate"`` C ``(..., 6, n)`` (bus twist per joint rate), ``"arm_inertia"``
+            H* ``(..., n, n)``; bus axes, each equal to its own kernel above.
+
+    Returns:
+        ``{name: array}`` for the names in ``needs``.
+    """
+    wanted = tuple(name for name in POSTURE_QUANTITIES if name in needs)
+    stacked = batched(lambda r, x: _posture_quantities_minor(r, x, wanted), 2)(robot, q)
+    rows = {"jacobian": 6, "base_rate": 6, "arm_inertia": robot.n_joints}
+    out, start = {}, 0
+    for name in wanted:
+        out[name] = stacked[..., start:start + rows[name], :]
+        start += rows[name]
+    return out
