@@ -68,11 +68,13 @@ def register(subparsers) -> None:
                             "(SPACEARM_PEER_TIMEOUT; default 60)")
 
 
-def _join(args: argparse.Namespace) -> None:
-    """Join the other processes of a distributed sweep, when asked (before JAX starts)."""
+def _join(args: argparse.Namespace) -> bool:
+    """Join the other processes of a distributed sweep, when asked (before JAX starts).
+
+    Returns whether this process joined; bad options raise before anything starts."""
     given = [args.coordinator is not None, args.num_processes is not None, args.process_id is not None]
     if not any(given):
-        return
+        return False
     if not all(given):
         raise ConfigError("a distributed sweep needs all three of --coordinator (SPACEARM_COORDINATOR), "
                           "--num-processes (SPACEARM_NUM_PROCESSES) and --process-id (SPACEARM_PROCESS_ID)")
@@ -87,10 +89,13 @@ def _join(args: argparse.Namespace) -> None:
     if not args.peer_timeout > 0:
         raise ConfigError(f"--peer-timeout {args.peer_timeout:g}: must be a positive number of seconds")
     join_processes(args.coordinator, args.num_processes, args.process_id, timeout_s=args.peer_timeout)
+    return True
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.coordinator is None and args.num_processes is None and args.process_id is None:
+    # First: jax.distributed must start before JAX's backend. Bad options raise here, as
+    # any bad input does (in-process callers such as the tests keep their process).
+    if not _join(args):
         return _run(args)
     try:
         return _run(args)
@@ -106,8 +111,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    _join(args)  # first: jax.distributed must start before JAX's backend
-
     from ..figures.sweep import write_figures
     from ..studies import load_sweep, run_sweep
 
