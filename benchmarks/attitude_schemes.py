@@ -26,12 +26,14 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
+import itertools
 
-import spacearm as sa  # noqa: E402
-from spacearm.motion import attitude  # noqa: E402
+import jax.numpy as jnp
+import numpy as np
+from scipy.integrate import solve_ivp
+
+import spacearm as sa
+from spacearm.motion import attitude
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROBOT = os.path.join(HERE, "..", "configs", "ur5-smallsat.yaml")
@@ -64,7 +66,7 @@ def scipy_reference(robot, waypoints, rtol=1e-13):
         return (R @ np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])).ravel()
 
     R = np.eye(3)
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         sol = solve_ivp(rhs, (0.0, 1.0), R.ravel(), method="DOP853", rtol=rtol, atol=rtol, args=(a, b - a))
         R = sol.y[:, -1].reshape(3, 3)
     u, _, vt = np.linalg.svd(R)
@@ -109,7 +111,7 @@ def quaternion_rk4(omega_map, waypoints, steps):
     h = 1.0 / steps
 
     def step(qu, w):
-        f = lambda x, k: 0.5 * _quat_mul(x, w[:, k])  # noqa: E731
+        f = lambda x, k: 0.5 * _quat_mul(x, w[:, k])
         k1 = f(qu, 0)
         k2 = f(qu + 0.5 * h * k1, 1)
         k3 = f(qu + 0.5 * h * k2, 1)
@@ -133,13 +135,21 @@ def diffrax_dopri8(omega_map, waypoints, rtol):
             return 0.5 * _quat_mul(y, jnp.concatenate([jnp.zeros(1), w]))
 
         sol = diffrax.diffeqsolve(
-            diffrax.ODETerm(field), diffrax.Dopri8(), 0.0, 1.0, 0.1, qu,
-            stepsize_controller=diffrax.PIDController(rtol=rtol, atol=rtol), max_steps=4096,
+            diffrax.ODETerm(field),
+            diffrax.Dopri8(),
+            0.0,
+            1.0,
+            0.1,
+            qu,
+            stepsize_controller=diffrax.PIDController(rtol=rtol, atol=rtol),
+            max_steps=4096,
         )
         y = sol.ys[-1]
         return y / jnp.linalg.norm(y), sol.stats["num_steps"]
 
-    qu, counts = jax.lax.scan(segment, jnp.array([1.0, 0.0, 0.0, 0.0]), (waypoints[:-1], waypoints[1:] - waypoints[:-1]))
+    qu, counts = jax.lax.scan(
+        segment, jnp.array([1.0, 0.0, 0.0, 0.0]), (waypoints[:-1], waypoints[1:] - waypoints[:-1])
+    )
     return _quat_matrix(qu), jnp.sum(counts)
 
 
@@ -176,24 +186,39 @@ def main():
         gap = float(jnp.max(attitude.geodesic_distance(references[name][:4], jnp.asarray(check))))
         self_gap = float(jnp.max(attitude.geodesic_distance(references[name], magnus(wp, 256, 6))))
         angle = np.asarray(attitude.geodesic_distance(jnp.eye(3), references[name]))
-        print(f"# {name}: net rotation {angle.min():.3g}..{angle.max():.3g} rad; reference vs DOP853 {gap:.2g} rad, "
-              f"vs 256 steps {self_gap:.2g} rad", flush=True)
+        print(
+            f"# {name}: net rotation {angle.min():.3g}..{angle.max():.3g} rad; reference vs DOP853 {gap:.2g} rad, "
+            f"vs 256 steps {self_gap:.2g} rad",
+            flush=True,
+        )
 
     timing_paths = jnp.asarray(ellipse_loops(np.random.default_rng(1), 1000, n))
-    print("| scheme | steps/segment | C_w evaluations/segment | max error, loops (rad) | max error, 2-rad polylines (rad) | 1,000 loops, warm (s) |")
+    print(
+        "| scheme | steps/segment | C_w evaluations/segment | max error, loops (rad) | max error, 2-rad polylines (rad) | 1,000 loops, warm (s) |"
+    )
     print("|---|---|---|---|---|---|")
     schemes = [("Magnus 4 (2 Gauss nodes)", 4, 2), ("Magnus 6 (3 Gauss nodes)", 6, 3), ("RKMK4", "rkmk4", 3)]
     for label, order, evals in schemes:
         for steps in (1, 2, 4, 8, 16, 32):
-            errors = [float(jnp.max(attitude.geodesic_distance(magnus(jnp.asarray(p), steps, order), references[k])))
-                      for k, p in sets.items()]
+            errors = [
+                float(jnp.max(attitude.geodesic_distance(magnus(jnp.asarray(p), steps, order), references[k])))
+                for k, p in sets.items()
+            ]
             seconds = timed(magnus, timing_paths, steps, order)
-            print(f"| {label} | {steps} | {evals * steps} | {errors[0]:.1e} | {errors[1]:.1e} | {seconds:.3f} |", flush=True)
+            print(
+                f"| {label} | {steps} | {evals * steps} | {errors[0]:.1e} | {errors[1]:.1e} | {seconds:.3f} |",
+                flush=True,
+            )
     for steps in (4, 8, 16, 32):
-        errors = [float(jnp.max(attitude.geodesic_distance(quat(jnp.asarray(p), steps), references[k])))
-                  for k, p in sets.items()]
+        errors = [
+            float(jnp.max(attitude.geodesic_distance(quat(jnp.asarray(p), steps), references[k])))
+            for k, p in sets.items()
+        ]
         seconds = timed(quat, timing_paths, steps)
-        print(f"| quaternion RK4, normalized | {steps} | {3 * steps} | {errors[0]:.1e} | {errors[1]:.1e} | {seconds:.3f} |", flush=True)
+        print(
+            f"| quaternion RK4, normalized | {steps} | {3 * steps} | {errors[0]:.1e} | {errors[1]:.1e} | {seconds:.3f} |",
+            flush=True,
+        )
     if "--no-diffrax" not in sys.argv:
         for rtol in (1e-10, 1e-12):
             run = jax.jit(jax.vmap(lambda w, r=rtol: diffrax_dopri8(omega_map, w, r)))
@@ -203,8 +228,11 @@ def main():
                 errors.append(float(jnp.max(attitude.geodesic_distance(R, references[k]))))
                 counts.append(float(jnp.mean(steps)) / (p.shape[1] - 1))
             seconds = timed(run, timing_paths)
-            print(f"| diffrax Dopri8, quaternion, rtol {rtol:.0e} | adaptive ({counts[0]:.1f}) | ~{12 * counts[0]:.0f} | "
-                  f"{errors[0]:.1e} | {errors[1]:.1e} | {seconds:.3f} |", flush=True)
+            print(
+                f"| diffrax Dopri8, quaternion, rtol {rtol:.0e} | adaptive ({counts[0]:.1f}) | ~{12 * counts[0]:.0f} | "
+                f"{errors[0]:.1e} | {errors[1]:.1e} | {seconds:.3f} |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -27,12 +27,14 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
+import itertools
 
-import spacearm as sa  # noqa: E402
-from spacearm.motion import attitude  # noqa: E402
+import jax.numpy as jnp
+import numpy as np
+from scipy.integrate import solve_ivp
+
+import spacearm as sa
+from spacearm.motion import attitude
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROBOT = os.path.join(HERE, "..", "configs", "ur5-smallsat.yaml")
@@ -60,7 +62,7 @@ def scipy_path(omega, waypoints, rtol, atol):
 
     R = np.eye(3)
     evaluations = 0
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         sol = solve_ivp(rhs, (0.0, 1.0), R.ravel(), method="DOP853", rtol=rtol, atol=atol, args=(a, b - a))
         R = sol.y[:, -1].reshape(3, 3)
         evaluations += sol.nfev
@@ -93,9 +95,9 @@ def main():
     compile_seconds = first - best
 
     reference_paths = loops[: max(args.scipy, 200)]
-    reference = jax.jit(functools.partial(attitude.path_rotation, functools.partial(attitude.bus_rate_map, robot), steps=64))(
-        jnp.asarray(reference_paths)
-    )
+    reference = jax.jit(
+        functools.partial(attitude.path_rotation, functools.partial(attitude.bus_rate_map, robot), steps=64)
+    )(jnp.asarray(reference_paths))
     spacearm_error = float(jnp.max(attitude.geodesic_distance(R_end[: len(reference_paths)], reference)))
 
     omega = jax.jit(functools.partial(attitude.bus_rate_map, robot))
@@ -107,18 +109,26 @@ def main():
         scipy_errors.append(R)
         evaluations += count
     scipy_seconds = time.perf_counter() - start
-    scipy_error = float(jnp.max(attitude.geodesic_distance(jnp.asarray(np.array(scipy_errors)), reference[: args.scipy])))
+    scipy_error = float(
+        jnp.max(attitude.geodesic_distance(jnp.asarray(np.array(scipy_errors)), reference[: args.scipy]))
+    )
     scipy_all = scipy_seconds / args.scipy * args.paths
 
     segments = loops.shape[1] - 1
-    print(f"UR5 on a 500 kg smallsat, {args.paths} closed loops of {segments} straight joint segments; "
-          f"{jax.device_count()} device(s), {os.cpu_count()} CPU(s), float64")
-    print(f"spacearm  Magnus 6, {steps} steps/segment ({3 * steps * segments} C_w evaluations/loop): "
-          f"compile {compile_seconds:.2f} s, run {best:.3f} s (best of {args.repeats}) = "
-          f"{args.paths / best:,.0f} loops/s; max error {spacearm_error:.1e} rad")
-    print(f"SciPy     solve_ivp DOP853 rtol {args.rtol:g}, {args.scipy} loops: {scipy_seconds:.2f} s "
-          f"({evaluations / args.scipy:.0f} RHS evaluations/loop) -> {scipy_all:.1f} s for {args.paths}; "
-          f"max error {scipy_error:.1e} rad")
+    print(
+        f"UR5 on a 500 kg smallsat, {args.paths} closed loops of {segments} straight joint segments; "
+        f"{jax.device_count()} device(s), {os.cpu_count()} CPU(s), float64"
+    )
+    print(
+        f"spacearm  Magnus 6, {steps} steps/segment ({3 * steps * segments} C_w evaluations/loop): "
+        f"compile {compile_seconds:.2f} s, run {best:.3f} s (best of {args.repeats}) = "
+        f"{args.paths / best:,.0f} loops/s; max error {spacearm_error:.1e} rad"
+    )
+    print(
+        f"SciPy     solve_ivp DOP853 rtol {args.rtol:g}, {args.scipy} loops: {scipy_seconds:.2f} s "
+        f"({evaluations / args.scipy:.0f} RHS evaluations/loop) -> {scipy_all:.1f} s for {args.paths}; "
+        f"max error {scipy_error:.1e} rad"
+    )
     print(f"speed-up {scipy_all / best:.0f}x (warm run against warm run)")
 
 

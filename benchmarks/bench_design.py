@@ -25,7 +25,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from spacearm import design  # noqa: E402
+from spacearm import design
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -45,8 +45,10 @@ def reference(seeds, grid_points):
     grid = design.grid_search(problem, points=grid_points)
     grid_hv = grid.checkpoints[-1]["hypervolume"]
     target = design.TARGET_FRACTION * grid_hv
-    print(f"grid {grid_points[0]}x{grid_points[1]}: {grid.evaluations} evaluations, compile "
-          f"{grid.compile_seconds:.2f} s, run {grid.run_seconds:.2f} s, hypervolume {grid_hv:.8f}")
+    print(
+        f"grid {grid_points[0]}x{grid_points[1]}: {grid.evaluations} evaluations, compile "
+        f"{grid.compile_seconds:.2f} s, run {grid.run_seconds:.2f} s, hypervolume {grid_hv:.8f}"
+    )
     print(f"target: {design.TARGET_FRACTION:.1%} of it = {target:.8f}")
     rows = {"gradient": [], "nsga2": []}
     for seed in seeds:
@@ -55,18 +57,24 @@ def reference(seeds, grid_points):
         nsga = design.nsga2_search(problem, population=40, evaluations=6000, seed=seed)
         for name, result in (("gradient", gradient), ("nsga2", nsga)):
             rows[name].append(result)
-            print(f"  seed {seed} {name:8s}: compile {result.compile_seconds:6.2f} s | to target "
-                  f"{show(result.seconds_to(target), ' s')} / {show(result.evaluations_to(target))} evaluations | "
-                  f"final HV / grid {result.checkpoints[-1]['hypervolume'] / grid_hv:.6f} after "
-                  f"{result.evaluations} evaluations, {result.run_seconds:.2f} s")
+            print(
+                f"  seed {seed} {name:8s}: compile {result.compile_seconds:6.2f} s | to target "
+                f"{show(result.seconds_to(target), ' s')} / {show(result.evaluations_to(target))} evaluations | "
+                f"final HV / grid {result.checkpoints[-1]['hypervolume'] / grid_hv:.6f} after "
+                f"{result.evaluations} evaluations, {result.run_seconds:.2f} s"
+            )
     t_gradient = median([r.seconds_to(target) for r in rows["gradient"]])
     t_nsga = median([r.seconds_to(target) for r in rows["nsga2"]])
     e_gradient = median([r.evaluations_to(target) for r in rows["gradient"]])
     e_nsga = median([r.evaluations_to(target) for r in rows["nsga2"]])
-    print(f"median time to target: gradient {show(t_gradient, ' s')}, NSGA-II {show(t_nsga, ' s')}"
-          + (f", ratio NSGA-II / gradient = {t_nsga / t_gradient:.2f}x" if t_gradient and t_nsga else ""))
-    print(f"median evaluations to target: gradient {show(e_gradient)}, NSGA-II {show(e_nsga)}"
-          + (f", ratio {e_nsga / e_gradient:.2f}x" if e_gradient and e_nsga else ""))
+    print(
+        f"median time to target: gradient {show(t_gradient, ' s')}, NSGA-II {show(t_nsga, ' s')}"
+        + (f", ratio NSGA-II / gradient = {t_nsga / t_gradient:.2f}x" if t_gradient and t_nsga else "")
+    )
+    print(
+        f"median evaluations to target: gradient {show(e_gradient)}, NSGA-II {show(e_nsga)}"
+        + (f", ratio {e_nsga / e_gradient:.2f}x" if e_gradient and e_nsga else "")
+    )
     ratio = design.value_and_grad_cost_ratio(problem, batch=64)
     print(f"value-and-gradient / value cost (batch 64, reverse mode): {ratio:.2f}")
 
@@ -83,11 +91,13 @@ def six_variables(seeds):
         hv_gradient = gradient.checkpoints[-1]["hypervolume"]
         hv_nsga = nsga.hypervolume_at(budget)
         wins.append(hv_gradient > hv_nsga)
-        print(f"  seed {seed}: gradient HV {hv_gradient:.8f} in {budget:.2f} s ({gradient.evaluations} evaluations, "
-              f"compile {gradient.compile_seconds:.1f} s) | NSGA-II HV at that time {hv_nsga:.8f}, "
-              f"after 3x the time {nsga.checkpoints[-1]['hypervolume']:.8f} ({nsga.evaluations} evaluations, "
-              f"compile {nsga.compile_seconds:.1f} s) | NSGA-II needs "
-              f"{show(nsga.seconds_to(hv_gradient), ' s')} for the gradient's HV")
+        print(
+            f"  seed {seed}: gradient HV {hv_gradient:.8f} in {budget:.2f} s ({gradient.evaluations} evaluations, "
+            f"compile {gradient.compile_seconds:.1f} s) | NSGA-II HV at that time {hv_nsga:.8f}, "
+            f"after 3x the time {nsga.checkpoints[-1]['hypervolume']:.8f} ({nsga.evaluations} evaluations, "
+            f"compile {nsga.compile_seconds:.1f} s) | NSGA-II needs "
+            f"{show(nsga.seconds_to(hv_gradient), ' s')} for the gradient's HV"
+        )
     print(f"gradient ahead at equal run time in {sum(wins)} of {len(wins)} seeds")
 
 

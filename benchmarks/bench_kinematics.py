@@ -23,8 +23,8 @@ import jax.numpy as jnp
 import numpy as np
 
 jax.config.update("jax_enable_x64", True)
-import spacearm as sa  # noqa: E402
-from spacearm import kinematics  # noqa: E402
+import spacearm as sa
+from spacearm import kinematics
 
 
 def best_time(fn, repeats):
@@ -103,11 +103,17 @@ def main():
 
     print(f"devices: {jax.devices()}  float64: {jax.config.jax_enable_x64}")
     print(f"postures: {N:,} (n = {robot.n_links}); best of {args.repeats}")
-    print(f"  spacearm.manipulability  {N / jax_s:14,.0f} postures/s  (compile {compile_s:.2f} s, run {jax_s * 1e3:.1f} ms)")
-    print(f"  generic path (no closed form) {N / generic_s:9,.0f} postures/s  (compile {generic_compile_s:.2f} s, max |diff| {generic_diff:.1e})")
+    print(
+        f"  spacearm.manipulability  {N / jax_s:14,.0f} postures/s  (compile {compile_s:.2f} s, run {jax_s * 1e3:.1f} ms)"
+    )
+    print(
+        f"  generic path (no closed form) {N / generic_s:9,.0f} postures/s  (compile {generic_compile_s:.2f} s, max |diff| {generic_diff:.1e})"
+    )
     print(f"  NumPy, same formulas     {N / numpy_s:14,.0f} postures/s  (max |diff| {diff:.1e})")
     print(f"  sin+cos bound, {robot.n_links + 1} angles  {N / bound_s:14,.0f} postures/s")
-    print(f"  grid {side}x{side}, angle addition {side * side / grid_s:14,.0f} postures/s  (compile {grid_compile_s:.2f} s)")
+    print(
+        f"  grid {side}x{side}, angle addition {side * side / grid_s:14,.0f} postures/s  (compile {grid_compile_s:.2f} s)"
+    )
     print(f"ratio closed form / generic     {generic_s / jax_s:6.1f}x")
     print(f"ratio generic / NumPy           {numpy_s / generic_s:6.1f}x")
     print(f"ratio spacearm / NumPy          {numpy_s / jax_s:6.1f}x")

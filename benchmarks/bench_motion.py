@@ -41,9 +41,11 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-import spacearm as sa  # noqa: E402
-from spacearm import motion  # noqa: E402
-from spacearm.motion import joint_paths, straight_paths  # noqa: E402
+import itertools
+
+import spacearm as sa
+from spacearm import motion
+from spacearm.motion import joint_paths, straight_paths
 
 ROWS: list[dict] = []
 
@@ -71,8 +73,16 @@ class Tasks:
 
     def add(self, method, tolerance, compiled, call_args, compile_s, describe):
         """``describe(out) -> (err_max, err_med, work, note)``; compile_s None when shared."""
-        self.tasks.append(dict(method=method, tolerance=tolerance, compiled=compiled, args=call_args,
-                               compile=compile_s, describe=describe))
+        self.tasks.append(
+            dict(
+                method=method,
+                tolerance=tolerance,
+                compiled=compiled,
+                args=call_args,
+                compile=compile_s,
+                describe=describe,
+            )
+        )
 
     def run(self, repeats):
         for task in self.tasks:
@@ -86,20 +96,45 @@ class Tasks:
                 jax.block_until_ready(task["compiled"](*task["args"]))
                 task["best"] = min(task["best"], time.perf_counter() - start)
         for task in self.tasks:
-            row(self.problem, task["method"], task["tolerance"], self.size, task["compile"], task["first"],
-                task["best"], repeats, *task["describe"](task["out"]))
+            row(
+                self.problem,
+                task["method"],
+                task["tolerance"],
+                self.size,
+                task["compile"],
+                task["first"],
+                task["best"],
+                repeats,
+                *task["describe"](task["out"]),
+            )
             del task["out"], task["compiled"]
 
 
 def row(problem, method, tolerance, size, compile_s, first, run, calls, err_max, err_med, work, note=""):
-    entry = dict(problem=problem, method=method, tolerance=tolerance, size=size, compile=compile_s, first=first,
-                 run=run, calls=calls, rate=size / run, err_max=err_max, err_med=err_med, work=work, note=note)
+    entry = dict(
+        problem=problem,
+        method=method,
+        tolerance=tolerance,
+        size=size,
+        compile=compile_s,
+        first=first,
+        run=run,
+        calls=calls,
+        rate=size / run,
+        err_max=err_max,
+        err_med=err_med,
+        work=work,
+        note=note,
+    )
     ROWS.append(entry)
     compile_text = "-" if compile_s is None else f"{compile_s:6.1f} s"
     first_text = "-" if first is None else f"{first:7.3f} s"
-    print(f"  {method:<46} {tolerance:>9}  compile {compile_text}  first {first_text}  "
-          f"run {run:8.3f} s (best of {calls})  {size / run:>9,.0f}/s  err max {err_max:.1e} med {err_med:.1e}"
-          f"  {work}{'  ' + note if note else ''}", flush=True)
+    print(
+        f"  {method:<46} {tolerance:>9}  compile {compile_text}  first {first_text}  "
+        f"run {run:8.3f} s (best of {calls})  {size / run:>9,.0f}/s  err max {err_max:.1e} med {err_med:.1e}"
+        f"  {work}{'  ' + note if note else ''}",
+        flush=True,
+    )
     return entry
 
 
@@ -132,8 +167,14 @@ def random_loops(rng, count):
     a = rng.uniform(-1.5, 1.5, count)
     b = rng.uniform(-1.0, 1.0, count)
     steps = np.stack(
-        [np.zeros((count, 2)), np.stack([a, 0 * a], -1), np.stack([0 * a, b], -1), np.stack([-a, 0 * a], -1),
-         np.stack([0 * a, -b], -1)], axis=1,
+        [
+            np.zeros((count, 2)),
+            np.stack([a, 0 * a], -1),
+            np.stack([0 * a, b], -1),
+            np.stack([-a, 0 * a], -1),
+            np.stack([0 * a, -b], -1),
+        ],
+        axis=1,
     )
     waypoints = start[:, None, :] + np.cumsum(steps, axis=1)
     phi_start = np.concatenate([np.zeros((count, 1)), start], axis=-1)
@@ -144,7 +185,7 @@ def scipy_loop(model, waypoints, rtol=1e-10, atol=1e-12):
     from scipy.integrate import solve_ivp
 
     total = 0.0
-    for start, end in zip(waypoints[:-1], waypoints[1:]):
+    for start, end in itertools.pairwise(waypoints):
         step = end - start
 
         def rate(t, y, start=start, step=step):
@@ -175,8 +216,17 @@ def diffrax_loops(solver_name, per_segment, max_steps=4096):
                 i_s, i_m = sa.momentum_inertias(robot, jnp.concatenate([jnp.zeros(1), start + t * step]))
                 return -(i_m @ step) / i_s
 
-            sol = diffrax.diffeqsolve(diffrax.ODETerm(rate), solver, 0.0, 1.0, 0.1, jnp.zeros(()),
-                                      stepsize_controller=controller, max_steps=max_steps, throw=False)
+            sol = diffrax.diffeqsolve(
+                diffrax.ODETerm(rate),
+                solver,
+                0.0,
+                1.0,
+                0.1,
+                jnp.zeros(()),
+                stepsize_controller=controller,
+                max_steps=max_steps,
+                throw=False,
+            )
             return sol.ys[-1], sol.stats["num_steps"], sol.result == diffrax.RESULTS.successful
 
         def loop(phi, wp):
@@ -190,8 +240,17 @@ def diffrax_loops(solver_name, per_segment, max_steps=4096):
                 return -(i_m @ step) / i_s
 
             clipped = diffrax.ClipStepSizeController(controller, jump_ts=jnp.arange(1.0, k - 1.0))
-            sol = diffrax.diffeqsolve(diffrax.ODETerm(rate), solver, 0.0, k - 1.0, 0.1, phi[0],
-                                      stepsize_controller=clipped, max_steps=max_steps, throw=False)
+            sol = diffrax.diffeqsolve(
+                diffrax.ODETerm(rate),
+                solver,
+                0.0,
+                k - 1.0,
+                0.1,
+                phi[0],
+                stepsize_controller=clipped,
+                max_steps=max_steps,
+                throw=False,
+            )
             return sol.ys[-1], sol.stats["num_steps"], sol.result == diffrax.RESULTS.successful
 
         if per_segment:
@@ -223,8 +282,10 @@ def bench_loops(args, rng, robot, model, long=False):
     segment_max = float(np.max(np.abs(np.diff(np.asarray(waypoints), axis=1))))
     title = "long closed paths" if long else "cyclic loops (rectangles)"
     print(f"\n[{title}: {count} paths x {segments} segments (<= {segment_max:.2f} rad per joint), Table 1 robot]")
-    print(f"  reference: Gauss-Legendre 40 x 64 per segment (agrees with 64 x 64 to "
-          f"{np.max(np.abs(reference - check)):.0e} rad); |phi0 change| up to {np.max(np.abs(reference)):.2f} rad")
+    print(
+        f"  reference: Gauss-Legendre 40 x 64 per segment (agrees with 64 x 64 to "
+        f"{np.max(np.abs(reference - check)):.0e} rad); |phi0 change| up to {np.max(np.abs(reference)):.2f} rad"
+    )
 
     def errors(values):
         err = np.abs(np.asarray(values) - reference)
@@ -238,21 +299,33 @@ def bench_loops(args, rng, robot, model, long=False):
     rules += [(n, p, f"GL {n} x {p}") for n, p in extra if (n, p) != (24, auto)]
     tasks = Tasks(problem, count)
     for nodes, pieces, label in rules:
+
         def fn(robot, phi, wp, nodes=nodes, pieces=pieces):
             return sa.integrate_joint_path(robot, phi, wp, nodes=nodes, pieces=pieces)[:, 0]
 
         compiled, compile_s = tasks.compile(fn, robot, phi_start, waypoints)
-        tasks.add(label, "-", compiled, (robot, phi_start, waypoints), compile_s,
-                  lambda values, work=f"{nodes * pieces} rate evals/segment": (*errors(values), work))
+        tasks.add(
+            label,
+            "-",
+            compiled,
+            (robot, phi_start, waypoints),
+            compile_s,
+            lambda values, work=f"{nodes * pieces} rate evals/segment": (*errors(values), work),
+        )
 
     if long:
         variants = (("Dopri8", True, (1e-10, 1e-12, 1e-14)),)
     else:
-        variants = (("Dopri8", True, (1e-8, 1e-10, 1e-12, 1e-14)), ("Dopri8", False, (1e-8, 1e-10, 1e-12, 1e-14)),
-                    ("Tsit5", True, (1e-8, 1e-10, 1e-12)), ("Tsit5", False, (1e-8, 1e-10, 1e-12)))
+        variants = (
+            ("Dopri8", True, (1e-8, 1e-10, 1e-12, 1e-14)),
+            ("Dopri8", False, (1e-8, 1e-10, 1e-12, 1e-14)),
+            ("Tsit5", True, (1e-8, 1e-10, 1e-12)),
+            ("Tsit5", False, (1e-8, 1e-10, 1e-12)),
+        )
     for solver_name, per_segment, tolerances in variants:
-        compiled, compile_s = tasks.compile(diffrax_loops(solver_name, per_segment), robot, phi_start, waypoints,
-                                            jnp.asarray(1e-8))
+        compiled, compile_s = tasks.compile(
+            diffrax_loops(solver_name, per_segment), robot, phi_start, waypoints, jnp.asarray(1e-8)
+        )
         stages = {"Dopri8": 12, "Tsit5": 6}[solver_name]
         layout = "per segment" if per_segment else "per loop, corners as jumps"
 
@@ -264,8 +337,14 @@ def bench_loops(args, rng, robot, model, long=False):
 
         for rtol in tolerances:
             # one compiled program for every tolerance (rtol is an argument)
-            tasks.add(f"diffrax {solver_name} PID, {layout}", f"rtol {rtol:.0e}", compiled,
-                      (robot, phi_start, waypoints, jnp.asarray(rtol)), compile_s, describe)
+            tasks.add(
+                f"diffrax {solver_name} PID, {layout}",
+                f"rtol {rtol:.0e}",
+                compiled,
+                (robot, phi_start, waypoints, jnp.asarray(rtol)),
+                compile_s,
+                describe,
+            )
             compile_s = None  # reported once per compiled program
     tasks.run(args.repeats)
 
@@ -277,8 +356,19 @@ def bench_loops(args, rng, robot, model, long=False):
     scipy_values = np.array([scipy_loop(model, np.asarray(waypoints[i])) for i in range(subset)])
     per_loop = (time.perf_counter() - start) / subset
     err = np.abs(scipy_values - reference[:subset])
-    row(problem, f"SciPy solve_ivp DOP853 loop ({subset} loops)", "rtol 1e-10", count, None, None, per_loop * count,
-        1, float(err.max()), float(np.median(err)), "extrapolated from the subset")
+    row(
+        problem,
+        f"SciPy solve_ivp DOP853 loop ({subset} loops)",
+        "rtol 1e-10",
+        count,
+        None,
+        None,
+        per_loop * count,
+        1,
+        float(err.max()),
+        float(np.median(err)),
+        "extrapolated from the subset",
+    )
 
 
 # Straight paths ----------------------------------------------------------------------------
@@ -312,8 +402,16 @@ def scipy_straight(model, phi_start, direction, rtol=1e-10, atol=1e-12, max_arc=
 
     singular.terminal = True
     singular.direction = -1
-    sol = solve_ivp(field, (0.0, max_arc), np.r_[phi_start, 0.0], method="DOP853", rtol=rtol, atol=atol,
-                    events=singular, max_step=max_step)
+    sol = solve_ivp(
+        field,
+        (0.0, max_arc),
+        np.r_[phi_start, 0.0],
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+        events=singular,
+        max_step=max_step,
+    )
     return sol.y[:, -1]
 
 
@@ -334,13 +432,18 @@ def diffrax_straight(solver_name, max_steps=4096):
                 return field(y)[-1]
 
             sol = diffrax.diffeqsolve(
-                diffrax.ODETerm(lambda t, y, args: field(y)), solver, 0.0, 60.0, 0.05,
+                diffrax.ODETerm(lambda t, y, args: field(y)),
+                solver,
+                0.0,
+                60.0,
+                0.05,
                 jnp.concatenate([phi, jnp.zeros(1)]),
                 stepsize_controller=diffrax.PIDController(rtol=rtol, atol=rtol, dtmax=max_step),
                 # Bisection: optx.Newton (rtol = atol = 1e-13 or 1e-10) stops without
                 # converging (nonlinear_max_steps_reached) on some grazing ends
                 event=diffrax.Event(cond, root_finder=optx.Bisection(rtol=1e-12, atol=1e-12)),
-                max_steps=max_steps, throw=False,
+                max_steps=max_steps,
+                throw=False,
             )
             ok = (sol.result == diffrax.RESULTS.successful) | (sol.result == diffrax.RESULTS.event_occurred)
             return sol.ys[-1], sol.stats["num_steps"], ok
@@ -368,9 +471,11 @@ def bench_straight(args, rng, robot, model):
     converged = motion.straight_tip_path(robot, phi0, directions, max_step=0.02, rtol=1e-14)
     ref_state = np.concatenate([np.asarray(converged.end_posture), np.asarray(converged.length)[:, None]], -1)
     print(f"\n[straight tip paths to the singular end: {count} paths (random postures x directions), Table 1 robot]")
-    print(f"  reference: spacearm DOP853 max_step 0.02 rtol 1e-14; joint arc up to "
-          f"{float(np.max(converged.joint_arc)):.1f} rad, mean {float(np.mean(converged.joint_arc)):.2f} rad; "
-          f"error = max over (phi0, phi1, phi2 rad, length m) at the end")
+    print(
+        f"  reference: spacearm DOP853 max_step 0.02 rtol 1e-14; joint arc up to "
+        f"{float(np.max(converged.joint_arc)):.1f} rad, mean {float(np.mean(converged.joint_arc)):.2f} rad; "
+        f"error = max over (phi0, phi1, phi2 rad, length m) at the end"
+    )
     cap = jnp.asarray(args.max_step)
 
     def errors(states):
@@ -385,6 +490,7 @@ def bench_straight(args, rng, robot, model):
         ("spacearm DOP853 fixed step (error control off)", ours_straight(), "step", (0.05,)),
         ("spacearm RK4 fixed step", ours_straight(tableau="rk4"), "step", (0.02, 0.005)),
     ]
+
     def describe(out):
         states, steps, ok = out
         notes = [] if np.all(ok) else [f"{int(np.sum(~np.asarray(ok)))} not at a singular end"]
@@ -400,8 +506,14 @@ def bench_straight(args, rng, robot, model):
         for value in values:
             rtol, step = (value, cap) if kind == "rtol" else (1e30, value)
             tolerance = f"rtol {value:.0e}" if kind == "rtol" else f"h {value:g}"
-            tasks.add(name, tolerance, compiled, (robot, phi0, directions, jnp.asarray(rtol), jnp.asarray(step)),
-                      compile_s, describe)
+            tasks.add(
+                name,
+                tolerance,
+                compiled,
+                (robot, phi0, directions, jnp.asarray(rtol), jnp.asarray(step)),
+                compile_s,
+                describe,
+            )
             compile_s = None
     tasks.run(args.repeats)
 
@@ -409,12 +521,29 @@ def bench_straight(args, rng, robot, model):
     scipy_straight(model, np.asarray(phi0[0]), np.asarray(directions[0]))  # imports SciPy outside the timing
     for rtol, atol in ((1e-10, 1e-12), (1e-12, 1e-14)):
         start = time.perf_counter()
-        states = np.array([scipy_straight(model, np.asarray(phi0[i]), np.asarray(directions[i]), rtol=rtol, atol=atol,
-                                          max_step=args.max_step) for i in range(subset)])
+        states = np.array(
+            [
+                scipy_straight(
+                    model, np.asarray(phi0[i]), np.asarray(directions[i]), rtol=rtol, atol=atol, max_step=args.max_step
+                )
+                for i in range(subset)
+            ]
+        )
         per_path = (time.perf_counter() - start) / subset
         err = np.max(np.abs(states - ref_state[:subset]), axis=-1)
-        row("straight", f"SciPy solve_ivp DOP853 + event loop ({subset} paths)", f"rtol {rtol:.0e}", count, None,
-            None, per_path * count, 1, float(err.max()), float(np.median(err)), "extrapolated from the subset")
+        row(
+            "straight",
+            f"SciPy solve_ivp DOP853 + event loop ({subset} paths)",
+            f"rtol {rtol:.0e}",
+            count,
+            None,
+            None,
+            per_path * count,
+            1,
+            float(err.max()),
+            float(np.median(err)),
+            "extrapolated from the subset",
+        )
 
 
 def main():
@@ -428,8 +557,10 @@ def main():
     args = parser.parse_args()
     robot = sa.umetani1990()
     model = numpy_model(robot)
-    print(f"device: {jax.devices()[0]} ({jax.device_count()} devices), float64, jax {jax.__version__}, "
-          f"{args.paths} paths per batch")
+    print(
+        f"device: {jax.devices()[0]} ({jax.device_count()} devices), float64, jax {jax.__version__}, "
+        f"{args.paths} paths per batch"
+    )
     if args.only in (None, "loops"):
         bench_loops(args, np.random.default_rng(0), robot, model)
     if args.only in (None, "long"):
@@ -446,16 +577,26 @@ def main():
 
 def summary():
     """The rows as one Markdown table; ratio = run time / run time of the spacearm default on that problem."""
-    print("\n| problem | method | tolerance | paths | max error | median error | compile s | warm run s | paths/s "
-          "| time / spacearm default |")
+    print(
+        "\n| problem | method | tolerance | paths | max error | median error | compile s | warm run s | paths/s "
+        "| time / spacearm default |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for entry in ROWS:
-        base = next(e for e in ROWS if e["problem"] == entry["problem"] and "default" in e["method"]
-                    and "former" not in e["method"] and e["tolerance"] in ("-", "rtol 1e-12"))
+        base = next(
+            e
+            for e in ROWS
+            if e["problem"] == entry["problem"]
+            and "default" in e["method"]
+            and "former" not in e["method"]
+            and e["tolerance"] in ("-", "rtol 1e-12")
+        )
         compile_text = "-" if entry["compile"] is None else f"{entry['compile']:.1f}"
-        print(f"| {entry['problem']} | {entry['method']} | {entry['tolerance']} | {entry['size']} "
-              f"| {entry['err_max']:.1e} | {entry['err_med']:.1e} | {compile_text} | {entry['run']:.3f} "
-              f"| {entry['rate']:,.0f} | {entry['run'] / base['run']:.2f} |")
+        print(
+            f"| {entry['problem']} | {entry['method']} | {entry['tolerance']} | {entry['size']} "
+            f"| {entry['err_max']:.1e} | {entry['err_med']:.1e} | {compile_text} | {entry['run']:.3f} "
+            f"| {entry['rate']:,.0f} | {entry['run'] / base['run']:.2f} |"
+        )
 
 
 if __name__ == "__main__":

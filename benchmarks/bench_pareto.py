@@ -29,11 +29,11 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-from spacearm._core.schema import read_yaml  # noqa: E402
-from spacearm.design.baselines import nsga2_search  # noqa: E402
-from spacearm.design.fronts import hypervolume  # noqa: E402
-from spacearm.design.hybrid import hybrid_search, parse_hybrid  # noqa: E402
-from spacearm.design.spatial_problem import load_design_problem  # noqa: E402
+from spacearm._core.schema import read_yaml
+from spacearm.design.baselines import nsga2_search
+from spacearm.design.fronts import hypervolume
+from spacearm.design.hybrid import hybrid_search, parse_hybrid
+from spacearm.design.spatial_problem import load_design_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEMS = ("pareto-attachment", "pareto-6var", "pareto-mount-ur5", "pareto-ur5-arm")
@@ -48,8 +48,9 @@ def show(value, unit=" s"):
     return "never" if value is None else f"{value:.3g}{unit}"
 
 
-def bench(name: str, max_seconds: float | None, population: int | None, factor: float,
-          tolerance: float | None = None) -> dict:
+def bench(
+    name: str, max_seconds: float | None, population: int | None, factor: float, tolerance: float | None = None
+) -> dict:
     path = ROOT / "sweeps" / f"{name}.yaml"
     config = read_yaml(path, what="design problem file")
     problem = load_design_problem(path)
@@ -64,33 +65,59 @@ def bench(name: str, max_seconds: float | None, population: int | None, factor: 
     hybrid = hybrid_search(problem, settings)
     reference = hybrid.extra["reference_point"]
     hybrid_wall = hybrid.compile_seconds + hybrid.run_seconds
-    print(f"  hybrid: compile {hybrid.compile_seconds:.1f} s, run {hybrid.run_seconds:.1f} s, "
-          f"{hybrid.evaluations} evaluations, {hybrid.extra['generations']} generations ({hybrid.extra['stop_reason']})",
-          flush=True)
+    print(
+        f"  hybrid: compile {hybrid.compile_seconds:.1f} s, run {hybrid.run_seconds:.1f} s, "
+        f"{hybrid.evaluations} evaluations, {hybrid.extra['generations']} generations ({hybrid.extra['stop_reason']})",
+        flush=True,
+    )
     nsga_population = int((problem.nsga2 or {}).get("population", settings.population))
     charged = hybrid.extra["compile_seconds_by_program"]["value"] if nsga_population == settings.population else 0.0
     tic = time.perf_counter()
-    nsga = nsga2_search(problem, population=nsga_population, evaluations=10**12, seed=0,
-                        time_limit=max(factor * hybrid_wall - charged, 1e-3), reference=reference)
+    nsga = nsga2_search(
+        problem,
+        population=nsga_population,
+        evaluations=10**12,
+        seed=0,
+        time_limit=max(factor * hybrid_wall - charged, 1e-3),
+        reference=reference,
+    )
     nsga.compile_seconds = max(nsga.compile_seconds, charged)
-    print(f"  nsga2: compile {nsga.compile_seconds:.1f} s, run {nsga.run_seconds:.1f} s, {nsga.evaluations} "
-          f"evaluations ({time.perf_counter() - tic:.1f} s)", flush=True)
+    print(
+        f"  nsga2: compile {nsga.compile_seconds:.1f} s, run {nsga.run_seconds:.1f} s, {nsga.evaluations} "
+        f"evaluations ({time.perf_counter() - tic:.1f} s)",
+        flush=True,
+    )
     best = hypervolume(np.concatenate([hybrid.objectives, nsga.objectives]), reference)
     target = nsga.checkpoints[-1]["hypervolume"]
     hybrid_to, nsga_to = wall_to(hybrid, target), wall_to(nsga, target)
     hybrid_hv = hybrid.checkpoints[-1]["hypervolume"]
-    row = dict(problem=name, nsga2_final=target, hybrid_final=hybrid_hv, hybrid_wall=hybrid_wall,
-               nsga2_wall=nsga.compile_seconds + nsga.run_seconds, hybrid_to=hybrid_to, nsga2_to=nsga_to,
-               ratio=None if hybrid_to is None or not nsga_to else hybrid_to / nsga_to,
-               hybrid_share=hybrid_hv / best, nsga2_share=target / best,
-               nsga2_at_hybrid_wall=nsga.hypervolume_at(hybrid_wall - nsga.compile_seconds))
+    row = dict(
+        problem=name,
+        nsga2_final=target,
+        hybrid_final=hybrid_hv,
+        hybrid_wall=hybrid_wall,
+        nsga2_wall=nsga.compile_seconds + nsga.run_seconds,
+        hybrid_to=hybrid_to,
+        nsga2_to=nsga_to,
+        ratio=None if hybrid_to is None or not nsga_to else hybrid_to / nsga_to,
+        hybrid_share=hybrid_hv / best,
+        nsga2_share=target / best,
+        nsga2_at_hybrid_wall=nsga.hypervolume_at(hybrid_wall - nsga.compile_seconds),
+    )
     row["met"] = hybrid_hv >= target and row["hybrid_share"] >= 0.995
-    print(f"  NSGA-II final hypervolume {target:.8g} after {row['nsga2_wall']:.1f} s wall "
-          f"({row['nsga2_wall'] / hybrid_wall:.2f}x the hybrid's {hybrid_wall:.1f} s)")
-    print(f"  wall time to reach it: hybrid {show(hybrid_to)}, NSGA-II {show(nsga_to)}, ratio hybrid/NSGA-II "
-          f"{show(row['ratio'], '')}")
-    print(f"  share of best known: hybrid {row['hybrid_share']:.5%}, NSGA-II {row['nsga2_share']:.5%}; NSGA-II at "
-          f"the hybrid's wall time {row['nsga2_at_hybrid_wall'] / best:.5%}; target met: {row['met']}", flush=True)
+    print(
+        f"  NSGA-II final hypervolume {target:.8g} after {row['nsga2_wall']:.1f} s wall "
+        f"({row['nsga2_wall'] / hybrid_wall:.2f}x the hybrid's {hybrid_wall:.1f} s)"
+    )
+    print(
+        f"  wall time to reach it: hybrid {show(hybrid_to)}, NSGA-II {show(nsga_to)}, ratio hybrid/NSGA-II "
+        f"{show(row['ratio'], '')}"
+    )
+    print(
+        f"  share of best known: hybrid {row['hybrid_share']:.5%}, NSGA-II {row['nsga2_share']:.5%}; NSGA-II at "
+        f"the hybrid's wall time {row['nsga2_at_hybrid_wall'] / best:.5%}; target met: {row['met']}",
+        flush=True,
+    )
     return row
 
 
@@ -105,8 +132,10 @@ def main() -> None:
     rows = [bench(name, args.max_seconds, args.population, args.factor, args.tolerance) for name in args.problems]
     print("\nproblem              NSGA-II end HV   hybrid/best  NSGA-II/best  hybrid wall  to NSGA-II end  ratio  met")
     for row in rows:
-        print(f"{row['problem']:<20}{row['nsga2_final']:>15.8g}{row['hybrid_share']:>13.4%}{row['nsga2_share']:>14.4%}"
-              f"{row['hybrid_wall']:>11.1f} s{show(row['hybrid_to']):>16}{show(row['ratio'], ''):>7}  {row['met']}")
+        print(
+            f"{row['problem']:<20}{row['nsga2_final']:>15.8g}{row['hybrid_share']:>13.4%}{row['nsga2_share']:>14.4%}"
+            f"{row['hybrid_wall']:>11.1f} s{show(row['hybrid_to']):>16}{show(row['ratio'], ''):>7}  {row['met']}"
+        )
 
 
 if __name__ == "__main__":

@@ -20,15 +20,15 @@ import time
 CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={CORES}")
 
-import jax  # noqa: E402
+import jax
 
 jax.config.update("jax_enable_x64", True)
 
-import numpy as np  # noqa: E402
-from jax.sharding import Mesh, PartitionSpec  # noqa: E402
+import numpy as np
+from jax.sharding import Mesh, PartitionSpec
 
-import spacearm as sa  # noqa: E402
-from spacearm.models.spatial import primitives  # noqa: E402
+import spacearm as sa
+from spacearm.models.spatial import primitives
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONFIG = os.path.join(HERE, "..", "configs", "ur5-smallsat.yaml")
@@ -58,7 +58,9 @@ def pinocchio_setup():
     urdf = locate_package_file("bench", "example-robot-data", "robots/ur_description/urdf/ur5_robot.urdf")
     model = pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())
     X_mount = pin.SE3(pin.rpy.rpyToMatrix(*BUS["rpy"]), np.array(BUS["xyz"]))
-    model.appendBodyToJoint(1, pin.Inertia(BUS["mass"], np.array(BUS["com"]), np.array(BUS["inertia"])), X_mount.inverse())
+    model.appendBodyToJoint(
+        1, pin.Inertia(BUS["mass"], np.array(BUS["com"]), np.array(BUS["inertia"])), X_mount.inverse()
+    )
     data = model.createData()
     tip = model.getFrameId("tool0")
     base = pin.neutral(model)
@@ -88,8 +90,10 @@ def main(argv=None) -> int:
     count = args.postures - args.postures % len(devices)
     rng = np.random.default_rng(0)
     postures = rng.uniform(-np.pi, np.pi, (count, robot.n_joints))
-    print(f"spacearm J*, UR5 on a 500 kg smallsat: {count:,} postures, float64, {len(devices)} CPU device(s), "
-          f"{CORES} core(s), jax {jax.__version__}")
+    print(
+        f"spacearm J*, UR5 on a 500 kg smallsat: {count:,} postures, float64, {len(devices)} CPU device(s), "
+        f"{CORES} core(s), jax {jax.__version__}"
+    )
 
     # Correctness first: the first postures against Pinocchio.
     try:
@@ -118,8 +122,10 @@ def main(argv=None) -> int:
     compiled(robot, q_device).block_until_ready()
     seconds = best_of(lambda: compiled(robot, q_device).block_until_ready(), args.repeats)
     rate = count / seconds
-    print(f"  spacearm, {len(devices)} device(s): compile {compile_seconds:.2f} s, run {seconds:.3f} s "
-          f"-> {rate:,.0f} postures/s ({seconds / count * 1e9:.0f} ns per posture)")
+    print(
+        f"  spacearm, {len(devices)} device(s): compile {compile_seconds:.2f} s, run {seconds:.3f} s "
+        f"-> {rate:,.0f} postures/s ({seconds / count * 1e9:.0f} ns per posture)"
+    )
 
     single = jax.jit(primitives.generalized_jacobian)
     q_one = jax.device_put(postures, devices[0])
@@ -128,8 +134,10 @@ def main(argv=None) -> int:
     single_compile = time.perf_counter() - start
     single_compiled(robot, q_one).block_until_ready()
     single_seconds = best_of(lambda: single_compiled(robot, q_one).block_until_ready(), args.repeats)
-    print(f"  spacearm, 1 device: compile {single_compile:.2f} s, run {single_seconds:.3f} s "
-          f"-> {count / single_seconds:,.0f} postures/s")
+    print(
+        f"  spacearm, 1 device: compile {single_compile:.2f} s, run {single_seconds:.3f} s "
+        f"-> {count / single_seconds:,.0f} postures/s"
+    )
 
     generic = jax.jit(jax.vmap(lambda q: sa.kinematics._jstar_one(sa.models.spatial.SPATIAL, robot, q)))
     sample = jax.device_put(postures[:100_000], devices[0])
@@ -138,8 +146,10 @@ def main(argv=None) -> int:
     generic_compile = time.perf_counter() - start
     generic_compiled(sample).block_until_ready()
     generic_seconds = best_of(lambda: generic_compiled(sample).block_until_ready(), args.repeats)
-    print(f"  generic J_M - J_S solve(I_S, I_M) under vmap, 1 device, 100,000 postures: compile {generic_compile:.2f} s "
-          f"-> {100_000 / generic_seconds:,.0f} postures/s")
+    print(
+        f"  generic J_M - J_S solve(I_S, I_M) under vmap, 1 device, 100,000 postures: compile {generic_compile:.2f} s "
+        f"-> {100_000 / generic_seconds:,.0f} postures/s"
+    )
 
     if pinocchio_jstar is not None:
         subset = postures[: args.pinocchio]
@@ -148,13 +158,15 @@ def main(argv=None) -> int:
             pinocchio_jstar(q)
         pin_seconds = time.perf_counter() - start
         pin_rate = len(subset) / pin_seconds
-        print(f"  Pinocchio Python loop ({len(subset):,} postures): {pin_rate:,.0f} postures/s "
-              f"-> spacearm is {rate / pin_rate:.0f}x faster")
+        print(
+            f"  Pinocchio Python loop ({len(subset):,} postures): {pin_rate:,.0f} postures/s "
+            f"-> spacearm is {rate / pin_rate:.0f}x faster"
+        )
     else:
         print("  Pinocchio: not installed")
 
     try:
-        from mujoco import mjx  # noqa: F401
+        from mujoco import mjx  # noqa: F401 (only whether it imports)
     except ImportError:
         print("  MuJoCo MJX: not installed (mujoco.mjx missing); skipped")
     else:

@@ -18,8 +18,8 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-import spacearm as sa  # noqa: E402
-from spacearm.analysis import reaction  # noqa: E402
+import spacearm as sa
+from spacearm.analysis import reaction
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -47,8 +47,10 @@ def reaction_free(count: int) -> None:
     first, t_first = timed(lambda: reaction.reaction_free_tip_path(robot, q0, d[:count], 0.01))
     _, t_warm = timed(lambda: reaction.reaction_free_tip_path(robot, q0, d[:count], 0.01))
     _, t_more = timed(lambda: reaction.reaction_free_tip_path(robot, q0, d, 0.01))
-    print(f"reaction-free, {count} paths: first call {t_first:.2f} s CPU, warm {t_warm:.2f} s, "
-          f"{count + 1} paths after {t_more:.2f} s")
+    print(
+        f"reaction-free, {count} paths: first call {t_first:.2f} s CPU, warm {t_warm:.2f} s, "
+        f"{count + 1} paths after {t_more:.2f} s"
+    )
     if len(sys.argv) > 3:
         np.savez(sys.argv[3], **{k: np.asarray(v) for k, v in vars(first).items()})
 
@@ -66,9 +68,11 @@ def main() -> None:
     first, t_first = timed(lambda: sa.straight_tip_path(robot, q, d[:count], **options))
     _, t_warm = timed(lambda: sa.straight_tip_path(robot, q, d[:count], **options))
     _, t_more = timed(lambda: sa.straight_tip_path(robot, np.broadcast_to(q0, (count + 1, 6)), d, **options))
-    print(f"{count} paths: first call {t_first:.2f} s CPU, warm {t_warm:.2f} s, "
-          f"{count + 1} paths after {t_more:.2f} s; steps mean {np.mean(first.steps):.0f} max {np.max(first.steps)}; "
-          f"reasons {np.bincount(np.asarray(first.reason), minlength=4)}")
+    print(
+        f"{count} paths: first call {t_first:.2f} s CPU, warm {t_warm:.2f} s, "
+        f"{count + 1} paths after {t_more:.2f} s; steps mean {np.mean(first.steps):.0f} max {np.max(first.steps)}; "
+        f"reasons {np.bincount(np.asarray(first.reason), minlength=4)}"
+    )
     if len(sys.argv) > 2:
         np.savez(sys.argv[2], **{k: np.asarray(v) for k, v in vars(first).items()})
 

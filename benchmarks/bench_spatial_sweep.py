@@ -50,7 +50,8 @@ import time
 def _sweep(designs: int, robot_name: str, chunk: int, rtol: float) -> dict:
     import jax
     import numpy as np
-    from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
+    from jax.sharding import Mesh, NamedSharding
+    from jax.sharding import PartitionSpec as P
 
     jax.config.update("jax_enable_x64", True)
     import spacearm as sa
@@ -142,7 +143,9 @@ def main() -> None:
     if args.child:
         print(json.dumps(_sweep(args.designs, args.robot, args.chunk, args.rtol)))
         return
-    print(f"spatial sweep: {args.designs} designs of {args.robot}, w-bar to rtol {args.rtol} (one sigma), os.cpu_count() = {os.cpu_count()}")
+    print(
+        f"spatial sweep: {args.designs} designs of {args.robot}, w-bar to rtol {args.rtol} (one sigma), os.cpu_count() = {os.cpu_count()}"
+    )
     rows = []
     for n in args.devices:
         env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={n}")

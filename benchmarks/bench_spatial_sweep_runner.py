@@ -74,8 +74,14 @@ def _child(designs: int, robot: str, direct: bool) -> dict:
         result = run_sweep(spec, Path(folder) / "out", progress=False)
         wall = time.perf_counter() - start
     timings = result.manifest["timings_s"]
-    out = dict(devices=jax.device_count(), designs=spec.n_designs, compile_s=timings["compile"],
-               run_s=timings["run"], wall_s=wall, designs_per_s=spec.n_designs / timings["run"])
+    out = dict(
+        devices=jax.device_count(),
+        designs=spec.n_designs,
+        compile_s=timings["compile"],
+        run_s=timings["run"],
+        wall_s=wall,
+        designs_per_s=spec.n_designs / timings["run"],
+    )
     if direct:
         batch, _ = build_designs(spec)
         function = jax.jit(lambda robot: joint_average(robot, "manipulability", rtol=1e-3).value)
@@ -117,13 +123,17 @@ def main() -> None:
             continue
         row = json.loads(done.stdout.strip().splitlines()[-1])
         rows.append(row)
-        print(f"{row['devices']} device(s): {row['designs']} designs, compile {row['compile_s']:.1f} s, "
-              f"run {row['run_s']:.2f} s -> {row['designs_per_s']:.1f} designs/s (wall {row['wall_s']:.1f} s)")
+        print(
+            f"{row['devices']} device(s): {row['designs']} designs, compile {row['compile_s']:.1f} s, "
+            f"run {row['run_s']:.2f} s -> {row['designs_per_s']:.1f} designs/s (wall {row['wall_s']:.1f} s)"
+        )
         if "direct" in row:
             d = row["direct"]
-            print(f"  baseline joint_average alone (1 jit): compile {d['compile_s']:.1f} s, run {d['run_s']:.2f} s -> "
-                  f"{d['designs_per_s']:.1f} designs/s; runner / baseline = "
-                  f"{row['designs_per_s'] / d['designs_per_s']:.2f}")
+            print(
+                f"  baseline joint_average alone (1 jit): compile {d['compile_s']:.1f} s, run {d['run_s']:.2f} s -> "
+                f"{d['designs_per_s']:.1f} designs/s; runner / baseline = "
+                f"{row['designs_per_s'] / d['designs_per_s']:.2f}"
+            )
     if len(rows) > 1:
         first = rows[0]["designs_per_s"]
         print("scaling: " + ", ".join(f"{r['devices']} dev {r['designs_per_s'] / first:.2f}x" for r in rows))

@@ -67,7 +67,10 @@ _UR5 = (
 SPATIAL: tuple[tuple[str, object], ...] = (
     ("UR5 straight path, 64 directions", (_UR5, "sa.straight_tip_path(robot, q0, d).length")),
     ("UR5 plan_reach (straight)", (_UR5, "sa.plan_reach(robot, q0, target).error")),
-    ("optimize pareto-mount-ur5 --no-baselines", ["optimize", "sweeps/pareto-mount-ur5.yaml", "--no-baselines", "--out", "TMP"]),
+    (
+        "optimize pareto-mount-ur5 --no-baselines",
+        ["optimize", "sweeps/pareto-mount-ur5.yaml", "--no-baselines", "--out", "TMP"],
+    ),
     ("UR5 path-independent radius", (_UR5, "radius(robot)")),
 )
 
@@ -168,8 +171,11 @@ def run_once(argv: list[str], cache_dir: str) -> dict:
 def run_library_once(setup: str, call: str, cache_dir: str) -> dict:
     """One fresh process: set-up, first call and warm call of a library entry point."""
     with tempfile.NamedTemporaryFile(suffix=".json") as report:
-        code = (_LIBRARY_CHILD.replace("REPORT", repr(report.name)).replace("SETUP", repr(setup))
-                .replace("CALL", repr(call)))
+        code = (
+            _LIBRARY_CHILD.replace("REPORT", repr(report.name))
+            .replace("SETUP", repr(setup))
+            .replace("CALL", repr(call))
+        )
         env = dict(os.environ, SPACEARM_CACHE_DIR=cache_dir, PYTHONPATH=str(ROOT / "src"))
         env.pop("JAX_LOG_COMPILES", None)
         done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True)
@@ -183,7 +189,7 @@ def measure_spatial(entry, repeat: int) -> tuple[dict, dict]:
     the library runs (a command counts as one call with no warm call)."""
     if isinstance(entry, list):
         cold, warm = measure(entry, repeat)
-        as_call = lambda stats: {"first": stats, "warm": None}  # noqa: E731
+        as_call = lambda stats: {"first": stats, "warm": None}
         return as_call(cold), as_call(warm)
     setup, call = entry
     colds, warms = [], []
@@ -191,7 +197,7 @@ def measure_spatial(entry, repeat: int) -> tuple[dict, dict]:
         with tempfile.TemporaryDirectory(prefix="spacearm-cache-") as cache:
             colds.append(run_library_once(setup, call, cache))
             warms.append(run_library_once(setup, call, cache))
-    best = lambda runs: min(runs, key=lambda stats: stats["first"]["cpu_s"])  # noqa: E731
+    best = lambda runs: min(runs, key=lambda stats: stats["first"]["cpu_s"])
     return best(colds), best(warms)
 
 
@@ -199,8 +205,10 @@ def spatial_main(args, picks: list[str]) -> None:
     """The spatial entry points' table (``--spatial``)."""
     entries = [(label, entry) for label, entry in SPATIAL if not picks or any(p in label for p in picks)]
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-    header = ("| entry point | cold: first call CPU s | programs | XLA compile s | warm call CPU s | warm call wall s "
-              "| warm cache: first call CPU s | programs compiled |")
+    header = (
+        "| entry point | cold: first call CPU s | programs | XLA compile s | warm call CPU s | warm call wall s "
+        "| warm cache: first call CPU s | programs compiled |"
+    )
     print(header)
     print("|" + "---|" * header.count(" | ") + "---|")
     results = {}
@@ -230,7 +238,7 @@ def measure(argv: list[str], repeat: int) -> tuple[dict, dict]:
         with tempfile.TemporaryDirectory(prefix="spacearm-cache-") as cache:
             colds.append(run_once(argv, cache))
             warms.append(run_once(argv, cache))
-    best = lambda runs: min(runs, key=lambda stats: stats["wall_s"])  # noqa: E731
+    best = lambda runs: min(runs, key=lambda stats: stats["wall_s"])
     return best(colds), best(warms)
 
 
@@ -250,8 +258,7 @@ def main() -> None:
 
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     header = (
-        "| command | compiles | cold wall s | cold CPU s | compile share | warm wall s | warm CPU s "
-        "| warm compiles |"
+        "| command | compiles | cold wall s | cold CPU s | compile share | warm wall s | warm CPU s | warm compiles |"
     )
     print(header)
     print("|" + "---|" * header.count(" | ") + "---|")

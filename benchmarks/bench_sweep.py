@@ -28,9 +28,9 @@ import jax
 import numpy as np
 
 jax.config.update("jax_enable_x64", True)
-import spacearm as sa  # noqa: E402
-from spacearm.analysis import average_manipulability, normalized_areas  # noqa: E402
-from spacearm.studies import build_designs, load_sweep, run_sweep  # noqa: E402
+import spacearm as sa
+from spacearm.analysis import average_manipulability, normalized_areas
+from spacearm.studies import build_designs, load_sweep, run_sweep
 
 RULES = {
     "adaptive": {},
@@ -39,16 +39,22 @@ RULES = {
 
 
 def sweep_spec(side: int, chunk_size: int, options: dict):
-    return load_sweep({
-        "name": "bench",
-        "robot": "configs/umetani1990.yaml",
-        "axes": {
-            "b0_over_B0": {"field": "base.attach", "relative": True, "range": {"start": 0.0, "stop": 2.0, "num": side}},
-            "arm_to_base_mass": {"field": "arm.mass_ratio", "range": {"start": 0.05, "stop": 0.6, "num": side}},
-        },
-        "metrics": [{"name": "wbar", **options}, "S_M", "S_G"],
-        "chunk_size": chunk_size,
-    })
+    return load_sweep(
+        {
+            "name": "bench",
+            "robot": "configs/umetani1990.yaml",
+            "axes": {
+                "b0_over_B0": {
+                    "field": "base.attach",
+                    "relative": True,
+                    "range": {"start": 0.0, "stop": 2.0, "num": side},
+                },
+                "arm_to_base_mass": {"field": "arm.mass_ratio", "range": {"start": 0.05, "stop": 0.6, "num": side}},
+            },
+            "metrics": [{"name": "wbar", **options}, "S_M", "S_G"],
+            "chunk_size": chunk_size,
+        }
+    )
 
 
 def per_call(fn, items) -> float:
@@ -69,9 +75,9 @@ def measure(name: str, options: dict, args, reference: dict | None) -> dict:
         wall = time.perf_counter() - start
     timings, total = result.manifest["timings_s"], spec.n_designs
 
-    robots, points = build_designs(spec)
+    robots, _points = build_designs(spec)
     pick = np.linspace(0, total - 1, args.loop_designs).astype(int)
-    singles = [jax.tree_util.tree_map(lambda x: np.asarray(x)[i], robots) for i in pick]
+    singles = [jax.tree_util.tree_map(lambda x, i=i: np.asarray(x)[i], robots) for i in pick]
     base = sa.umetani1990()
     attach = [float(robots.base_attach[i]) for i in pick]
 
@@ -93,19 +99,29 @@ def measure(name: str, options: dict, args, reference: dict | None) -> dict:
 
     run_rate = total / timings["run"]
     print(f"\n== w-bar rule: {name} {options or '(default)'}")
-    print(f"sweep: {total:,} designs (wbar, S_M, S_G), chunk {result.manifest['chunk_size']}, "
-          f"compile {timings['compile']:.2f} s, run {timings['run']:.2f} s, wall incl. files {wall:.2f} s")
+    print(
+        f"sweep: {total:,} designs (wbar, S_M, S_G), chunk {result.manifest['chunk_size']}, "
+        f"compile {timings['compile']:.2f} s, run {timings['run']:.2f} s, wall incl. files {wall:.2f} s"
+    )
     print(f"  {run_rate:,.0f} designs/s run ({1e6 / run_rate:,.1f} us/design), {total / wall:,.0f} designs/s wall")
-    print(f"loop of single-design calls ({len(singles)} designs timed, compile {loop_compile:.2f} s): "
-          f"{1 / t_calls:,.0f} designs/s ({t_calls * 1e6:,.0f} us/design); max |wbar loop - sweep| {diff:.1e}")
-    print(f"  parts per design: w-bar call {t_wbar * 1e6:,.0f} us, areas call {t_areas * 1e6:,.0f} us, "
-          f"bare jitted call on the pytree {t_bare * 1e6:,.0f} us; building a design (replace) {t_build * 1e6:,.0f} us")
+    print(
+        f"loop of single-design calls ({len(singles)} designs timed, compile {loop_compile:.2f} s): "
+        f"{1 / t_calls:,.0f} designs/s ({t_calls * 1e6:,.0f} us/design); max |wbar loop - sweep| {diff:.1e}"
+    )
+    print(
+        f"  parts per design: w-bar call {t_wbar * 1e6:,.0f} us, areas call {t_areas * 1e6:,.0f} us, "
+        f"bare jitted call on the pytree {t_bare * 1e6:,.0f} us; building a design (replace) {t_build * 1e6:,.0f} us"
+    )
     print(f"ratio sweep / loop (run)             {run_rate * t_calls:8.1f}x  (target >= 100x)")
     print(f"ratio sweep / loop (wall)            {total / wall * t_calls:8.1f}x")
-    print(f"ratio incl. building each design     {total / wall * (t_calls + t_build):8.1f}x  (sweep wall incl. its own build)")
+    print(
+        f"ratio incl. building each design     {total / wall * (t_calls + t_build):8.1f}x  (sweep wall incl. its own build)"
+    )
     if reference is not None:
         dev = np.abs(result.table["wbar"] - reference["wbar"]) / reference["wbar"]
-        print(f"  w-bar vs the default rule over all {total:,} designs: max rel {dev.max():.1e}, median {np.median(dev):.1e}")
+        print(
+            f"  w-bar vs the default rule over all {total:,} designs: max rel {dev.max():.1e}, median {np.median(dev):.1e}"
+        )
     return {"wbar": result.table["wbar"]}
 
 

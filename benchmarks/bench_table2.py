@@ -28,8 +28,8 @@ import jax
 import numpy as np
 
 jax.config.update("jax_enable_x64", True)
-import spacearm as sa  # noqa: E402
-from spacearm.analysis.manipulability_average import average_manipulability  # noqa: E402
+import spacearm as sa
+from spacearm.analysis.manipulability_average import average_manipulability
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -89,7 +89,9 @@ def main():
                 warm = time.perf_counter() - start
             finally:
                 os.chdir(here)
-        print(f"   cold {cold:.2f} s (target < 10 s: {'met' if cold < 10 else 'NOT met'}), warm {warm:.2f} s, cold/warm {cold / warm:.2f}")
+        print(
+            f"   cold {cold:.2f} s (target < 10 s: {'met' if cold < 10 else 'NOT met'}), warm {warm:.2f} s, cold/warm {cold / warm:.2f}"
+        )
 
     count = args.designs
     batch = design_batch(count)
@@ -97,9 +99,11 @@ def main():
     batched = jax.jit(lambda r: average_manipulability(r, designs_per_chunk=args.designs_per_chunk))
     small = jax.tree_util.tree_map(lambda x: x[:1], batch)
     _, first = timed(batched, small)
-    _, compile_only = timed(batched, batch)  # new shape: trace + compile + run
+    _, _compile_only = timed(batched, batch)  # new shape: trace + compile + run
     values, run = timed(batched, batch)
-    print(f"   adaptive (default): first call (compile, 1 design) {first:.2f} s; run {run:.2f} s = {1e3 * run / count:.3f} ms/design")
+    print(
+        f"   adaptive (default): first call (compile, 1 design) {first:.2f} s; run {run:.2f} s = {1e3 * run / count:.3f} ms/design"
+    )
 
     single = jax.jit(average_manipulability)
     designs = [jax.tree_util.tree_map(lambda x, i=i: x[i], batch) for i in range(args.loop_designs)]
@@ -108,9 +112,15 @@ def main():
     loop_values = [float(single(d)) for d in designs]
     loop = (time.perf_counter() - start) / args.loop_designs
     error = np.max(np.abs(np.asarray(loop_values) - np.asarray(values[: args.loop_designs])))
-    print(f"   Python loop over single designs (jitted once): {1e3 * loop:.3f} ms/design -> batch is {loop * count / run:.1f}x faster; max |diff| {error:.1e}")
+    print(
+        f"   Python loop over single designs (jitted once): {1e3 * loop:.3f} ms/design -> batch is {loop * count / run:.1f}x faster; max |diff| {error:.1e}"
+    )
 
-    product = jax.jit(lambda r: average_manipulability(r, rule="product", phi1_panels=32, phi2_panels=16, order=8, designs_per_chunk=args.designs_per_chunk))
+    product = jax.jit(
+        lambda r: average_manipulability(
+            r, rule="product", phi1_panels=32, phi2_panels=16, order=8, designs_per_chunk=args.designs_per_chunk
+        )
+    )
     timed(product, small)
     product_values, product_run = timed(product, batch)
     reference = jax.jit(lambda r: average_manipulability(r, order=16, designs_per_chunk=args.designs_per_chunk))(

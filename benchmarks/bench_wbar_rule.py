@@ -32,13 +32,13 @@ import jax
 import numpy as np
 
 jax.config.update("jax_enable_x64", True)
-import spacearm as sa  # noqa: E402
-from spacearm import analysis as metrics  # noqa: E402
-from spacearm.studies import build_designs, load_sweep  # noqa: E402
+import spacearm as sa
+from spacearm import analysis as metrics
+from spacearm.studies import build_designs, load_sweep
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from tests.conftest import random_robot  # noqa: E402
+from tests.conftest import random_robot
 
 TABLE2_EXPECTED = (0.0876862727874975, 0.0907243239426461, 0.0970120167785581, 0.1014599860992248, 0.1023088639013738)
 CONVERGED = {"phi1_panels": 16, "phi2_panels": 8, "order": 16, "newton_steps": 8}
@@ -55,15 +55,21 @@ def load_baseline(path: str):
 def table1_designs(count: int) -> sa.PlanarRobot:
     side_a = int(round(np.sqrt(count * 1.6)))
     side_b = max(1, count // side_a)
-    spec = load_sweep({
-        "name": "bench",
-        "robot": str(ROOT / "configs" / "umetani1990.yaml"),
-        "axes": {
-            "b0_over_B0": {"field": "base.attach", "relative": True, "range": {"start": 0.0, "stop": 2.0, "num": side_a}},
-            "arm_to_base_mass": {"field": "arm.mass_ratio", "range": {"start": 0.05, "stop": 0.6, "num": side_b}},
-        },
-        "metrics": ["wbar"],
-    })
+    spec = load_sweep(
+        {
+            "name": "bench",
+            "robot": str(ROOT / "configs" / "umetani1990.yaml"),
+            "axes": {
+                "b0_over_B0": {
+                    "field": "base.attach",
+                    "relative": True,
+                    "range": {"start": 0.0, "stop": 2.0, "num": side_a},
+                },
+                "arm_to_base_mass": {"field": "arm.mass_ratio", "range": {"start": 0.05, "stop": 0.6, "num": side_b}},
+            },
+            "metrics": ["wbar"],
+        }
+    )
     robots, _ = build_designs(spec)
     return robots
 
@@ -74,11 +80,13 @@ def random_designs(count: int) -> sa.PlanarRobot:
     robots = [random_robot(rng, 2) for _ in range(count - light)]
     for _ in range(light):
         robot = random_robot(rng, 2)
-        robots.append(robot.replace(
-            base_mass=np.float64(rng.uniform(20.0, 60.0)),
-            base_inertia=np.float64(rng.uniform(2.0, 20.0)),
-            base_attach=np.float64(rng.uniform(0.0, 4.0)),
-        ))
+        robots.append(
+            robot.replace(
+                base_mass=np.float64(rng.uniform(20.0, 60.0)),
+                base_inertia=np.float64(rng.uniform(2.0, 20.0)),
+                base_attach=np.float64(rng.uniform(0.0, 4.0)),
+            )
+        )
     return sa.stack_robots(robots)
 
 
@@ -104,7 +112,11 @@ class Candidate:
         self.best = {"vmap": np.inf, "chunk": np.inf, "single": np.inf}
 
     def warm(self, batch, one):
-        for key, fn, arg in (("vmap", self.vmapped, batch), ("chunk", self.chunked, batch), ("single", self.single, one)):
+        for key, fn, arg in (
+            ("vmap", self.vmapped, batch),
+            ("chunk", self.chunked, batch),
+            ("single", self.single, one),
+        ):
             start = time.perf_counter()
             jax.block_until_ready(fn(arg))
             self.compile[key] = time.perf_counter() - start
@@ -141,8 +153,12 @@ def main():
     for _ in range(args.rounds):
         for candidate in candidates:
             candidate.run(batch, singles[0], singles)
-    print(f"timing: {size} Table 1 designs (b0/B0 0-2 x arm mass ratio 0.05-0.6), best of {args.rounds} interleaved rounds")
-    print(f"{'':22s} {'jit(vmap) us/design':>20s} {'chunk 64 us/design':>19s} {'single call us':>15s}   compile s (vmap, chunk, single)")
+    print(
+        f"timing: {size} Table 1 designs (b0/B0 0-2 x arm mass ratio 0.05-0.6), best of {args.rounds} interleaved rounds"
+    )
+    print(
+        f"{'':22s} {'jit(vmap) us/design':>20s} {'chunk 64 us/design':>19s} {'single call us':>15s}   compile s (vmap, chunk, single)"
+    )
     for c in candidates:
         print(
             f"{c.name:22s} {c.best['vmap'] / size * 1e6:20.1f} {c.best['chunk'] / size * 1e6:19.1f} {c.best['single'] * 1e6:15.1f}"
@@ -155,13 +171,17 @@ def main():
     values = {name: np.asarray(jax.jit(module.average_manipulability)(table2)) for name, module in modules}
     for name, value in values.items():
         rel = np.max(np.abs(value / np.asarray(TABLE2_EXPECTED) - 1))
-        print(f"  {name}: {np.array2string(value, precision=16)}  max rel diff vs the test's regression values {rel:.1e}")
+        print(
+            f"  {name}: {np.array2string(value, precision=16)}  max rel diff vs the test's regression values {rel:.1e}"
+        )
     if len(values) == 2:
         rel = np.max(np.abs(values["current"] / values["baseline"] - 1))
         print(f"  max rel diff current vs baseline {rel:.1e}")
 
     robots = random_designs(args.random)
-    print(f"accuracy on {args.random} random designs (a quarter with light bases) vs the converged reference {CONVERGED}")
+    print(
+        f"accuracy on {args.random} random designs (a quarter with light bases) vs the converged reference {CONVERGED}"
+    )
     references = {
         name: np.asarray(jax.jit(jax.vmap(lambda r, m=module: m.average_manipulability(r, **CONVERGED)))(robots))
         for name, module in modules

@@ -18,11 +18,11 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-import spacearm as sa  # noqa: E402
-from spacearm import analysis as ws  # noqa: E402
-from spacearm.analysis import straight_workspace as spw  # noqa: E402
+from bench_motion import scipy_straight
 
-from bench_motion import scipy_straight  # noqa: E402  (same folder: one SciPy baseline for both)
+import spacearm as sa
+from spacearm import analysis as ws
+from spacearm.analysis import straight_workspace as spw
 
 
 def scipy_straight_path(coeffs, phi_start, direction, max_arc=60.0, rtol=1e-10, atol=1e-12):
@@ -52,8 +52,10 @@ def main() -> None:
     t_run = time.perf_counter() - t0
     t_compile = max(t_first - t_run, 0.0)
     steps = np.asarray(ends.steps)
-    print(f"JAX   compile {t_compile:7.2f} s   run {t_run:7.2f} s   {n_paths / t_run:9.0f} paths/s"
-          f"   (steps per path mean {steps.mean():.0f}, max {steps.max()})")
+    print(
+        f"JAX   compile {t_compile:7.2f} s   run {t_run:7.2f} s   {n_paths / t_run:9.0f} paths/s"
+        f"   (steps per path mean {steps.mean():.0f}, max {steps.max()})"
+    )
 
     # SciPy baseline on a random subset of the same paths.
     rng = np.random.default_rng(1)
@@ -63,7 +65,9 @@ def main() -> None:
     c = sa.design_coefficients(robot)
     coeffs = (np.asarray(c.tip), np.asarray(c.inertia_coupling), np.asarray(c.inertia))
     t0 = time.perf_counter()
-    reference = np.array([scipy_straight_path(coeffs, phis[p], directions[d]) for p, d in zip(p_idx, d_idx)])
+    reference = np.array(
+        [scipy_straight_path(coeffs, phis[p], directions[d]) for p, d in zip(p_idx, d_idx, strict=False)]
+    )
     t_scipy = time.perf_counter() - t0
     scipy_rate = args.scipy / t_scipy
     print(f"SciPy solve_ivp DOP853 (rtol 1e-10), {args.scipy} paths: {t_scipy:7.2f} s   {scipy_rate:9.0f} paths/s")
@@ -71,7 +75,9 @@ def main() -> None:
     tip_jax = np.asarray(ends.end_tip)[p_idx, d_idx]
     tip_ref = np.asarray(sa.tip_position(robot, reference))
     gap = np.linalg.norm(tip_jax - tip_ref, axis=-1)
-    print(f"end-point agreement with SciPy: median {np.median(gap):.1e} m, 99% {np.quantile(gap, 0.99):.1e} m, max {gap.max():.1e} m")
+    print(
+        f"end-point agreement with SciPy: median {np.median(gap):.1e} m, 99% {np.quantile(gap, 0.99):.1e} m, max {gap.max():.1e} m"
+    )
 
     print("\nArea 3 (union) and Area 5 (intersection) of the Straight-Path Workspaces in this batch:")
     study = ws.summarize_straight_paths(robot, phis, ends)

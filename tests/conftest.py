@@ -38,7 +38,7 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-import spacearm as sa  # noqa: E402
+import spacearm as sa
 
 _FRESH_DIR_VARIABLE = "SPACEARM_TEST_FRESH_CACHE_DIR"  # set by the controller for pytest-xdist workers
 _fresh_dir: str | None = None
@@ -48,14 +48,18 @@ _cpu_seconds: dict[str, float] = {}
 
 def pytest_addoption(parser):
     parser.addoption(
-        "--fresh-cache", action="store_true", default=False,
+        "--fresh-cache",
+        action="store_true",
+        default=False,
         help="compile into a new, empty JAX cache folder (deleted at the end) instead of the kept one "
-             "(also SPACEARM_FRESH_CACHE=1)",
+        "(also SPACEARM_FRESH_CACHE=1)",
     )
     parser.addoption(
-        "--fast", action="store_true", default=False,
+        "--fast",
+        action="store_true",
+        default=False,
         help="the edit-test loop: leave out tests marked slow and those that took more than --fast-limit "
-             "CPU seconds when they last ran (recorded in the kept cache folder)",
+        "CPU seconds when they last ran (recorded in the kept cache folder)",
     )
     parser.addoption("--fast-limit", type=float, default=5.0, help="CPU seconds for --fast (default 5)")
 

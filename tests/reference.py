@@ -25,7 +25,7 @@ def bodies_and_tip(d, phi):
     """Centroids of bodies 0..n and the tip, inertial frame, origin at the system centroid."""
     phi = np.asarray(phi)
     theta = np.cumsum(phi)
-    unit = lambda t: np.array([np.cos(t), np.sin(t)])  # noqa: E731
+    unit = lambda t: np.array([np.cos(t), np.sin(t)])
     centroids = [np.zeros(2, dtype=theta.dtype)]
     joint = centroids[0] + d["b0"] * unit(theta[0])
     for i in range(len(d["a"])):

@@ -65,8 +65,16 @@ def combined_urdf(
     ET.SubElement(inertial, "mass", value=repr(float(base_mass)))
     I = np.asarray(base_inertia, dtype=float)
     ET.SubElement(
-        inertial, "inertia",
-        **{k: repr(float(I[i, j])) for k, (i, j) in zip(('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz'), ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))},
+        inertial,
+        "inertia",
+        **{
+            k: repr(float(I[i, j]))
+            for k, (i, j) in zip(
+                ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+                ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)),
+                strict=False,
+            )
+        },
     )
     mount = ET.SubElement(robot, "joint", name="mount", type="fixed")
     ET.SubElement(mount, "origin", xyz=_fmt(mount_xyz), rpy=_fmt(mount_rpy))
@@ -90,7 +98,9 @@ def combined_urdf(
             xyz = np.array([float(v) for v in (origin.get("xyz", "0 0 0") if origin is not None else "0 0 0").split()])
             rpy = np.array([float(v) for v in (origin.get("rpy", "0 0 0") if origin is not None else "0 0 0").split()])
             axis_e = j.find("axis")
-            axis = np.array([float(v) for v in axis_e.get("xyz").split()]) if axis_e is not None else np.array([1.0, 0, 0])
+            axis = (
+                np.array([float(v) for v in axis_e.get("xyz").split()]) if axis_e is not None else np.array([1.0, 0, 0])
+            )
             axis = axis / np.linalg.norm(axis)
             rot = rpy_matrix(rpy)
             if j.get("type") == "prismatic":
@@ -126,10 +136,10 @@ def pinocchio_reference(combined: str, joint_names, tip: str, q):
     data = model.createData()
     config = pin.neutral(model)  # bus at the origin, identity attitude
     velocity_index = []
-    for name, value in zip(joint_names, q):
+    for name, value in zip(joint_names, q, strict=False):
         joint = model.joints[model.getJointId(name)]
         if joint.nq == 2:  # continuous: (cos, sin)
-            config[joint.idx_q:joint.idx_q + 2] = [math.cos(value), math.sin(value)]
+            config[joint.idx_q : joint.idx_q + 2] = [math.cos(value), math.sin(value)]
         else:
             config[joint.idx_q] = value
         velocity_index.append(joint.idx_v)
@@ -216,7 +226,7 @@ def mujoco_reference(model, joint_names, tip: str, q):
     data.qpos[:] = 0.0
     data.qpos[3] = 1.0  # bus at the origin, identity attitude
     columns = []
-    for name, value in zip(joint_names, q):
+    for name, value in zip(joint_names, q, strict=False):
         joint = model.joint(name)
         data.qpos[model.jnt_qposadr[joint.id]] = value
         columns.append(model.jnt_dofadr[joint.id])
@@ -251,7 +261,11 @@ def _random_rotation(rng):
 
 def _inertial(rng, mass):
     sides = rng.uniform(0.05, 0.6, 3)
-    principal = mass / 12.0 * np.array([sides[1] ** 2 + sides[2] ** 2, sides[0] ** 2 + sides[2] ** 2, sides[0] ** 2 + sides[1] ** 2])
+    principal = (
+        mass
+        / 12.0
+        * np.array([sides[1] ** 2 + sides[2] ** 2, sides[0] ** 2 + sides[2] ** 2, sides[0] ** 2 + sides[1] ** 2])
+    )
     R = _random_rotation(rng)
     I = R @ np.diag(principal) @ R.T  # off-diagonal terms; the inertial rpy turns it again
     return (
@@ -275,12 +289,17 @@ def random_chain_urdf(rng, n: int, kinds=None):
         (urdf text, joint names in path order, lock_joints, tip link name)
     """
     kinds = kinds or [("revolute", "continuous", "prismatic")[i % 3] for i in range(n)]
-    parts = ['<robot name="random">', '<link name="world"/>',
-             '<joint name="world_joint" type="fixed"><parent link="world"/><child link="root"/></joint>',
-             f'<link name="root">{_inertial(rng, 3.0)}</link>',
-             f'<link name="root_box">{_inertial(rng, 1.5)}</link>',
-             (f'<joint name="root_box_joint" type="fixed"><origin xyz="{_fmt(rng.uniform(-0.3, 0.3, 3))}" rpy="{_fmt(rng.uniform(-1, 1, 3))}"/>'
-             '<parent link="root"/><child link="root_box"/></joint>')]
+    parts = [
+        '<robot name="random">',
+        '<link name="world"/>',
+        '<joint name="world_joint" type="fixed"><parent link="world"/><child link="root"/></joint>',
+        f'<link name="root">{_inertial(rng, 3.0)}</link>',
+        f'<link name="root_box">{_inertial(rng, 1.5)}</link>',
+        (
+            f'<joint name="root_box_joint" type="fixed"><origin xyz="{_fmt(rng.uniform(-0.3, 0.3, 3))}" rpy="{_fmt(rng.uniform(-1, 1, 3))}"/>'
+            '<parent link="root"/><child link="root_box"/></joint>'
+        ),
+    ]
     parent, names = "root", []
     for i in range(n):
         kind = kinds[i]

@@ -139,7 +139,9 @@ def test_gradient_matches_finite_differences_planar():
     fd = _finite_difference(mean, robot, "base_mass", 1e-2)
     np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-6)
     e = jnp.zeros(2).at[1].set(1.0)
-    fd = (mean(robot.replace(link_a=robot.link_a + 1e-5 * e)) - mean(robot.replace(link_a=robot.link_a - 1e-5 * e))) / 2e-5
+    fd = (
+        mean(robot.replace(link_a=robot.link_a + 1e-5 * e)) - mean(robot.replace(link_a=robot.link_a - 1e-5 * e))
+    ) / 2e-5
     np.testing.assert_allclose(float(grad.link_a[1]), float(fd), rtol=1e-6)
 
 
@@ -155,7 +157,10 @@ def test_spatial_averages_and_gradient():
     fd = _finite_difference(mean, robot, "base_mass", 1e-2)
     np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-6)
     e = jnp.zeros(3).at[2].set(1.0)
-    fd = (mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e)) - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))) / 2e-6
+    fd = (
+        mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e))
+        - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))
+    ) / 2e-6
     np.testing.assert_allclose(float(grad.mount_xyz[2]), float(fd), rtol=1e-5)
     # The public dispatch returns an array for either family (joint_average adds the error).
     estimate = averages.average_manipulability(robot, rtol=1e-3)
@@ -176,7 +181,10 @@ def test_other_averages_are_differentiable(metric):
     fd = _finite_difference(mean, robot, "base_mass", 1e-2)
     np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-5)
     e = jnp.zeros(3).at[0].set(1.0)
-    fd = (mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e)) - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))) / 2e-6
+    fd = (
+        mean(robot.replace(mount_xyz=robot.mount_xyz + 1e-6 * e))
+        - mean(robot.replace(mount_xyz=robot.mount_xyz - 1e-6 * e))
+    ) / 2e-6
     np.testing.assert_allclose(float(grad.mount_xyz[0]), float(fd), rtol=1e-5, atol=1e-9 * abs(float(value)))
 
 
@@ -227,12 +235,20 @@ def test_adaptive_options_are_traced_and_the_custom_vjp_matches_finite_differenc
     def mean(r):
         return averages.joint_averages(r, ("manipulability", "base_disturbance"), **options)["base_disturbance"].value
 
-    value, grad = jax.value_and_grad(mean)(robot)
+    _value, grad = jax.value_and_grad(mean)(robot)
     fd = _finite_difference(mean, robot, "base_mass", 1e-2)
     np.testing.assert_allclose(float(grad.base_mass), float(fd), rtol=1e-6)
     before = averages._estimate_batched._cache_size()
-    averages.joint_averages(robot, ("manipulability", "base_disturbance"), rtol=3e-3, min_samples=2**9,
-                            max_samples=2**12, block=128, seed=5)
-    averages.joint_averages(robot, ("manipulability", "base_disturbance"), rtol=1e-2, min_samples=2**10,
-                            max_samples=2**13, block=128, seed=6)
+    averages.joint_averages(
+        robot, ("manipulability", "base_disturbance"), rtol=3e-3, min_samples=2**9, max_samples=2**12, block=128, seed=5
+    )
+    averages.joint_averages(
+        robot,
+        ("manipulability", "base_disturbance"),
+        rtol=1e-2,
+        min_samples=2**10,
+        max_samples=2**13,
+        block=128,
+        seed=6,
+    )
     assert averages._estimate_batched._cache_size() == before + 1  # one program for both calls

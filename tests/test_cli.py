@@ -53,9 +53,7 @@ def test_each_command_module_has_register_and_run():
         assert callable(loaded.register) and callable(loaded.run)
 
 
-@pytest.mark.parametrize(
-    "old", ["robot", "metrics", "workspace", "sweep", "results", "reports", "validate", "config"]
-)
+@pytest.mark.parametrize("old", ["robot", "metrics", "workspace", "sweep", "results", "reports", "validate", "config"])
 def test_removed_module_paths_are_gone(old):
     """The one-release re-export modules are deleted: an old import fails loudly instead of
     silently serving a renamed function (``workspace.normalized_areas`` did)."""

@@ -9,6 +9,7 @@ method uses the same objective code, so that choice does not favour any of them.
 
 import copy
 import csv
+import itertools
 import json
 from pathlib import Path
 
@@ -52,7 +53,7 @@ def brute_hypervolume(f, reference):
     f = f[np.all(f > reference, axis=1)]
     xs = np.unique(np.concatenate([[reference[0]], f[:, 0]]))
     total = 0.0
-    for left, right in zip(xs[:-1], xs[1:]):
+    for left, right in itertools.pairwise(xs):
         cover = f[f[:, 0] >= right]
         if cover.size:
             total += (right - left) * (cover[:, 1].max() - reference[1])
@@ -122,10 +123,17 @@ def test_guaranteed_area_table2_and_the_honest_clamp():
     # K0 = b0 m0 / w crosses K1 + K2 = 11/3 m at b0 = 4.4 m: past it the paper's formula
     # grows again, while no point inside the circle is reachable; the clamp gives 0.
     b0 = jnp.linspace(3.0, 6.0, 61)
-    robots = table1.replace(base_attach=b0, base_mass=jnp.full(61, 1000.0), base_inertia=jnp.full(61, 635.3),
-                            link_mass=jnp.tile(table1.link_mass, (61, 1)), link_inertia=jnp.tile(table1.link_inertia, (61, 1)),
-                            link_a=jnp.tile(table1.link_a, (61, 1)), link_b=jnp.tile(table1.link_b, (61, 1)),
-                            joint_lower=jnp.tile(table1.joint_lower, (61, 1)), joint_upper=jnp.tile(table1.joint_upper, (61, 1)))
+    robots = table1.replace(
+        base_attach=b0,
+        base_mass=jnp.full(61, 1000.0),
+        base_inertia=jnp.full(61, 635.3),
+        link_mass=jnp.tile(table1.link_mass, (61, 1)),
+        link_inertia=jnp.tile(table1.link_inertia, (61, 1)),
+        link_a=jnp.tile(table1.link_a, (61, 1)),
+        link_b=jnp.tile(table1.link_b, (61, 1)),
+        joint_lower=jnp.tile(table1.joint_lower, (61, 1)),
+        joint_upper=jnp.tile(table1.joint_upper, (61, 1)),
+    )
     clamped = np.asarray(jax.jit(design.guaranteed_area)(robots))
     paper = np.asarray(jax.jit(lambda r: design.guaranteed_area(r, clamp=False))(robots))
     margin = 11.0 / 3.0 - np.asarray(b0) / 1.2
@@ -166,7 +174,7 @@ def test_problem_yaml_errors_name_the_field():
         design.problem_from_mapping(reference_config(variables={"b_0": [0.0, 3.0]}))
     with pytest.raises(sa.ConfigError, match=r"variables.b0: the lower bound must be below"):
         design.problem_from_mapping(reference_config(variables={"b0": [3.0, 0.0]}))
-    with pytest.raises(sa.ConfigError, match="l1_over_L.*sum below 1"):
+    with pytest.raises(sa.ConfigError, match=r"l1_over_L.*sum below 1"):
         design.problem_from_mapping(reference_config(variables={"b0": [0.0, 3.0], "l1_over_L": [0.5, 1.0]}))
     with pytest.raises(sa.ConfigError, match=r"objectives\[1\]: must be one of wbar, S_G, S_M, got 'area'"):
         design.problem_from_mapping(reference_config(objectives=["wbar", "area"]))
@@ -199,12 +207,18 @@ def test_old_planar_names_are_aliases_of_the_design_fields():
     config = yaml.safe_load((ROOT / "sweeps" / "pareto-6var.yaml").read_text())
     renamed = dict(config)
     renamed["variables"] = {design.problem.planar_fields.canonical_name(k): v for k, v in config["variables"].items()}
-    assert list(renamed["variables"]) == ["base.attach", "links[0].length_share", "links[0].mass_share",
-                                          "links[0].centroid", "links[1].centroid", "arm.mass_ratio_fixed_total"]
+    assert list(renamed["variables"]) == [
+        "base.attach",
+        "links[0].length_share",
+        "links[0].mass_share",
+        "links[0].centroid",
+        "links[1].centroid",
+        "arm.mass_ratio_fixed_total",
+    ]
     old, new = design.problem_from_mapping(config), design.problem_from_mapping(renamed)
     x = jnp.array([1.1, 0.45, 0.55, 0.45, 0.6, 0.25])
     a, b = old.robot(x), new.robot(x)
-    for leaf_a, leaf_b in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)):
+    for leaf_a, leaf_b in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=False):
         np.testing.assert_array_equal(leaf_a, leaf_b)
     # The fields agree with the parametrization written out: l1 = 0.45 L, m1 = 0.55 m_arm,
     # a_i = ratio l_i, m_arm / m0 = 0.25 at w = 1200 kg, rods I = m l^2 / 12.
@@ -216,7 +230,7 @@ def test_old_planar_names_are_aliases_of_the_design_fields():
     np.testing.assert_allclose(b.base_mass, 1200.0 / 1.25, rtol=1e-14)
     # A field and its alias together set the same number: refused.
     config["variables"]["base.attach"] = [0.0, 1.0]
-    with pytest.raises(sa.ConfigError, match="b0 and base.attach set the same design number"):
+    with pytest.raises(sa.ConfigError, match=r"b0 and base.attach set the same design number"):
         design.problem_from_mapping(config)
 
 
@@ -243,7 +257,7 @@ def independent_curve(b0):
 
 
 def test_b0_only_front_is_the_analytic_curve(b0_only):
-    problem, result = b0_only
+    _problem, result = b0_only
     front = result.front()
     designs, values = result.designs[front, 0], result.objectives[front]
     # Every front design lies on the curve: the closed-form S_G (K0 = b0 m0 / w) and
@@ -254,7 +268,7 @@ def test_b0_only_front_is_the_analytic_curve(b0_only):
     np.testing.assert_allclose(values, both[: designs.size], rtol=1e-12)
     # The curve's own front (a dense b0 sweep, its non-dominated part) is what the search
     # covers: from the S_G anchor at b0 = 0 to the w-bar maximum, with the same hypervolume.
-    curve = both[designs.size:]
+    curve = both[designs.size :]
     curve_front = design.nondominated(curve)
     assert designs.min() == 0.0  # the bound is reached exactly (projection, no sigmoid)
     assert abs(designs.max() - sweep[curve_front].max()) < 0.02

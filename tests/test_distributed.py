@@ -34,8 +34,9 @@ def _gloo_available() -> bool:
     return hasattr(jax.config, "jax_cpu_collectives_implementation") and hasattr(_jax, "make_gloo_tcp_collectives")
 
 
-pytestmark = pytest.mark.skipif(not _gloo_available(),
-                                reason="the installed jaxlib has no gloo CPU collectives (jax.distributed on CPU)")
+pytestmark = pytest.mark.skipif(
+    not _gloo_available(), reason="the installed jaxlib has no gloo CPU collectives (jax.distributed on CPU)"
+)
 
 
 def _free_port() -> int:
@@ -45,8 +46,11 @@ def _free_port() -> int:
 
 
 def _env(devices: int, **extra) -> dict:
-    env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}",
-               PYTHONPATH=str(Path("src").resolve()) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = dict(
+        os.environ,
+        XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}",
+        PYTHONPATH=str(Path("src").resolve()) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+    )
     env.update(extra)
     return env
 
@@ -70,15 +74,20 @@ def _sweep(tmp_path) -> Path:
 def test_two_processes_write_the_same_table_as_one(tmp_path):
     sweep = _sweep(tmp_path)
     command = [sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--quiet", "--out"]
-    single = subprocess.run(command + [str(tmp_path / "single")], env=_env(2), capture_output=True, text=True,
-                            timeout=TIMEOUT_S)
+    single = subprocess.run(
+        command + [str(tmp_path / "single")], env=_env(2), capture_output=True, text=True, timeout=TIMEOUT_S
+    )
     assert single.returncode == 0, single.stderr
 
     coordinator = f"127.0.0.1:{_free_port()}"
     processes = [
-        subprocess.Popen(command + [str(tmp_path / "two")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         env=_env(1, SPACEARM_COORDINATOR=coordinator, SPACEARM_NUM_PROCESSES="2",
-                                  SPACEARM_PROCESS_ID=str(rank)))
+        subprocess.Popen(
+            command + [str(tmp_path / "two")],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=_env(1, SPACEARM_COORDINATOR=coordinator, SPACEARM_NUM_PROCESSES="2", SPACEARM_PROCESS_ID=str(rank)),
+        )
         for rank in range(2)
     ]
     try:
@@ -87,7 +96,7 @@ def test_two_processes_write_the_same_table_as_one(tmp_path):
         for p in processes:
             if p.poll() is None:
                 p.kill()
-    for rank, (p, (out, err)) in enumerate(zip(processes, outputs)):
+    for rank, (p, (_out, err)) in enumerate(zip(processes, outputs, strict=False)):
         assert p.returncode == 0, f"process {rank}: {err}"
     assert "process 1 of 2: done" in outputs[1][0]
 

@@ -76,8 +76,14 @@ def site(tmp_path_factory) -> dict[Path, _Page]:
     _load_hooks()
     out = tmp_path_factory.mktemp("site")
     env = dict(os.environ, DISABLE_MKDOCS_2_WARNING="true", NO_MKDOCS_2_WARNING="1")
-    run = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    run = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert run.returncode == 0, run.stderr[-4000:]
     pages = {}
     for path in sorted(out.rglob("*.html")):
@@ -144,8 +150,12 @@ def test_every_formula_is_rendered_as_mathml(site):
                 leftovers.append(f"{path.relative_to(site['root'])}: raw TeX {pattern!r} in the text")
     assert not leftovers, "\n".join(leftovers[:40])
     root = site["root"]
-    for page, at_least in (("explanation/model/index.html", 10), ("tutorials/spatial-arm/index.html", 3),
-                           ("guide/spatial-robots/index.html", 2), ("explanation/wbar-quadrature/index.html", 3)):
+    for page, at_least in (
+        ("explanation/model/index.html", 10),
+        ("tutorials/spatial-arm/index.html", 3),
+        ("guide/spatial-robots/index.html", 2),
+        ("explanation/wbar-quadrature/index.html", 3),
+    ):
         assert site[root / page].maths >= at_least, page
 
 
@@ -161,8 +171,10 @@ def test_site_builds_no_stray_pages_and_loads_nothing_from_the_network(site):
 
 def test_formula_hook_renders_tex_and_refuses_a_bad_formula():
     hooks = _load_hooks()
-    html = ('<p>inline <span class="arithmatex">\\(w^* = \\sqrt{\\det(J^* J^{*T})}\\)</span></p>'
-            '<div class="arithmatex">\\[J^* = J_M - J_S I_S^{-1} I_M\\]</div>')
+    html = (
+        '<p>inline <span class="arithmatex">\\(w^* = \\sqrt{\\det(J^* J^{*T})}\\)</span></p>'
+        '<div class="arithmatex">\\[J^* = J_M - J_S I_S^{-1} I_M\\]</div>'
+    )
     out = hooks.render_math(html, "page.md")
     assert out.count("<math") == 2 and 'display="block"' in out and 'display="inline"' in out
     assert "<msqrt>" in out and "arithmatex" not in out
@@ -221,5 +233,7 @@ def test_the_spatial_tutorial_shows_the_files_it_ships():
     assert robot == shipped_robot
     for block, name in ((sweep, "baxter-mount.yaml"), (problem, "baxter-pareto.yaml")):
         shipped = yaml.safe_load((ROOT / "sweeps" / name).read_text())
-        assert shipped.pop("robot") == "../configs/baxter-smallsat.yaml" and block.pop("robot") == "baxter-smallsat.yaml"
+        assert (
+            shipped.pop("robot") == "../configs/baxter-smallsat.yaml" and block.pop("robot") == "baxter-smallsat.yaml"
+        )
         assert block == shipped, name

@@ -18,8 +18,9 @@ import yaml
 
 from tests.test_distributed import _env, _free_port, _gloo_available
 
-pytestmark = pytest.mark.skipif(not _gloo_available(),
-                                reason="the installed jaxlib has no gloo CPU collectives (jax.distributed on CPU)")
+pytestmark = pytest.mark.skipif(
+    not _gloo_available(), reason="the installed jaxlib has no gloo CPU collectives (jax.distributed on CPU)"
+)
 
 ROBOT = str(Path("configs/umetani1990.yaml").resolve())
 TIMEOUT_S = 120
@@ -39,11 +40,26 @@ def _sweep(tmp_path, num=5, chunk_size=4, metrics=("radii",)) -> Path:
 
 
 def _start(sweep, out, coordinator, rank, *extra, timeout="20"):
-    command = [sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--quiet", "--out", str(out),
-               "--peer-timeout", timeout, *extra]
-    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_env(1, SPACEARM_COORDINATOR=coordinator, SPACEARM_NUM_PROCESSES="2",
-                                     SPACEARM_PROCESS_ID=str(rank)))
+    command = [
+        sys.executable,
+        "-m",
+        "spacearm.cli",
+        "sweep",
+        str(sweep),
+        "--quiet",
+        "--out",
+        str(out),
+        "--peer-timeout",
+        timeout,
+        *extra,
+    ]
+    return subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=_env(1, SPACEARM_COORDINATOR=coordinator, SPACEARM_NUM_PROCESSES="2", SPACEARM_PROCESS_ID=str(rank)),
+    )
 
 
 def _finish(processes):
@@ -64,10 +80,12 @@ def test_a_process_with_other_settings_is_refused_naming_the_keys(tmp_path):
     7 of 25 rows hold process 1's results under process 0's x values."""
     sweep = _sweep(tmp_path)
     coordinator = f"127.0.0.1:{_free_port()}"
-    processes = [_start(sweep, tmp_path / "out", coordinator, 0),
-                 _start(sweep, tmp_path / "out", coordinator, 1, "--set", "axes.x.range.start=0.2")]
+    processes = [
+        _start(sweep, tmp_path / "out", coordinator, 0),
+        _start(sweep, tmp_path / "out", coordinator, 1, "--set", "axes.x.range.start=0.2"),
+    ]
     outputs = _finish(processes)
-    for rank, (p, (_, err)) in enumerate(zip(processes, outputs)):
+    for rank, (p, (_, err)) in enumerate(zip(processes, outputs, strict=False)):
         assert p.returncode == 1, f"process {rank}: {err}"
         assert "Traceback" not in err and len(_error_lines(err)) == 1, err
         assert "config.axes.x.values" in err and "refusing to run" in err, err
@@ -79,7 +97,7 @@ def test_a_lone_process_gives_up_after_the_peer_timeout(tmp_path):
     sweep = _sweep(tmp_path)
     start = time.monotonic()
     process = _start(sweep, tmp_path / "out", f"127.0.0.1:{_free_port()}", 0, timeout="3")
-    (_, err), = _finish([process])
+    ((_, err),) = _finish([process])
     elapsed = time.monotonic() - start
     assert process.returncode == 1, err
     assert "did not all join" in err and "--peer-timeout" in err, err
@@ -130,6 +148,6 @@ def test_a_locked_folder_refuses_every_process(tmp_path):
     finally:
         holder.kill()
         holder.wait()
-    for rank, (p, (_, err)) in enumerate(zip(processes, outputs)):
+    for rank, (p, (_, err)) in enumerate(zip(processes, outputs, strict=False)):
         assert p.returncode == 1, f"process {rank}: {err}"
         assert f"another spacearm run (PID {holder.pid})" in err and len(_error_lines(err)) == 1, err

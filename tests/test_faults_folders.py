@@ -30,8 +30,9 @@ def config(num=4, **changes):
     data = {
         "name": "faults",
         "robot": ROBOT,
-        "axes": {"b0_over_B0": {"field": "base.attach", "relative": True,
-                                "range": {"start": 0.0, "stop": 2.0, "num": num}}},
+        "axes": {
+            "b0_over_B0": {"field": "base.attach", "relative": True, "range": {"start": 0.0, "stop": 2.0, "num": num}}
+        },
         "metrics": ["radii"],
         "chunk_size": 2,
     }
@@ -111,8 +112,9 @@ def test_sigkill_right_before_the_swap_keeps_the_old_folder_and_resumes(first_ru
     sweep = tmp_path / "six.yaml"
     sweep.write_text(yaml.safe_dump(config(num=6)))
     env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    killed = subprocess.run([sys.executable, "-c", _KILLED_RUN, str(sweep), str(out)], env=env,
-                            capture_output=True, text=True, timeout=120)
+    killed = subprocess.run(
+        [sys.executable, "-c", _KILLED_RUN, str(sweep), str(out)], env=env, capture_output=True, text=True, timeout=120
+    )
     assert killed.returncode == -signal.SIGKILL, killed.stderr
     assert list(out.parent.glob(".res.staging-*"))  # what the killed run left
     assert snapshot(out) == before and consistent(out) == 4
@@ -155,10 +157,12 @@ def test_a_second_writer_is_refused_naming_the_holder(first_run, tmp_path, capsy
 
 
 def test_lock_is_exclusive_between_open_descriptions_and_released_on_exit(tmp_path):
-    with folders.lock_folder(tmp_path / "x"):
-        with pytest.raises(folders.FolderLocked, match=f"PID {os.getpid()}"):
-            with folders.lock_folder(tmp_path / "x"):
-                pass
+    with (
+        folders.lock_folder(tmp_path / "x"),
+        pytest.raises(folders.FolderLocked, match=f"PID {os.getpid()}"),
+        folders.lock_folder(tmp_path / "x"),
+    ):
+        pass
     with folders.lock_folder(tmp_path / "x"):  # released
         pass
 
@@ -184,10 +188,17 @@ def test_sigint_during_a_sweep_is_one_line_and_resumable(tmp_path):
     """Ctrl-C while the sweep computes: exit 130, no traceback, the chunks kept."""
     sweep = tmp_path / "long.yaml"
     sweep.write_text(yaml.safe_dump(config(num=64, chunk_size=1, metrics=["S_G"])))
-    env = dict(os.environ, PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""),
-               XLA_FLAGS="--xla_force_host_platform_device_count=1")
-    process = subprocess.Popen([sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--out",
-                                str(tmp_path / "o")], env=env, stderr=subprocess.PIPE, text=True)
+    env = dict(
+        os.environ,
+        PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""),
+        XLA_FLAGS="--xla_force_host_platform_device_count=1",
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--out", str(tmp_path / "o")],
+        env=env,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 120
     while not list((tmp_path / "o").glob(".partial-*/chunk_*.npz")) and time.monotonic() < deadline:
         time.sleep(0.1)

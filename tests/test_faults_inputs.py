@@ -49,8 +49,9 @@ URDF = """<robot name="t">
 
 
 def urdf(**changes):
-    fields = dict(mass="2.0", ixx="0.1", axis="0 0 1", xyz="0.5 0 0", j2_type="continuous", j2_parent="l1",
-                  links="", joints="")
+    fields = dict(
+        mass="2.0", ixx="0.1", axis="0 0 1", xyz="0.5 0 0", j2_type="continuous", j2_parent="l1", links="", joints=""
+    )
     fields.update(changes)
     return URDF.format(**fields)
 
@@ -64,8 +65,13 @@ SPATIAL = {
 
 
 def sweep_config():
-    return {"name": "faulty", "robot": str(ROOT / "configs" / "umetani1990.yaml"),
-            "axes": {"b0": {"field": "base.attach", "values": [0.0, 1.0]}}, "metrics": ["S_M"], "chunk_size": 4}
+    return {
+        "name": "faulty",
+        "robot": str(ROOT / "configs" / "umetani1990.yaml"),
+        "axes": {"b0": {"field": "base.attach", "values": [0.0, 1.0]}},
+        "metrics": ["S_M"],
+        "chunk_size": 4,
+    }
 
 
 def put(config, path, value):
@@ -97,42 +103,86 @@ def dump(config):
 
 # Field by field ---------------------------------------------------------------------------
 
-for field in ["base.mass", "base.inertia", "base.attach", "links[0].mass", "links[0].inertia", "links[0].a",
-              "links[1].b"]:
+for field in [
+    "base.mass",
+    "base.inertia",
+    "base.attach",
+    "links[0].mass",
+    "links[0].inertia",
+    "links[0].a",
+    "links[1].b",
+]:
     for label, value in BAD_NUMBERS.items():
         add(f"planar {field} {label}", dump(put(copy.deepcopy(PLANAR), field, value)), field)
 
 for field, values in {
     "base.mass": BAD_NUMBERS,
-    "base.com": {"short": [0, 0], "nan": [float("nan"), 0, 0], "huge": [1e300, 0, 0], "string": "origin",
-                 "numeric string": ["1.0e12", 0, 0], "bool": [True, 0, 0]},
-    "base.inertia": {"flat": [80, 90, 100], "nan": [[float("nan"), 0, 0], [0, 90, 0], [0, 0, 100]],
-                     "huge": [[1e308, 0, 0], [0, 90, 0], [0, 0, 100]], "ragged": [[80, 0], [0, 90, 0], [0, 0, 100]],
-                     "not symmetric": [[80, 5, 0], [0, 90, 0], [0, 0, 100]],
-                     "triangle": [[1, 0, 0], [0, 1, 0], [0, 0, 5]], "string": "heavy"},
-    "mount.xyz": {"huge": [1e300, 0, 0], "inf": [float("inf"), 0, 0], "long": [0, 0, 0, 0], "string": "top",
-                  "nested": [[0], [0], [0]]},
+    "base.com": {
+        "short": [0, 0],
+        "nan": [float("nan"), 0, 0],
+        "huge": [1e300, 0, 0],
+        "string": "origin",
+        "numeric string": ["1.0e12", 0, 0],
+        "bool": [True, 0, 0],
+    },
+    "base.inertia": {
+        "flat": [80, 90, 100],
+        "nan": [[float("nan"), 0, 0], [0, 90, 0], [0, 0, 100]],
+        "huge": [[1e308, 0, 0], [0, 90, 0], [0, 0, 100]],
+        "ragged": [[80, 0], [0, 90, 0], [0, 0, 100]],
+        "not symmetric": [[80, 5, 0], [0, 90, 0], [0, 0, 100]],
+        "triangle": [[1, 0, 0], [0, 1, 0], [0, 0, 5]],
+        "string": "heavy",
+    },
+    "mount.xyz": {
+        "huge": [1e300, 0, 0],
+        "inf": [float("inf"), 0, 0],
+        "long": [0, 0, 0, 0],
+        "string": "top",
+        "nested": [[0], [0], [0]],
+    },
     "mount.rpy": {"nan": [float("nan"), 0, 0], "huge": [0, 1e200, 0], "mapping": {"r": 0}},
     "arm.root_link": {"unknown": "bse", "number": 3, "list": ["base"]},
     "arm.tip": {"unknown": "toool", "number": 7, "null": None},
-    "arm.lock_joints": {"unknown joint": {"j9": 0.0}, "nan": {"j2": float("nan")}, "list": ["j2"],
-                        "fixed joint": {"tool_joint": 0.0}, "string value": {"j2": "zero"}},
+    "arm.lock_joints": {
+        "unknown joint": {"j9": 0.0},
+        "nan": {"j2": float("nan")},
+        "list": ["j2"],
+        "fixed joint": {"tool_joint": 0.0},
+        "string value": {"j2": "zero"},
+    },
     "arm.inertia_as_written": {"string": "yes", "number": 1},
-    "arm.urdf": {"missing file": "nowhere.urdf", "number": 5, "bad package": {"package": "no-such-pkg-xyz", "path": "a"}},
+    "arm.urdf": {
+        "missing file": "nowhere.urdf",
+        "number": 5,
+        "bad package": {"package": "no-such-pkg-xyz", "path": "a"},
+    },
 }.items():
     for label, value in values.items():
         expected = {"mount.xyz": "mount.xyz", "mount.rpy": "mount.rpy"}.get(field, field)
         add(f"spatial {field} {label}", dump(put(copy.deepcopy(SPATIAL), field, value)), expected, urdf())
 
 for field, values in {
-    "axes.b0.values": {"empty": [], "string": "many", "nan": [float("nan")], "huge": [1e300], "inf": [float("inf")],
-                       "numeric string": ["1.0e12"], "bool": [True], "nested": [[1.0]]},
+    "axes.b0.values": {
+        "empty": [],
+        "string": "many",
+        "nan": [float("nan")],
+        "huge": [1e300],
+        "inf": [float("inf")],
+        "numeric string": ["1.0e12"],
+        "bool": [True],
+        "nested": [[1.0]],
+    },
     "axes.b0.field": {"unknown": "base.atach", "number": 3},
     "chunk_size": {"zero": 0, "huge": 2**40, "float": 4.5, "string": "big"},
-    "metrics": {"unknown": ["wbra"], "string": 7, "bad option": [{"name": "wbar", "order": 10**9}],
-                "huge panels": [{"name": "wbar", "phi1_panels": 10**6}],
-                "huge directions": [{"name": "straight_path_area", "n_directions": 10**9}],
-                "float order": [{"name": "wbar", "order": 1e9}]},
+    "metrics": {
+        "unknown": ["wbra"],
+        "string": 7,
+        "bad option": [{"name": "wbar", "order": 10**9}],
+        "huge panels": [{"name": "wbar", "phi1_panels": 10**6}],
+        "huge directions": [{"name": "straight_path_area", "n_directions": 10**9}],
+        "float order": [{"name": "wbar", "order": 1e9}],
+    },
     "combine": {"unknown": "zipped"},
     "name": {"spaces": "a b", "number": 5},
     "robot": {"missing": "nowhere.yaml", "number": 5},
@@ -161,7 +211,9 @@ for field, values in {
 
 BOMB = "a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
     f"{chr(98 + i)}: &{chr(98 + i)} [*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, "
-    f"*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}]\n" for i in range(8))
+    f"*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}]\n"
+    for i in range(8)
+)
 WHOLE = {
     "empty": ("", "neither a robot file"),
     "only a comment": ("# nothing\n", "neither a robot file"),
@@ -184,31 +236,60 @@ for kind, config in (("planar", PLANAR), ("spatial", SPATIAL), ("sweep", sweep_c
     first = text.splitlines()[0]
     add(f"{kind} duplicate top key", text + first + "\n", "duplicate key")
     add(f"{kind} alias bomb in description", BOMB + text, "expands to more than", urdf() if kind == "spatial" else None)
-    add(f"{kind} deep value", text.replace(first, first.split(":")[0] + ": " + "[" * 300 + "]" * 300, 1), "nest",
-        urdf() if kind == "spatial" else None)
+    add(
+        f"{kind} deep value",
+        text.replace(first, first.split(":")[0] + ": " + "[" * 300 + "]" * 300, 1),
+        "nest",
+        urdf() if kind == "spatial" else None,
+    )
 
-add("planar duplicate link key", "name: dup\nbase: {mass: 1000.0, inertia: 635.3, attach: 1.4}\nlinks:\n"
+add(
+    "planar duplicate link key",
+    "name: dup\nbase: {mass: 1000.0, inertia: 635.3, attach: 1.4}\nlinks:\n"
     "  - {mass: 100.0, inertia: 33.3, a: 1.0, b: 1.0, mass: 50.0}\n  - {mass: 100.0, inertia: 33.3, a: 1.0, b: 1.0}\n",
-    "duplicate key 'mass'")
-add("sweep duplicate axis", "name: faulty\nrobot: " + str(ROOT / "configs" / "umetani1990.yaml") + "\naxes:\n"
+    "duplicate key 'mass'",
+)
+add(
+    "sweep duplicate axis",
+    "name: faulty\nrobot: " + str(ROOT / "configs" / "umetani1990.yaml") + "\naxes:\n"
     "  b0: {field: base.attach, values: [0.0]}\n  b0: {field: base.mass, values: [1.0]}\nmetrics: [S_M]\n",
-    "duplicate key 'b0'", command="sweep")
-add("sweep alias bomb in values", "name: faulty\nrobot: " + str(ROOT / "configs" / "umetani1990.yaml") + "\n"
-    + BOMB + "axes:\n  b0: {field: base.attach, values: *i}\nmetrics: [S_M]\n", "expands to more than", command="sweep")
+    "duplicate key 'b0'",
+    command="sweep",
+)
+add(
+    "sweep alias bomb in values",
+    "name: faulty\nrobot: "
+    + str(ROOT / "configs" / "umetani1990.yaml")
+    + "\n"
+    + BOMB
+    + "axes:\n  b0: {field: base.attach, values: *i}\nmetrics: [S_M]\n",
+    "expands to more than",
+    command="sweep",
+)
 
 # URDFs (through the spatial robot file that names them) -------------------------------------
 
 URDFS = {
-    "cycle through root_link": (urdf(joints='<joint name="back" type="fixed"><parent link="l2"/><child link="base"/></joint>'),
-                                "form a cycle"),
-    "fixed cycle": (urdf(links='<link name="a"/><link name="b"/>',
-                         joints='<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>'
-                                '<joint name="ba" type="fixed"><parent link="b"/><child link="a"/></joint>'),
-                    "'ab', 'ba'"),
-    "orphan tree": (urdf(links='<link name="ghost"><inertial><mass value="1000"/><inertia ixx="1" iyy="1" izz="1" ixy="0" '
-                               'ixz="0" iyz="0"/></inertial></link><link name="ghost2"/>',
-                         joints='<joint name="g" type="fixed"><parent link="ghost"/><child link="ghost2"/></joint>'),
-                    "'ghost', 'ghost2' are not connected"),
+    "cycle through root_link": (
+        urdf(joints='<joint name="back" type="fixed"><parent link="l2"/><child link="base"/></joint>'),
+        "form a cycle",
+    ),
+    "fixed cycle": (
+        urdf(
+            links='<link name="a"/><link name="b"/>',
+            joints='<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>'
+            '<joint name="ba" type="fixed"><parent link="b"/><child link="a"/></joint>',
+        ),
+        "'ab', 'ba'",
+    ),
+    "orphan tree": (
+        urdf(
+            links='<link name="ghost"><inertial><mass value="1000"/><inertia ixx="1" iyy="1" izz="1" ixy="0" '
+            'ixz="0" iyz="0"/></inertial></link><link name="ghost2"/>',
+            joints='<joint name="g" type="fixed"><parent link="ghost"/><child link="ghost2"/></joint>',
+        ),
+        "'ghost', 'ghost2' are not connected",
+    ),
     "lone orphan": (urdf(links='<link name="stray"/>'), "'stray'"),
     "unknown parent": (urdf(j2_parent="l7"), "joint 'j2': parent link 'l7' is not defined"),
     "huge inertia": (urdf(ixx="1e308"), "link 'l1'"),
@@ -222,23 +303,43 @@ URDFS = {
     "floating joint": (urdf(j2_type="floating"), "joint 'j2': type 'floating'"),
     "unknown type": (urdf(j2_type="hinge"), "joint 'j2': unknown type"),
     "duplicate link": (urdf(links='<link name="l1"/>'), "link 'l1' is defined twice"),
-    "duplicate joint": (urdf(links='<link name="x"/>',
-                             joints='<joint name="j1" type="fixed"><parent link="l2"/><child link="x"/></joint>'),
-                        "joint 'j1' is defined twice"),
-    "two parents": (urdf(joints='<joint name="j3" type="fixed"><parent link="base"/><child link="l2"/></joint>'),
-                    "already has parent joint"),
+    "duplicate joint": (
+        urdf(
+            links='<link name="x"/>',
+            joints='<joint name="j1" type="fixed"><parent link="l2"/><child link="x"/></joint>',
+        ),
+        "joint 'j1' is defined twice",
+    ),
+    "two parents": (
+        urdf(joints='<joint name="j3" type="fixed"><parent link="base"/><child link="l2"/></joint>'),
+        "already has parent joint",
+    ),
     "malformed": (urdf()[:-30], "malformed XML"),
     "not a robot": ("<world/>", "root element must be <robot>"),
     "empty": ("", "malformed XML"),
     "binary": ("\x00\x01garbage", "malformed XML"),
-    "entity bomb": ('<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa">' + "".join(
-        f'<!ENTITY {chr(98 + i)} "{("&" + chr(97 + i) + ";") * 10}">' for i in range(8)) + ']><robot name="&i;"/>',
-                    "arm.urdf"),
-    "external entity": ('<?xml version="1.0"?><!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
-                        '<robot name="&x;"><link name="base"/></robot>', "arm.urdf"),
-    "long chain": ("<robot name='c'>" + "".join(f"<link name='l{i}'/>" for i in range(2001)) + "".join(
-        f"<joint name='j{i}' type='revolute'><parent link='l{i}'/><child link='l{i + 1}'/><axis xyz='0 0 1'/>"
-        "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for i in range(2000)) + "</robot>", "at most 64"),
+    "entity bomb": (
+        '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa">'
+        + "".join(f'<!ENTITY {chr(98 + i)} "{("&" + chr(97 + i) + ";") * 10}">' for i in range(8))
+        + ']><robot name="&i;"/>',
+        "arm.urdf",
+    ),
+    "external entity": (
+        '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
+        '<robot name="&x;"><link name="base"/></robot>',
+        "arm.urdf",
+    ),
+    "long chain": (
+        "<robot name='c'>"
+        + "".join(f"<link name='l{i}'/>" for i in range(2001))
+        + "".join(
+            f"<joint name='j{i}' type='revolute'><parent link='l{i}'/><child link='l{i + 1}'/><axis xyz='0 0 1'/>"
+            "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
+            for i in range(2000)
+        )
+        + "</robot>",
+        "at most 64",
+    ),
 }
 for name, (text, field) in URDFS.items():
     config = copy.deepcopy(SPATIAL)

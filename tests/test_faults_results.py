@@ -17,11 +17,17 @@ ROBOT = str(Path("configs/umetani1990.yaml").resolve())
 
 def write_sweep(tmp_path, metrics=("radii",)):
     path = tmp_path / "sweep.yaml"
-    path.write_text(yaml.safe_dump({
-        "name": "results", "robot": ROBOT,
-        "axes": {"b0": {"field": "base.attach", "values": [0.0, 1.0, 2.0]}},
-        "metrics": list(metrics), "chunk_size": 4,
-    }))
+    path.write_text(
+        yaml.safe_dump(
+            {
+                "name": "results",
+                "robot": ROBOT,
+                "axes": {"b0": {"field": "base.attach", "values": [0.0, 1.0, 2.0]}},
+                "metrics": list(metrics),
+                "chunk_size": 4,
+            }
+        )
+    )
     return path
 
 

@@ -104,16 +104,21 @@ def test_sweep_plots_draw_errors_as_bars_not_as_panels(tmp_path, monkeypatch):
     root = SRC.parents[1]
     spec = load_sweep(root / "sweeps" / "ur5-mass-ratio.yaml")
     n = len(spec.axes[0].values)
-    table = {"w_avg_m3": np.linspace(0.045, 0.016, n), "w_avg_m3_error": np.full(n, 1e-5),
-             "C_w_avg": np.linspace(0.01, 0.3, n), "C_w_avg_error": np.full(n, 2e-5),
-             "gci": np.linspace(0.265, 0.259, n), "gci_error": np.full(n, 2e-4)}
+    table = {
+        "w_avg_m3": np.linspace(0.045, 0.016, n),
+        "w_avg_m3_error": np.full(n, 1e-5),
+        "C_w_avg": np.linspace(0.01, 0.3, n),
+        "C_w_avg_error": np.full(n, 2e-5),
+        "gci": np.linspace(0.265, 0.259, n),
+        "gci_error": np.full(n, 2e-4),
+    }
     drawn = []
     monkeypatch.setattr(sweep_figures, "save_figure", lambda fig, path, **kw: drawn.append(fig) or path)
     sweep_figures.sweep_figures(spec, tmp_path, table)
     (fig,) = drawn
     axes = fig.axes
     assert len(axes) == 3
-    for ax, column in zip(axes, ("w_avg_m3", "C_w_avg", "gci")):
+    for ax, column in zip(axes, ("w_avg_m3", "C_w_avg", "gci"), strict=False):
         bars = [c for c in ax.containers if isinstance(c, matplotlib.container.ErrorbarContainer)]
         assert len(bars) == 1
         segments = bars[0].lines[2][0].get_segments()
@@ -139,8 +144,12 @@ def test_3d_figures_have_equal_scales_and_keep_the_bus_inside():
 
 
 def test_sweep_prints_its_table_with_errors_and_summarizes_long_ones():
-    short = {"design": np.arange(3.0), "x": np.array([0.1, 0.2, 0.3]), "w_avg_m3": np.array([0.5, 0.25, 0.125]),
-             "w_avg_m3_error": np.array([1e-4, 2e-4, 3e-4])}
+    short = {
+        "design": np.arange(3.0),
+        "x": np.array([0.1, 0.2, 0.3]),
+        "w_avg_m3": np.array([0.5, 0.25, 0.125]),
+        "w_avg_m3_error": np.array([1e-4, 2e-4, 3e-4]),
+    }
     lines = format_table(short).splitlines()
     assert lines[0].split() == ["design", "x", "w_avg_m3"]
     assert lines[2].split() == ["1", "0.2", "0.25", "±", "0.0002"] and len(lines) == 4

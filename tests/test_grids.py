@@ -23,8 +23,10 @@ def run(tmp_path, **changes):
 
 
 def test_product_sweep_opens_with_one_dimension_per_axis(tmp_path):
-    axes = {"b0": {"field": "base.attach", "values": [0.0, 0.7, 1.4]},
-            "m0": {"field": "base.mass", "values": [500.0, 1000.0]}}
+    axes = {
+        "b0": {"field": "base.attach", "values": [0.0, 0.7, 1.4]},
+        "m0": {"field": "base.mass", "values": [500.0, 1000.0]},
+    }
     out = run(tmp_path, axes=axes)
     data = sa.open_results(out)
     assert isinstance(data, xr.Dataset)
@@ -44,8 +46,10 @@ def test_product_sweep_opens_with_one_dimension_per_axis(tmp_path):
 
 
 def test_zipped_sweep_opens_along_design(tmp_path):
-    axes = {"m0": {"field": "base.mass", "values": [500.0, 900.0]},
-            "b0": {"field": "base.attach", "relative": True, "values": [0.5, 1.5]}}
+    axes = {
+        "m0": {"field": "base.mass", "values": [500.0, 900.0]},
+        "b0": {"field": "base.attach", "relative": True, "values": [0.5, 1.5]},
+    }
     data = sa.open_results(run(tmp_path, axes=axes, combine="zip"))
     assert data["S_M"].dims == ("design",)
     np.testing.assert_array_equal(data["m0"], [500.0, 900.0])
@@ -53,5 +57,5 @@ def test_zipped_sweep_opens_along_design(tmp_path):
 
 
 def test_a_folder_without_grids_is_refused(tmp_path):
-    with pytest.raises(sa.ConfigError, match="no grids.npz"):
+    with pytest.raises(sa.ConfigError, match=r"no grids.npz"):
         sa.open_results(tmp_path)

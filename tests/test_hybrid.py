@@ -38,8 +38,16 @@ def ur5():
 def test_length_factor_one_is_the_identity(ur5):
     for name in ("base_link", "upper_arm_link", "wrist_3_link"):
         scaled = fields.set_field(ur5, f"links.{name}.length", 1.0)
-        for key in ("joint_translation", "tip_translation", "root_com", "link_com", "root_inertia", "link_inertia",
-                    "link_mass", "root_mass"):
+        for key in (
+            "joint_translation",
+            "tip_translation",
+            "root_com",
+            "link_com",
+            "root_inertia",
+            "link_inertia",
+            "link_mass",
+            "root_mass",
+        ):
             np.testing.assert_array_equal(np.asarray(getattr(scaled, key)), np.asarray(getattr(ur5, key)), key)
 
 
@@ -73,15 +81,19 @@ def test_length_factor_scales_one_body(ur5):
 def test_link_field_errors_name_the_field(ur5):
     with pytest.raises(ConfigError, match="'mass' or 'length'"):
         fields.check_field("axis", "links.upper_arm_link.width", ur5)
-    with pytest.raises(ConfigError, match="did you mean .upper_arm_link."):
+    with pytest.raises(ConfigError, match=r"did you mean .upper_arm_link."):
         fields.check_field("axis", "links.upper_arm_lnk.length", ur5)
 
 
 def _tiny_arm_problem(**changes):
     config = dict(
-        name="tiny-ur5-arm", robot=UR5,
-        variables={"links.upper_arm_link.length": [0.7, 1.3], "links.forearm_link.mass": [1.0, 4.0],
-                   "base.mass": [200.0, 600.0]},
+        name="tiny-ur5-arm",
+        robot=UR5,
+        variables={
+            "links.upper_arm_link.length": [0.7, 1.3],
+            "links.forearm_link.mass": [1.0, 4.0],
+            "base.mass": [200.0, 600.0],
+        },
         objectives=["w_avg", "low_disturbance", "low_total_mass"],
         average={"samples": 64, "randomizations": 4, "seed": 0},
     )
@@ -130,7 +142,7 @@ def test_reference_from_population_lies_below_the_front_nadir():
 
 def test_parse_hybrid_checks_its_section():
     assert parse_hybrid("f.yaml", {"population": 12}).population == 12
-    with pytest.raises(ConfigError, match="f.yaml: hybrid.population"):
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.population"):
         parse_hybrid("f.yaml", {"population": 2})
     with pytest.raises(ConfigError, match="populaton"):
         parse_hybrid("f.yaml", {"populaton": 12})
@@ -149,7 +161,9 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     f = result.objectives
     # Every evaluated design is in the box and archived, with the values batch_function gives.
     assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
-    assert result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 3 * 16  # start, then steps, children, densified
+    assert (
+        result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 3 * 16
+    )  # start, then steps, children, densified
     np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
     hv = [c["hypervolume"] for c in result.checkpoints]
     assert np.all(np.diff(hv) >= 0)
@@ -163,7 +177,7 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
 def test_hybrid_gradient_steps_raise_the_hypervolume_of_a_population(planar_hybrid):
     """More generations of the same seed never end lower, and the hybrid beats its own
     space-filling start."""
-    problem, result, _ = planar_hybrid
+    _problem, result, _ = planar_hybrid
     assert result.checkpoints[-1]["hypervolume"] > result.checkpoints[0]["hypervolume"]
 
 
@@ -172,8 +186,7 @@ def test_spatial_optimize_without_reference_writes_a_front_that_batch_function_r
     """A 3-objective spatial problem with no reference point (compiles two spatial programs:
     about a minute on a loaded machine): the reference is chosen and written, pareto.csv holds
     variables then objectives, and its objectives are batch_function() at its designs to 1e-9."""
-    config = _tiny_arm_problem(hybrid={"population": 8, "generations": 2},
-                               baselines={"nsga2": {"population": 8}})
+    config = _tiny_arm_problem(hybrid={"population": 8, "generations": 2}, baselines={"nsga2": {"population": 8}})
     config["robot"] = str(Path(UR5).resolve())
     path = tmp_path / "arm.yaml"
     path.write_text(yaml.safe_dump(config, sort_keys=False))

@@ -26,11 +26,11 @@ def _point_set(m, count, seed, ties=False):
     rng = np.random.default_rng(seed)
     points = rng.uniform(0.0, 1.0, size=(count, m))
     if ties:
-        points[1, 0] = points[2, 0]          # a tie in f1
+        points[1, 0] = points[2, 0]  # a tie in f1
         points[4, m - 1] = points[5, m - 1]  # a tie in the slicing objective
-        points[7] = points[6]                # a duplicate
-        points[8] = points[6] * 0.5          # dominated
-        points[9, 0] = -0.5                  # below the reference in f1
+        points[7] = points[6]  # a duplicate
+        points[8] = points[6] * 0.5  # dominated
+        points[9, 0] = -0.5  # below the reference in f1
     return points
 
 
@@ -78,8 +78,9 @@ def test_gradient_equals_finite_differences(m):
     points[3] = points[2] * 0.9  # dominated: zero gradient
     reference = np.full(m, 0.05)
     gradient = np.asarray(gradient_jit(points, reference))
-    expected = np.array([[_finite_difference(points, reference, i, j, 1e-6) for j in range(m)]
-                         for i in range(points.shape[0])])
+    expected = np.array(
+        [[_finite_difference(points, reference, i, j, 1e-6) for j in range(m)] for i in range(points.shape[0])]
+    )
     assert np.abs(expected).max() > 0.01
     np.testing.assert_allclose(gradient, expected, atol=1e-7 * np.abs(expected).max())
     assert np.all(gradient[3] == 0.0)

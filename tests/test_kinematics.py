@@ -4,7 +4,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 import spacearm as sa
@@ -64,6 +65,7 @@ def test_jacobian_pieces_compose(table1):
 
 def _naive_motion(d, phi_start, joint_rate_fn, t_end):
     """Integrate the base with the naive momentum balance (scipy, tight tolerances)."""
+
     def rhs(t, phi):
         rates = joint_rate_fn(t)
         return np.r_[ref.base_rate(d, phi, rates), rates]
@@ -73,7 +75,7 @@ def _naive_motion(d, phi_start, joint_rate_fn, t_end):
 
 def test_generalized_jacobian_along_momentum_conserving_motion(table1):
     d = ref.design(table1)
-    rates = lambda t: np.array([0.3 * np.cos(t), -0.5 + 0.2 * np.sin(2 * t)])  # noqa: E731
+    rates = lambda t: np.array([0.3 * np.cos(t), -0.5 + 0.2 * np.sin(2 * t)])
     sol = _naive_motion(d, np.radians([0.0, -60.0, 120.0]), rates, 3.0)
     h = 1e-5
     for t in np.linspace(0.2, 2.8, 7):
@@ -104,9 +106,7 @@ def test_infinitely_heavy_base_gives_fixed_base_jacobian(table1):
     J = sa.generalized_jacobian(heavy, np.r_[0.0, phi[1:]])
     np.testing.assert_allclose(J, sa.fixed_base_jacobian(table1, phi[1:]), atol=1e-11)
     l1, l2 = 2.0, 2.0
-    np.testing.assert_allclose(
-        sa.fixed_base_manipulability(table1, phi[1:]), l1 * l2 * abs(np.sin(phi[2])), rtol=1e-14
-    )
+    np.testing.assert_allclose(sa.fixed_base_manipulability(table1, phi[1:]), l1 * l2 * abs(np.sin(phi[2])), rtol=1e-14)
 
 
 def test_singular_postures_zero_and_finite_gradients(table1):

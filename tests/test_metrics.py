@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.kinematics import manipulability
+from spacearm import ConfigError
 from spacearm.analysis import (
     average_manipulability,
     fixed_base_average_manipulability,
@@ -19,7 +19,7 @@ from spacearm.analysis import (
     normalized_areas,
     workspace_map,
 )
-from spacearm import ConfigError
+from spacearm.kinematics import manipulability
 
 from .conftest import random_robot
 
@@ -34,7 +34,7 @@ def _with_b0(robot, ratio):
 
 
 def test_normalized_areas_match_closed_form_and_table2(table1):
-    for ratio, s_m_printed, s_g_printed in zip(RATIOS, PRINTED_S_M, PRINTED_S_G):
+    for ratio, s_m_printed, s_g_printed in zip(RATIOS, PRINTED_S_M, PRINTED_S_G, strict=False):
         robot = _with_b0(table1, ratio)
         s_m, s_g = normalized_areas(robot)
         # Closed form from Table 1: w = 1200 kg, K0 = 1000 b0 / 1200, K1 = (1000*2 + 100*1) / 1200,
@@ -81,7 +81,9 @@ def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1
     # the study of the README; here the two ends of that range.
     assert 1e-11 < errors[0] < 1e-8 and errors[1] < 1e-13, errors
     plain = [
-        abs(float(average_manipulability(robot, phi1_panels=p, phi2_panels=p // 2, order=8, rule="product")) - reference)
+        abs(
+            float(average_manipulability(robot, phi1_panels=p, phi2_panels=p // 2, order=8, rule="product")) - reference
+        )
         for p in (8, 16, 32)
     ]
     orders = [math.log2(plain[i] / plain[i + 1]) for i in range(2)]
@@ -90,16 +92,18 @@ def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1
 
 
 def test_written_out_determinant_matches_generic_kernel():
+    from spacearm.analysis.manipulability_average import _signed_determinant
     from spacearm.kinematics import generalized_jacobian
     from spacearm.models.planar.closed_forms import design_coefficients
-    from spacearm.analysis.manipulability_average import _signed_determinant
 
     rng = np.random.default_rng(5)
     for robot in (sa.umetani1990(), random_robot(rng, 2)):
         phi = rng.uniform(-4, 4, (50, 2))
         det = _signed_determinant(design_coefficients(robot), np.cos(phi[:, 0]), np.sin(phi[:, 0]), phi[:, 1])
         full = np.concatenate([np.zeros((50, 1)), phi], axis=1)
-        np.testing.assert_allclose(np.asarray(det), np.linalg.det(np.asarray(generalized_jacobian(robot, full))), atol=1e-13)
+        np.testing.assert_allclose(
+            np.asarray(det), np.linalg.det(np.asarray(generalized_jacobian(robot, full))), atol=1e-13
+        )
 
 
 def test_elbow_sheets_agree_by_mirror_symmetry(table1):
@@ -122,9 +126,7 @@ def test_ground_robot_limit_matches_closed_form(table1):
 
 
 def test_ground_robot_closed_form_for_unequal_links():
-    robot = random_robot(np.random.default_rng(3), 2).replace(
-        base_mass=np.float64(1e15), base_inertia=np.float64(1e17)
-    )
+    robot = random_robot(np.random.default_rng(3), 2).replace(base_mass=np.float64(1e15), base_inertia=np.float64(1e17))
     l1, l2 = np.asarray(robot.link_length)
     expected = l1 * l2 / (l1 + l2) ** 2 * math.pi / 4
     assert float(average_manipulability(robot)) == pytest.approx(expected, rel=1e-9)
@@ -204,7 +206,7 @@ def test_workspace_map_inverse_kinematics_round_trip(table1):
         assert np.all(np.asarray(ok))
         np.testing.assert_allclose(np.asarray(sa.robot_frame_tip_position(table1, phi_arm)), points, atol=1e-12)
         assert np.all(np.asarray(phi_arm[:, 1]) * (1 if elbow == "down" else -1) >= 0)
-    x, y, w = workspace_map(table1, 41)
+    _x, _y, w = workspace_map(table1, 41)
     assert np.isnan(np.asarray(w)[0, 0])  # the corner (-L, -L) is out of reach
     _, _, ground = workspace_map(table1, 41, ground=True)
     # Ground robot: w/L^2 = l1 l2 |sin phi2| / L^2 is at most 1/4 (at r^2 = l1^2 + l2^2).
@@ -214,8 +216,14 @@ def test_workspace_map_inverse_kinematics_round_trip(table1):
 def test_panel_forms_of_the_determinant_match_the_written_out_one():
     # The adaptive rule's det J* = N / H: trigonometric forms in phi2, rotated to panel
     # centers, and N as a quartic in t = tan((phi2 - c) / 2), against _signed_determinant.
+    from spacearm.analysis.manipulability_average import (
+        _TO_QUARTIC,
+        _fourier_forms,
+        _panel_rotations,
+        _polynomial,
+        _signed_determinant,
+    )
     from spacearm.models.planar.closed_forms import design_coefficients
-    from spacearm.analysis.manipulability_average import _TO_QUARTIC, _fourier_forms, _panel_rotations, _polynomial, _signed_determinant
 
     rng = np.random.default_rng(8)
     centers = np.array([0.3, 2.0, -2.9])
@@ -227,7 +235,9 @@ def test_panel_forms_of_the_determinant_match_the_written_out_one():
         for k, c in enumerate(centers):
             det = np.asarray(_signed_determinant(coeffs, np.cos(phi1), np.sin(phi1), c + offset))
             n_local, h_local = numerator @ rotate_n[:, 5 * k : 5 * k + 5], total @ rotate_h[:, 3 * k : 3 * k + 3]
-            basis = np.stack([np.ones_like(offset), np.cos(offset), np.sin(offset), np.cos(2 * offset), np.sin(2 * offset)], -1)
+            basis = np.stack(
+                [np.ones_like(offset), np.cos(offset), np.sin(offset), np.cos(2 * offset), np.sin(2 * offset)], -1
+            )
             h = np.sum(h_local * basis[:, :3], -1)
             assert np.all(h > 0)
             np.testing.assert_allclose(np.sum(n_local * basis, -1) / h, det, rtol=1e-12, atol=1e-13)
@@ -239,12 +249,15 @@ def test_panel_forms_of_the_determinant_match_the_written_out_one():
 def test_closed_form_edge_crossings_are_the_sign_changes_on_the_strip_edges():
     # phi1 splits of the adaptive rule: besides phi1 = 0, pi, det J* changes sign on
     # phi2 = 0 (pi) exactly at +-arccos of _edge_crossings; compare with a dense scan.
-    from spacearm.models.planar.closed_forms import design_coefficients
     from spacearm.analysis.manipulability_average import _edge_crossings, _signed_determinant
+    from spacearm.models.planar.closed_forms import design_coefficients
 
     rng = np.random.default_rng(9)
     robots = [random_robot(rng, 2).replace(base_attach=np.float64(rng.uniform(0.2, 4.0))) for _ in range(12)]
-    robots += [r.replace(base_mass=np.float64(rng.uniform(20, 60)), base_inertia=np.float64(rng.uniform(2, 20))) for r in robots[:8]]
+    robots += [
+        r.replace(base_mass=np.float64(rng.uniform(20, 60)), base_inertia=np.float64(rng.uniform(2, 20)))
+        for r in robots[:8]
+    ]
     grid = np.linspace(1e-9, math.pi - 1e-9, 200_001)
     found = 0
     for robot in robots:

@@ -2,6 +2,8 @@
 over the naive model of tests/reference.py, momentum conservation, loop reversal,
 convergence, and the singular ends of straight tip paths."""
 
+import itertools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -25,7 +27,7 @@ PHI_FIG3 = np.array([0.0, -60.0, 120.0]) * DEG
 def reference_base_rotation(d, waypoints):
     """Line integral of eq. (5) by scipy.integrate.quad over the naive model, segment by segment."""
     total = 0.0
-    for start, end in zip(waypoints[:-1], waypoints[1:]):
+    for start, end in itertools.pairwise(waypoints):
         step = end - start
 
         def integrand(t, start=start, step=step):
@@ -108,7 +110,7 @@ def test_history_conserves_angular_momentum_and_ends_where_the_integral_does(tab
     seg = postures[: samples + 1]
     rates = central_derivative(seg, 1.0 / samples)
     worst_angular = worst_linear = 0.0
-    for phi, rate in zip(seg[3:-3], rates):
+    for phi, rate in zip(seg[3:-3], rates, strict=False):
         linear, angular = ref.momentum(d, phi, rate)
         worst_angular = max(worst_angular, abs(angular))
         worst_linear = max(worst_linear, np.max(np.abs(linear)))
@@ -188,10 +190,14 @@ def test_straight_path_converges_with_tolerance_and_step(fig3_paths):
     # DOP853 with the error control off (fixed steps): halving the step divides the
     # error by ~2^8 until rounding (fixed-step RK4 is measured in benchmarks/bench_motion.py)
     fixed = [
-        float(np.max(np.abs(
-            motion.straight_tip_path(robot, PHI_FIG3, DIRECTIONS, max_step=step, rtol=1e30).end_posture
-            - converged.end_posture
-        )))
+        float(
+            np.max(
+                np.abs(
+                    motion.straight_tip_path(robot, PHI_FIG3, DIRECTIONS, max_step=step, rtol=1e30).end_posture
+                    - converged.end_posture
+                )
+            )
+        )
         for step in (0.4, 0.2, 0.1)
     ]
     assert fixed[0] > 30 * fixed[1] > 30 * 30 * fixed[2]
@@ -209,7 +215,7 @@ def test_straight_path_history_conserves_momentum(fig3_paths):
     h = float(paths.joint_arc[0]) / (samples - 1)
     rates = central_derivative(postures, h)
     worst = 0.0
-    for phi, rate in zip(postures[3:-3], rates):
+    for phi, rate in zip(postures[3:-3], rates, strict=False):
         _, angular = ref.momentum(d, phi, rate)
         worst = max(worst, abs(angular))
     assert worst < 1e-8  # |I_M dphi_M| ~ 1e2..1e3 kg m^2 per unit arc
@@ -224,9 +230,7 @@ def test_b0_zero_ends_at_the_kinematic_singularity(table1):
 
 
 def test_length_and_joint_limits_end_paths(table1):
-    limited = table1.replace(
-        joint_lower=np.array([-np.pi, 100.0 * DEG]), joint_upper=np.array([np.pi, 140.0 * DEG])
-    )
+    limited = table1.replace(joint_lower=np.array([-np.pi, 100.0 * DEG]), joint_upper=np.array([np.pi, 140.0 * DEG]))
     lengths = np.full(8, 0.05)
     lengths[:4] = np.inf
     paths = motion.straight_tip_path(limited, PHI_FIG3, DIRECTIONS, max_length=lengths)
@@ -298,8 +302,12 @@ def test_one_program_for_every_batch_up_to_the_bucket(fig3_paths):
     assert not [name for name in compiles if "_straight_flat" in name]
     assert one.length.shape == () and many.length.shape == (320,)
     np.testing.assert_allclose(one.length, paths.length[3], rtol=1e-13)
-    np.testing.assert_allclose(np.asarray(many.end_posture).reshape(40, 8, 3), np.broadcast_to(paths.end_posture, (40, 8, 3)),
-                               rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(
+        np.asarray(many.end_posture).reshape(40, 8, 3),
+        np.broadcast_to(paths.end_posture, (40, 8, 3)),
+        rtol=1e-13,
+        atol=1e-13,
+    )
 
 
 def test_straight_path_errors(table1):

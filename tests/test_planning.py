@@ -2,6 +2,8 @@
 of eq. (5) over the naive model of tests/reference.py, a MuJoCo zero-gravity simulation
 of a planned loop, and the reached targets themselves."""
 
+import itertools
+
 import numpy as np
 import pytest
 from scipy.integrate import quad
@@ -20,7 +22,7 @@ PHI_START = np.array([0.0, -60.0, 120.0]) * DEG  # the initial posture of Fig. 3
 def reference_loop_rotation(d, waypoints):
     """Line integral of eq. (5) along the polygon, scipy.integrate.quad over the naive model."""
     total = 0.0
-    for start, end in zip(waypoints[:-1], waypoints[1:]):
+    for start, end in itertools.pairwise(waypoints):
         step = end - start
         if not np.any(step):
             continue
@@ -113,8 +115,12 @@ def test_joint_limits_are_respected_and_the_cache_is_reused():
     assert reorientation._optimize_loops._cache_size() == cache_size
     assert abs(again.rotation + 12.0 * DEG) < 1e-9
     # so are new step counts, rates, bounds and weights (traced, not compiled in)
-    settings = planning.LoopSettings(steps=200, learning_rate=0.04, newton_steps=10, travel_weight=0.01, room_fraction=0.9)
-    tuned = planning.plan_reorientation_details(other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG, settings=settings)
+    settings = planning.LoopSettings(
+        steps=200, learning_rate=0.04, newton_steps=10, travel_weight=0.01, room_fraction=0.9
+    )
+    tuned = planning.plan_reorientation_details(
+        other, PHI_START + np.array([0.3, 0.1, -0.1]), -12.0 * DEG, settings=settings
+    )
     assert reorientation._optimize_loops._cache_size() == cache_size
     assert abs(tuned.rotation + 12.0 * DEG) < 1e-9 and not np.array_equal(tuned.loop, again.loop)
 

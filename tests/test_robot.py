@@ -36,7 +36,7 @@ def test_mapping_and_path_agree(tmp_path):
     path = tmp_path / "r.yaml"
     path.write_text(yaml.safe_dump(TABLE1))
     a, b = sa.load_robot(path), sa.load_robot(TABLE1)
-    for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)):
+    for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=False):
         np.testing.assert_array_equal(x, y)
 
 
@@ -117,9 +117,7 @@ def test_cli_validate_ok_and_invalid(tmp_path, capsys):
 def test_console_script_exit_status(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("links: [1, 2\n")
-    proc = subprocess.run(
-        [sys.executable, "-m", "spacearm.cli", "validate", str(bad)], capture_output=True, text=True
-    )
+    proc = subprocess.run([sys.executable, "-m", "spacearm.cli", "validate", str(bad)], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "malformed YAML" in proc.stderr and "Traceback" not in proc.stderr
 
@@ -129,8 +127,17 @@ def test_fast_validity_check_agrees_with_the_detailed_one(table1):
     from spacearm.models.planar.robot import _check_fields, _looks_valid
 
     rng = np.random.default_rng(3)
-    fields = ["base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b",
-              "joint_lower", "joint_upper"]
+    fields = [
+        "base_mass",
+        "base_inertia",
+        "base_attach",
+        "link_mass",
+        "link_inertia",
+        "link_a",
+        "link_b",
+        "joint_lower",
+        "joint_upper",
+    ]
     bad_values = [0.0, -1.0, np.nan, np.inf, -np.inf, 1e-300, 5.0]
     seen = {True: 0, False: 0}
     for _ in range(400):
@@ -162,10 +169,15 @@ def test_console_script_uses_every_cpu_core_unless_told_otherwise(monkeypatch):
     import os
 
     if count > 1:
-        assert os.environ["XLA_FLAGS"] == f"--xla_cpu_use_thunk_runtime=true --xla_force_host_platform_device_count={count}"
+        assert (
+            os.environ["XLA_FLAGS"]
+            == f"--xla_cpu_use_thunk_runtime=true --xla_force_host_platform_device_count={count}"
+        )
     monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=3")
     assert use_every_cpu_core() == 0 and os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=3"
-    code = "import jax; from spacearm.cli import console_main; import sys; sys.argv = ['spacearm', 'info']; console_main()"
+    code = (
+        "import jax; from spacearm.cli import console_main; import sys; sys.argv = ['spacearm', 'info']; console_main()"
+    )
     monkeypatch.delenv("XLA_FLAGS")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout
     assert f"device_count {max(1, len(os.sched_getaffinity(0)))}" in out

@@ -32,8 +32,12 @@ def test_planar_closed_forms_equal_the_generic_path(n):
         rates = rng.normal(size=(64, n))
         C = sa.base_rate_matrix(robot, phi)
         assert C.shape == (64, 1, n)
-        np.testing.assert_allclose(C[:, 0, :] @ np.ones(n), closed_forms.base_rate(robot, phi, np.ones((64, n))), atol=1e-13)
-        np.testing.assert_allclose(jnp.einsum("bij,bj->bi", C, rates)[:, 0], sa.base_rate(robot, phi, rates), atol=1e-13)
+        np.testing.assert_allclose(
+            C[:, 0, :] @ np.ones(n), closed_forms.base_rate(robot, phi, np.ones((64, n))), atol=1e-13
+        )
+        np.testing.assert_allclose(
+            jnp.einsum("bij,bj->bi", C, rates)[:, 0], sa.base_rate(robot, phi, rates), atol=1e-13
+        )
 
 
 def test_ellipsoid_axes_match_the_planar_ellipse(table1):
@@ -88,5 +92,7 @@ def test_planar_straight_path_field_equals_the_generic_field(n):
         direction = jnp.array([np.cos(angle), np.sin(angle)])
         sign0 = jnp.asarray(rng.choice([-1.0, 1.0]) if n == 2 else 1.0)
         np.testing.assert_allclose(
-            generic_straight_field(robot, direction, sign0)(y), straight_path_field(robot, direction, sign0)(y), atol=1e-13
+            generic_straight_field(robot, direction, sign0)(y),
+            straight_path_field(robot, direction, sign0)(y),
+            atol=1e-13,
         )

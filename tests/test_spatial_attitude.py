@@ -2,6 +2,7 @@
 a converged reference and SciPy, time reversal, batching and the public dispatch."""
 
 import functools
+import itertools
 import os
 
 import jax
@@ -64,17 +65,20 @@ def test_constant_map_is_exact():
     """C_w constant: each segment turns the bus by expm([C dq]x), whatever the step."""
     rng = np.random.default_rng(1)
     C = rng.normal(size=(3, 4))
-    omega_map = lambda q: jnp.broadcast_to(jnp.asarray(C), q.shape[:-1] + C.shape)  # noqa: E731
+    omega_map = lambda q: jnp.broadcast_to(jnp.asarray(C), q.shape[:-1] + C.shape)
     waypoints = rng.normal(size=(5, 4))
     expected = np.eye(3)
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         expected = expected @ Rotation.from_rotvec(C @ (b - a)).as_matrix()
     for order in (4, 6, "rkmk4"):
-        np.testing.assert_allclose(attitude.path_rotation(omega_map, jnp.asarray(waypoints), 1, order), expected, atol=1e-14)
+        np.testing.assert_allclose(
+            attitude.path_rotation(omega_map, jnp.asarray(waypoints), 1, order), expected, atol=1e-14
+        )
 
 
 def test_commuting_loop_turns_by_the_enclosed_area():
     """C_w(q) = e_z (-q2, q1) / 2: a closed polygon turns the bus about z by its signed area."""
+
     def omega_map(q):
         row = 0.5 * jnp.stack([-q[..., 1], q[..., 0]], -1)
         zeros = jnp.zeros_like(row)
@@ -92,18 +96,21 @@ def test_orders_on_a_smooth_map():
     """Halving the step divides the error by 2^order against an adaptive DOP853 reference."""
     rng = np.random.default_rng(3)
     C, B = rng.normal(size=(3, 4)), 0.3 * rng.normal(size=(3, 4, 4))
-    omega_map = lambda q: jnp.asarray(C) + jnp.einsum("ijk,...k->...ij", jnp.asarray(B), jnp.sin(q))  # noqa: E731
+    omega_map = lambda q: jnp.asarray(C) + jnp.einsum("ijk,...k->...ij", jnp.asarray(B), jnp.sin(q))
     waypoints = 0.5 * rng.normal(size=(4, 4))
     R = np.eye(3)
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
+
         def rhs(t, y, a=a, d=b - a):
             w = np.asarray(omega_map(jnp.asarray(a + t * d))) @ d
             return (y.reshape(3, 3) @ np.asarray(attitude.hat(w))).ravel()
 
         R = solve_ivp(rhs, (0.0, 1.0), R.ravel(), method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1].reshape(3, 3)
     for order, expected in ((4, 16.0), (6, 64.0), ("rkmk4", 16.0)):
-        errors = [float(attitude.geodesic_distance(attitude.path_rotation(omega_map, jnp.asarray(waypoints), s, order), R))
-                  for s in (8, 16)]
+        errors = [
+            float(attitude.geodesic_distance(attitude.path_rotation(omega_map, jnp.asarray(waypoints), s, order), R))
+            for s in (8, 16)
+        ]
         assert 0.6 * expected < errors[0] / errors[1] < 1.5 * expected, (order, errors)
 
 
@@ -115,7 +122,9 @@ def test_ur5_against_converged_reference_and_scipy(ur5):
     loops = _loops(rng, 6, 6, size=1.2)
     R0 = _random_rotations(rng, 6)
     R_end, q_end = sa.integrate_joint_path(ur5, loops[:, 0], loops, base_rotation=R0)
-    reference = R0 @ np.asarray(attitude.path_rotation(functools.partial(attitude.bus_rate_map, ur5), jnp.asarray(loops), 128, 6))
+    reference = R0 @ np.asarray(
+        attitude.path_rotation(functools.partial(attitude.bus_rate_map, ur5), jnp.asarray(loops), 128, 6)
+    )
     assert np.max(attitude.geodesic_distance(R_end, reference)) < 1e-10
     np.testing.assert_array_equal(q_end, loops[:, -1])
     assert np.min(attitude.geodesic_distance(R0, R_end)) > 1e-3  # the loops do turn the bus
@@ -123,7 +132,8 @@ def test_ur5_against_converged_reference_and_scipy(ur5):
     # SciPy's DOP853 on the 9 entries of R (independent of the Magnus code), one loop
     omega = jax.jit(functools.partial(attitude.bus_rate_map, ur5))
     R = R0[0]
-    for a, b in zip(loops[0, :-1], loops[0, 1:]):
+    for a, b in zip(loops[0, :-1], loops[0, 1:], strict=False):
+
         def rhs(t, y, a=a, d=b - a):
             w = np.asarray(omega(a + t * d)) @ d
             return (y.reshape(3, 3) @ np.asarray(attitude.hat(w))).ravel()

@@ -57,7 +57,16 @@ def test_reach_command_plans_a_spatial_target(arm, tmp_path, capsys):
 
 def test_reach_command_refuses_a_target_beyond_the_reachable_radius(tmp_path, capsys):
     """Refused before planning (no program compiled; the UR5 answered after 2 minutes before)."""
-    args = ["reach", "configs/ur5-smallsat.yaml", "--from", "0,-60,90,-30,90,0", "--to", "5,0,0", "--out", str(tmp_path)]
+    args = [
+        "reach",
+        "configs/ur5-smallsat.yaml",
+        "--from",
+        "0,-60,90,-30,90,0",
+        "--to",
+        "5,0,0",
+        "--out",
+        str(tmp_path),
+    ]
     with count_compiles() as compiles:
         assert main(args) == 2
     assert sum(compiles.values()) == 0, dict(compiles)

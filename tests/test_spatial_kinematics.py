@@ -78,10 +78,14 @@ def test_bus_attitude_rotates_twists_and_points(ur5):
     J_inertial = np.asarray(sa.generalized_jacobian(ur5, q, base_rotation=R))
     expected = np.concatenate([R @ J_bus[:, :3], R @ J_bus[:, 3:]], axis=1)
     np.testing.assert_allclose(J_inertial, expected, atol=1e-14)
-    np.testing.assert_allclose(sa.tip_position(ur5, q, base_rotation=R), np.einsum("bij,bj->bi", R, sa.tip_position(ur5, q)), atol=1e-14)
+    np.testing.assert_allclose(
+        sa.tip_position(ur5, q, base_rotation=R), np.einsum("bij,bj->bi", R, sa.tip_position(ur5, q)), atol=1e-14
+    )
     # w* does not depend on the attitude
     J_v = J_inertial[:, :3]
-    np.testing.assert_allclose(np.sqrt(np.linalg.det(J_v @ np.swapaxes(J_v, 1, 2))), sa.manipulability(ur5, q), rtol=1e-10)
+    np.testing.assert_allclose(
+        np.sqrt(np.linalg.det(J_v @ np.swapaxes(J_v, 1, 2))), sa.manipulability(ur5, q), rtol=1e-10
+    )
 
 
 def test_zero_momentum_holds_in_pinocchio(ur5):
@@ -94,15 +98,20 @@ def test_zero_momentum_holds_in_pinocchio(ur5):
         text = handle.read()
     com = np.array([-0.2, 0.05, -0.1])
     combined = combined_urdf(
-        text, root_link="base_link", base_mass=500.0, base_com=com,
-        base_inertia=[[80, 1, 0], [1, 95, 2], [0, 2, 120]], mount_xyz=[0.6, 0.1, 0.5], mount_rpy=[0.1, -0.2, 0.3],
+        text,
+        root_link="base_link",
+        base_mass=500.0,
+        base_com=com,
+        base_inertia=[[80, 1, 0], [1, 95, 2], [0, 2, 120]],
+        mount_xyz=[0.6, 0.1, 0.5],
+        mount_rpy=[0.1, -0.2, 0.3],
     )
     model = pin.buildModelFromXML(combined, pin.JointModelFreeFlyer())
     data = model.createData()
     rng = np.random.default_rng(3)
     qs, all_rates = rng.uniform(-3, 3, (8, 6)), rng.normal(size=(8, 6))
     twists = np.asarray(sa.base_rate(ur5, qs, all_rates))  # [v of bus centroid; w], bus axes
-    for joint_q, rates, twist in zip(qs, all_rates, twists):
+    for joint_q, rates, twist in zip(qs, all_rates, twists, strict=False):
         v_origin = twist[:3] - np.cross(twist[3:], com)  # the free-flyer origin is the bus-frame origin
         config = pin.neutral(model)
         config[7:] = joint_q
@@ -127,7 +136,9 @@ def test_fast_paths_equal_the_generic_path(name):
     robot = _load(name)
     rng = np.random.default_rng(4)
     q = rng.uniform(-3, 3, (8, robot.n_joints))
-    np.testing.assert_allclose(kinematics.generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-13)
+    np.testing.assert_allclose(
+        kinematics.generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-13
+    )
     np.testing.assert_allclose(kinematics.generic_tip_position(robot, q), sa.tip_position(robot, q), atol=1e-13)
     np.testing.assert_allclose(kinematics.generic_manipulability(robot, q), sa.manipulability(robot, q), atol=1e-12)
     rates = rng.normal(size=q.shape)
@@ -151,7 +162,9 @@ def test_metrics_extras(ur5):
     H = np.asarray(spatial.arm_inertia(ur5, q))
     np.testing.assert_allclose(H, np.swapaxes(H, 1, 2), atol=1e-14)
     assert np.all(np.linalg.eigvalsh(H) > 0)
-    assert np.all(np.linalg.eigvalsh(np.asarray(spatial.mass_matrix(ur5, q)) - H) > -1e-12)  # a free bus only lightens the arm
+    assert np.all(
+        np.linalg.eigvalsh(np.asarray(spatial.mass_matrix(ur5, q)) - H) > -1e-12
+    )  # a free bus only lightens the arm
     K = J[:, :3] @ np.linalg.inv(H)
     np.testing.assert_allclose(
         spatial.dynamic_manipulability(ur5, q), np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9
@@ -175,7 +188,9 @@ def test_any_leading_batch_shape(ur5):
     big = np.random.default_rng(7).uniform(-3, 3, (primitives.BLOCK + 5, 6))
     J_big = primitives.generalized_jacobian(ur5, big)
     for start in (0, primitives.BLOCK - 4):
-        np.testing.assert_allclose(J_big[start:start + 8], sa.generalized_jacobian(ur5, big[start:start + 8]), atol=1e-15)
+        np.testing.assert_allclose(
+            J_big[start : start + 8], sa.generalized_jacobian(ur5, big[start : start + 8]), atol=1e-15
+        )
 
 
 # The pytree -----------------------------------------------------------------------------
@@ -184,7 +199,10 @@ def test_any_leading_batch_shape(ur5):
 @pytest.mark.slow
 def test_designs_batch_under_vmap_and_differentiate(ur5):
     designs = spatial.stack_spatial_robots(
-        [ur5.replace(base_mass=np.float64(m), mount_xyz=np.array([0.6, 0.1, z])) for m, z in [(300.0, 0.4), (500.0, 0.5), (900.0, 0.7)]]
+        [
+            ur5.replace(base_mass=np.float64(m), mount_xyz=np.array([0.6, 0.1, z]))
+            for m, z in [(300.0, 0.4), (500.0, 0.5), (900.0, 0.7)]
+        ]
     )
     assert designs.batch_shape == (3,)
     q = jnp.array([0.3, -1.1, 0.7, 0.2, -0.5, 1.3])
@@ -255,6 +273,6 @@ def test_ets7_matches_the_bmsd_convention():
     bus_centroid = np.asarray(state.centroid)
     # link centroids: rebuild them from the subtree moments is indirect; compare the system centroid and the tip
     masses = [35.01, 22.45, 21.89, 16.54, 26.0, 18.49]
-    G = (sum(m * c for m, c in zip(masses, centroids))) / (2552.0 + sum(masses))
+    G = (sum(m * c for m, c in zip(masses, centroids, strict=False))) / (2552.0 + sum(masses))
     np.testing.assert_allclose(bus_centroid, G, atol=1e-13)
     np.testing.assert_allclose(np.asarray(state.tip), hand, atol=1e-13)

@@ -88,7 +88,7 @@ def test_random_chains_agree_with_pinocchio(seed, kinds):
     n = len(kinds) if kinds else 6
     robot, combined, names, tip, rng = _random_case(seed, n, kinds)
     qs = rng.uniform(-2.0, 2.0, (3, n))
-    for q, mine in zip(qs, _mine(robot, qs)):
+    for q, mine in zip(qs, _mine(robot, qs), strict=False):
         reference = pinocchio_reference(combined, names, tip, q)
         _compare(reference, mine, f"seed {seed}")
         # C(q): Pinocchio's free-flyer twist is the bus origin's [v; w] (bus pose = identity).
@@ -105,7 +105,7 @@ def test_random_chains_agree_with_idyntree_mixed(seed, kinds):
     n = len(kinds) if kinds else 6
     robot, combined, names, tip, rng = _random_case(seed, n, kinds)
     qs = rng.uniform(-2.0, 2.0, (3, n))
-    for q, mine in zip(qs, _mine(robot, qs)):
+    for q, mine in zip(qs, _mine(robot, qs), strict=False):
         _compare(idyntree_reference(combined, names, tip, q), mine, f"seed {seed}")
 
 
@@ -116,7 +116,7 @@ def test_random_chains_agree_with_mujoco(seed, kinds):
     robot, combined, names, tip, rng = _random_case(seed, n, kinds)
     model = mujoco_model(combined)
     qs = rng.uniform(-2.0, 2.0, (3, n))
-    for q, mine in zip(qs, _mine(robot, qs)):
+    for q, mine in zip(qs, _mine(robot, qs), strict=False):
         _compare(mujoco_reference(model, names, tip, q), mine, f"seed {seed}")
 
 
@@ -170,7 +170,7 @@ def test_real_arms_agree_with_pinocchio(name):
     pytest.importorskip("pinocchio")
     robot, combined, tip = _real_case(name)
     qs = np.random.default_rng(len(name)).uniform(-2.5, 2.5, (3, robot.n_joints))
-    for q, mine in zip(qs, _mine(robot, qs)):
+    for q, mine in zip(qs, _mine(robot, qs), strict=False):
         _compare(pinocchio_reference(combined, robot.joint_names, tip, q), mine, name)
 
 
@@ -181,7 +181,7 @@ def test_real_arms_agree_with_idyntree_and_mujoco(name):
     robot, combined, tip = _real_case(name)
     model = mujoco_model(combined)
     qs = np.random.default_rng(5).uniform(-2.5, 2.5, (3, robot.n_joints))
-    for q, mine in zip(qs, _mine(robot, qs)):
+    for q, mine in zip(qs, _mine(robot, qs), strict=False):
         _compare(idyntree_reference(combined, robot.joint_names, tip, q), mine, f"{name} iDynTree")
         _compare(mujoco_reference(model, robot.joint_names, tip, q), mine, f"{name} MuJoCo")
 
@@ -215,7 +215,7 @@ def test_example_robot_files_agree_with_pinocchio(config):
         mount_rpy=spec["mount"]["rpy"],
     )
     qs = np.random.default_rng(11).uniform(-2.5, 2.5, (3, robot.n_joints))
-    for q, mine in zip(qs, _mine(robot, qs)):
+    for q, mine in zip(qs, _mine(robot, qs), strict=False):
         _compare(pinocchio_reference(combined, robot.joint_names, arm["tip"], q), mine, config)
 
 
@@ -236,7 +236,7 @@ def test_spatial_md_recipe_for_the_ur5_smallsat():
     data = model.createData()
     tip = model.getFrameId("tool0")
     qs = np.random.default_rng(3).uniform(-3, 3, (3, 6))
-    for joint_q, mine in zip(qs, _mine(robot, qs)):
+    for joint_q, mine in zip(qs, _mine(robot, qs), strict=False):
         q = pin.neutral(model)
         q[:3] = X_mount.translation
         q[3:7] = pin.Quaternion(X_mount.rotation).coeffs()

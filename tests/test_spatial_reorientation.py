@@ -1,12 +1,11 @@
 """Spatial reorientation: a closed joint path turns the bus by a target rotation (3 DOF)."""
 
+import dataclasses
 import os
 
 import jax.numpy as jnp
 import numpy as np
 import pytest
-
-import dataclasses
 
 import spacearm as sa
 from spacearm.motion import attitude
@@ -47,7 +46,9 @@ def test_public_dispatch_and_limits(arm3):
     q0 = np.array([0.2, 0.6, -1.1])
     target = np.asarray(attitude.expm(jnp.array([0.0, 0.03, -0.02])))
     tight = arm3.replace(joint_lower=np.array([-0.6, -0.2, -1.9]), joint_upper=np.array([1.0, 1.4, -0.3]))
-    path = sa.plan_reorientation(tight, q0, target, **{k: getattr(FAST, k) for k in ("segments", "seeds", "adam_steps")})
+    path = sa.plan_reorientation(
+        tight, q0, target, **{k: getattr(FAST, k) for k in ("segments", "seeds", "adam_steps")}
+    )
     assert np.all(path >= np.asarray(tight.joint_lower)) and np.all(path <= np.asarray(tight.joint_upper))
     R_end, _ = sa.integrate_joint_path(tight, q0, path, steps=64)
     assert float(attitude.geodesic_distance(target, R_end)) < 1e-9
@@ -62,8 +63,9 @@ def test_rates_weights_and_step_counts_are_traced_not_compiled(arm3):
     q0 = np.array([0.2, 0.6, -1.1])
     target = np.array([0.02, -0.03, 0.04])
     first = plan_spatial_reorientation_details(arm3, q0, target, FAST)
-    other = dataclasses.replace(FAST, adam_steps=25, newton_steps=9, learning_rate=0.03, travel_weight=2e-3,
-                                limit_margin=0.04, tolerance=1e-8)
+    other = dataclasses.replace(
+        FAST, adam_steps=25, newton_steps=9, learning_rate=0.03, travel_weight=2e-3, limit_margin=0.04, tolerance=1e-8
+    )
     with count_compiles() as compiles:
         second = plan_spatial_reorientation_details(arm3, q0, target, other)
     assert compiles["_optimize"] == 0, dict(compiles)

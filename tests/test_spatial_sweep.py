@@ -44,13 +44,17 @@ def test_arm_length_scales_geometry_and_inertias_consistently(ur5):
 
 
 def test_masses_mount_and_bus_fields(ur5):
-    spec = load_sweep(sweep({
-        "ratio": {"field": "arm.mass_ratio", "values": [0.02, 0.1]},
-        "x": {"field": "mount.xyz[0]", "values": [-0.3]},
-        "pitch": {"field": "mount.rpy_deg[1]", "values": [30.0]},
-        "m0": {"field": "base.mass", "values": [800.0]},
-        "I0": {"field": "base.inertia", "values": [2.0]},
-    }))
+    spec = load_sweep(
+        sweep(
+            {
+                "ratio": {"field": "arm.mass_ratio", "values": [0.02, 0.1]},
+                "x": {"field": "mount.xyz[0]", "values": [-0.3]},
+                "pitch": {"field": "mount.rpy_deg[1]", "values": [30.0]},
+                "m0": {"field": "base.mass", "values": [800.0]},
+                "I0": {"field": "base.inertia", "values": [2.0]},
+            }
+        )
+    )
     robot, points = build_designs(spec)
     np.testing.assert_allclose(fields.arm_mass(robot) / robot.base_mass, points["ratio"], rtol=1e-14)
     np.testing.assert_allclose(robot.mount_xyz[:, 0], -0.3, rtol=0)
@@ -60,15 +64,30 @@ def test_masses_mount_and_bus_fields(ur5):
     factor = fields.arm_mass(robot) / fields.arm_mass(ur5)  # every mass and inertia scaled alike
     np.testing.assert_allclose(robot.link_inertia, factor[:, None, None, None] * ur5.link_inertia, rtol=1e-14)
     columns = design_columns(robot, spec.axes)
-    assert {"arm_mass_kg", "arm_over_base", "mount_x_m", "mount_pitch_rad", "base_mass_kg",
-            "base_inertia_trace_kg_m2"} <= set(columns)
+    assert {
+        "arm_mass_kg",
+        "arm_over_base",
+        "mount_x_m",
+        "mount_pitch_rad",
+        "base_mass_kg",
+        "base_inertia_trace_kg_m2",
+    } <= set(columns)
 
-    spec = load_sweep(sweep({"wrist": {"field": "links.wrist_3_link.mass", "values": [1.0, 2.0]},
-                             "root": {"field": "links.base_link.mass", "relative": True, "values": [3.0]}}))
+    spec = load_sweep(
+        sweep(
+            {
+                "wrist": {"field": "links.wrist_3_link.mass", "values": [1.0, 2.0]},
+                "root": {"field": "links.base_link.mass", "relative": True, "values": [3.0]},
+            }
+        )
+    )
     robot, _ = build_designs(spec)
     np.testing.assert_allclose(robot.link_mass[:, 5], [1.0, 2.0], rtol=0)
-    np.testing.assert_allclose(robot.link_inertia[:, 5], np.array([1.0, 2.0])[:, None, None]
-                               * ur5.link_inertia[5] / ur5.link_mass[5], rtol=1e-14)  # radius of gyration kept
+    np.testing.assert_allclose(
+        robot.link_inertia[:, 5],
+        np.array([1.0, 2.0])[:, None, None] * ur5.link_inertia[5] / ur5.link_mass[5],
+        rtol=1e-14,
+    )  # radius of gyration kept
     np.testing.assert_allclose(robot.root_mass, 3.0 * ur5.root_mass, rtol=1e-15)
     assert "wrist_3_link_mass_kg" in design_columns(robot, spec.axes)
 
@@ -81,22 +100,31 @@ def test_fields_are_differentiable(ur5):
     np.testing.assert_allclose(slope, np.pi / 180.0, rtol=1e-15)
 
 
-@pytest.mark.parametrize("axes, metrics, message", [
-    ({"a": {"field": "links.wrist3_link.mass", "values": [1.0]}}, ["posture"], "did you mean 'wrist_3_link'"),
-    ({"a": {"field": "links.tool0.mass", "values": [1.0]}}, ["posture"], "merged into body 'wrist_3_link'"),
-    ({"a": {"field": "mount.xyz[3]", "values": [1.0]}}, ["posture"], "index 3 of mount.xyz out of range"),
-    ({"a": {"field": "mount.xzy[0]", "values": [1.0]}}, ["posture"], "did you mean 'mount.xyz[0]'"),
-    ({"a": {"field": "base.attach", "values": [1.0]}}, ["posture"], "unknown design field 'base.attach'"),
-    ({"a": {"field": "arm.mass", "values": [1.0]}, "b": {"field": "links.base_link.mass", "values": [2.0]}},
-     ["posture"], "both set"),
-    ({"a": {"field": "arm.mass", "values": [1.0]}}, ["wbar"], "'wbar' is a metric of planar robots"),
-    ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "w_avg", "block": 100}], "power of two"),
-    ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "posture", "q_deg": [0, 0]}], "needs 6 joint"),
-    ({"a": {"field": "base.mass", "values": [-1.0]}}, ["posture"], "sweep point 0"),
-    ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "reach_radii", "starts": 0}], "starts"),
-    ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "path_independent_radius", "sample": 64}],
-     "did you mean 'samples'"),
-])
+@pytest.mark.parametrize(
+    "axes, metrics, message",
+    [
+        ({"a": {"field": "links.wrist3_link.mass", "values": [1.0]}}, ["posture"], "did you mean 'wrist_3_link'"),
+        ({"a": {"field": "links.tool0.mass", "values": [1.0]}}, ["posture"], "merged into body 'wrist_3_link'"),
+        ({"a": {"field": "mount.xyz[3]", "values": [1.0]}}, ["posture"], "index 3 of mount.xyz out of range"),
+        ({"a": {"field": "mount.xzy[0]", "values": [1.0]}}, ["posture"], "did you mean 'mount.xyz[0]'"),
+        ({"a": {"field": "base.attach", "values": [1.0]}}, ["posture"], "unknown design field 'base.attach'"),
+        (
+            {"a": {"field": "arm.mass", "values": [1.0]}, "b": {"field": "links.base_link.mass", "values": [2.0]}},
+            ["posture"],
+            "both set",
+        ),
+        ({"a": {"field": "arm.mass", "values": [1.0]}}, ["wbar"], "'wbar' is a metric of planar robots"),
+        ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "w_avg", "block": 100}], "power of two"),
+        ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "posture", "q_deg": [0, 0]}], "needs 6 joint"),
+        ({"a": {"field": "base.mass", "values": [-1.0]}}, ["posture"], "sweep point 0"),
+        ({"a": {"field": "arm.mass", "values": [1.0]}}, [{"name": "reach_radii", "starts": 0}], "starts"),
+        (
+            {"a": {"field": "arm.mass", "values": [1.0]}},
+            [{"name": "path_independent_radius", "sample": 64}],
+            "did you mean 'samples'",
+        ),
+    ],
+)
 def test_bad_spatial_sweeps_are_refused(tmp_path, axes, metrics, message):
     path = tmp_path / "bad.yaml"
     path.write_text(yaml.safe_dump(sweep(axes, metrics)))
@@ -114,8 +142,16 @@ def test_example_files_validate():
 
 
 def test_spatial_sweep_runs_in_chunks(tmp_path):
-    spec = load_sweep(sweep({"x": {"field": "mount.xyz[0]", "values": [0.0, 0.2, 0.4]},
-                             "s": {"field": "arm.length", "values": [1.0, 1.5]}}, robot=ARM3, chunk_size=4))
+    spec = load_sweep(
+        sweep(
+            {
+                "x": {"field": "mount.xyz[0]", "values": [0.0, 0.2, 0.4]},
+                "s": {"field": "arm.length", "values": [1.0, 1.5]},
+            },
+            robot=ARM3,
+            chunk_size=4,
+        )
+    )
     result = run_sweep(spec, tmp_path / "out", progress=False)
     table = result.table
     assert list(table["mount_x_m"]) == [0.0, 0.0, 0.2, 0.2, 0.4, 0.4]

@@ -58,11 +58,17 @@ def test_fixed_and_locked_side_branches_are_merged_with_their_spatial_inertia():
     assert chain.body_mass[1] == pytest.approx(5.5)
     expected = (2.0 * np.array([0.1, 0, 0]) + 3.0 * np.array([0.1, 0.2, 0]) + 0.5 * np.array([0.15, 0, 0.3])) / 5.5
     np.testing.assert_allclose(chain.body_com[1], expected, atol=1e-15)
+
     # inertia about the merged centroid: parallel-axis sums (all three are isotropic tensors)
     def about(m, i, c):
         d = c - expected
         return i * np.eye(3) + m * (d @ d * np.eye(3) - np.outer(d, d))
-    total = about(2.0, 0.1, np.array([0.1, 0, 0])) + about(3.0, 0.02, np.array([0.1, 0.2, 0])) + about(0.5, 0.001, np.array([0.15, 0, 0.3]))
+
+    total = (
+        about(2.0, 0.1, np.array([0.1, 0, 0]))
+        + about(3.0, 0.02, np.array([0.1, 0.2, 0]))
+        + about(0.5, 0.001, np.array([0.15, 0, 0.3]))
+    )
     np.testing.assert_allclose(chain.body_inertia[1], total, atol=1e-14)
 
 
@@ -74,13 +80,21 @@ def test_zero_mass_links_are_taken_as_written():
 
 
 def test_links_above_the_root_are_dropped():
-    text = _urdf('<link name="world"/>', '<joint name="w" type="fixed"><parent link="world"/><child link="base"/></joint>')
+    text = _urdf(
+        '<link name="world"/>', '<joint name="w" type="fixed"><parent link="world"/><child link="base"/></joint>'
+    )
     assert _read(text).body_links[0] == ("base",)
 
 
 def test_the_triangle_inequality_opt_in():
-    bad = _urdf().replace(INERTIAL.format(m=2.0, i=0.1), '<inertial><mass value="2"/><inertia ixx="0.1" iyy="0.1" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial>')
-    with pytest.raises(sa.ConfigError, match=r"arm.urdf: link 'l1': inertial inertia: violates the triangle inequality.*0\.1, 0\.1, 0\.5"):
+    bad = _urdf().replace(
+        INERTIAL.format(m=2.0, i=0.1),
+        '<inertial><mass value="2"/><inertia ixx="0.1" iyy="0.1" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial>',
+    )
+    with pytest.raises(
+        sa.ConfigError,
+        match=r"arm.urdf: link 'l1': inertial inertia: violates the triangle inequality.*0\.1, 0\.1, 0\.5",
+    ):
         _read(bad)
     assert _read(bad, inertia_as_written=True).body_mass[1] == 2.0
 
@@ -88,15 +102,30 @@ def test_the_triangle_inequality_opt_in():
 BAD_URDFS = {
     "negative mass": (_urdf(mass=-1.0), r"arm.urdf: link 'l1': inertial mass: must not be negative"),
     "not positive definite": (_urdf(inertia=-0.1), r"arm.urdf: link 'l1': inertial inertia: must be positive definite"),
-    "non-finite": (_urdf().replace('xyz="0.5 0 0"', 'xyz="0.5 nan 0"'), r"arm.urdf: joint 'j2': origin xyz: must be finite"),
+    "non-finite": (
+        _urdf().replace('xyz="0.5 0 0"', 'xyz="0.5 nan 0"'),
+        r"arm.urdf: joint 'j2': origin xyz: must be finite",
+    ),
     "zero axis": (_urdf(axis="0 0 0"), r"arm.urdf: joint 'j1': axis xyz: must not be zero"),
     "floating": (_urdf(j1_type="floating"), r"arm.urdf: joint 'j1': type 'floating' is not supported"),
     "planar": (_urdf(j1_type="planar"), r"arm.urdf: joint 'j1': type 'planar' is not supported"),
-    "unknown type": (_urdf(j1_type="revolut"), r"arm.urdf: joint 'j1': unknown type 'revolut' \(did you mean 'revolute'\?\)"),
-    "missing parent": (_urdf().replace('<parent link="l1"/><child link="l2"/>', '<parent link="l7"/><child link="l2"/>'), r"arm.urdf: joint 'j2': parent link 'l7' is not defined"),
-    "missing child": (_urdf().replace('<child link="tool"/>', '<child link="tol"/>'), r"arm.urdf: joint 'tool_joint': child link 'tol' is not defined \(did you mean 'tool'\?\)"),
+    "unknown type": (
+        _urdf(j1_type="revolut"),
+        r"arm.urdf: joint 'j1': unknown type 'revolut' \(did you mean 'revolute'\?\)",
+    ),
+    "missing parent": (
+        _urdf().replace('<parent link="l1"/><child link="l2"/>', '<parent link="l7"/><child link="l2"/>'),
+        r"arm.urdf: joint 'j2': parent link 'l7' is not defined",
+    ),
+    "missing child": (
+        _urdf().replace('<child link="tool"/>', '<child link="tol"/>'),
+        r"arm.urdf: joint 'tool_joint': child link 'tol' is not defined \(did you mean 'tool'\?\)",
+    ),
     "malformed": (_urdf()[:-20], r"arm.urdf: malformed XML at line \d+, column \d+"),
-    "bad number": (_urdf().replace('xyz="0.5 0 0"', 'xyz="0.5 zero 0"'), r"arm.urdf: joint 'j2': origin xyz: expected 3 numbers"),
+    "bad number": (
+        _urdf().replace('xyz="0.5 0 0"', 'xyz="0.5 zero 0"'),
+        r"arm.urdf: joint 'j2': origin xyz: expected 3 numbers",
+    ),
 }
 
 
@@ -108,7 +137,9 @@ def test_bad_urdfs_get_one_message_naming_file_and_element(case):
 
 
 def test_missing_root_tip_and_unlocked_side_joints():
-    with pytest.raises(sa.ConfigError, match=r"arm.urdf: root_link: link 'bas' is not in the URDF \(did you mean 'base'\?\)"):
+    with pytest.raises(
+        sa.ConfigError, match=r"arm.urdf: root_link: link 'bas' is not in the URDF \(did you mean 'base'\?\)"
+    ):
         _read(_urdf(), root_link="bas")
     with pytest.raises(sa.ConfigError, match=r"arm.urdf: tip: link 'hand' is not in the URDF"):
         _read(_urdf(), tip="hand")
@@ -118,9 +149,14 @@ def test_missing_root_tip_and_unlocked_side_joints():
         f'<link name="finger">{INERTIAL.format(m=0.5, i=0.001)}</link>',
         '<joint name="finger_joint" type="revolute"><parent link="l2"/><child link="finger"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>',
     )
-    with pytest.raises(sa.ConfigError, match=r"joint 'finger_joint' \(revolute\) is off the path .* not locked; add it to arm.lock_joints"):
+    with pytest.raises(
+        sa.ConfigError,
+        match=r"joint 'finger_joint' \(revolute\) is off the path .* not locked; add it to arm.lock_joints",
+    ):
         _read(side)
-    with pytest.raises(sa.ConfigError, match=r"lock_joints: unknown joint 'fingerjoint' \(did you mean 'finger_joint'\?\)"):
+    with pytest.raises(
+        sa.ConfigError, match=r"lock_joints: unknown joint 'fingerjoint' \(did you mean 'finger_joint'\?\)"
+    ):
         _read(side, lock_joints={"fingerjoint": 0.0})
     # locking a joint on the path merges it too
     assert _read(side, lock_joints={"finger_joint": 0.1, "j2": 0.3}).joint_names == ("j1",)
@@ -162,12 +198,18 @@ def test_robot_file_loads_through_load_robot(tmp_path):
         ({"arm__tipp": "x"}, r"robot.yaml: arm: unknown key 'tipp' \(did you mean 'tip'\?\)"),
         ({"base__mas": 1.0}, r"robot.yaml: base: unknown key 'mas' \(did you mean 'mass'\?\)"),
         ({"mount__rpyy": [0, 0, 0]}, r"robot.yaml: mount: unknown key 'rpyy' \(did you mean 'rpy'\?\)"),
-        ({"base__inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 3]]}, r"robot.yaml: base.inertia: violates the triangle inequality"),
+        (
+            {"base__inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 3]]},
+            r"robot.yaml: base.inertia: violates the triangle inequality",
+        ),
         ({"base__inertia": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]}, r"robot.yaml: base.inertia: must be symmetric"),
         ({"base__mass": -5.0}, r"robot.yaml: base.mass: must be positive"),
         ({"base__com": [0, 0]}, r"robot.yaml: base.com: must be numbers of shape \[3\]"),
         ({"arm__urdf": "nowhere.urdf"}, r"nowhere.urdf: no such URDF file"),
-        ({"arm__urdf": {"package": "no-such-package-xyz", "path": "a.urdf"}}, r"robot.yaml: arm.urdf.package: 'no-such-package-xyz' is not installed"),
+        (
+            {"arm__urdf": {"package": "no-such-package-xyz", "path": "a.urdf"}},
+            r"robot.yaml: arm.urdf.package: 'no-such-package-xyz' is not installed",
+        ),
         ({"arm__lock_joints": {"jj": 0.0}}, r"robot.yaml: arm.lock_joints: \(in .*arm.urdf\) unknown joint 'jj'"),
         ({"arm__inertia_as_written": "yes"}, r"robot.yaml: arm.inertia_as_written: must be true or false"),
     ],
@@ -183,7 +225,7 @@ def test_package_urdfs_are_located_through_importlib_metadata():
     except sa.ConfigError:
         pytest.skip("example-robot-data is not installed")
     assert os.path.isfile(path)
-    with pytest.raises(sa.ConfigError, match="package 'example-robot-data' has no file 'robots/nothing.urdf'"):
+    with pytest.raises(sa.ConfigError, match=r"package 'example-robot-data' has no file 'robots/nothing.urdf'"):
         spatial.locate_package_file("x", "example-robot-data", "robots/nothing.urdf")
 
 
@@ -200,7 +242,9 @@ def test_ets7_needs_the_opt_in_for_its_published_inertias(tmp_path):
     with open(os.path.join(CONFIGS, "ets7.yaml"), encoding="utf-8") as handle:
         config = yaml.safe_load(handle)
     config["arm"]["inertia_as_written"] = False
-    with pytest.raises(sa.ConfigError, match=r"ets7.urdf: link 'link2': inertial inertia: violates the triangle inequality"):
+    with pytest.raises(
+        sa.ConfigError, match=r"ets7.urdf: link 'link2': inertial inertia: violates the triangle inequality"
+    ):
         spatial.load_spatial_robot(config, base_dir=CONFIGS)
 
 
@@ -233,5 +277,7 @@ def test_batched_validation_is_vectorized_and_names_the_design():
     spatial.SpatialRobot(**batch, joint_kinds=robot.joint_kinds)  # valid: the one vectorized pass
     batch["link_inertia"] = batch["link_inertia"].copy()
     batch["link_inertia"][17, 2] = -np.eye(3)
-    with pytest.raises(sa.ConfigError, match=r"design \(17,\): joints\[2\]: link_inertia: must be positive semidefinite"):
+    with pytest.raises(
+        sa.ConfigError, match=r"design \(17,\): joints\[2\]: link_inertia: must be positive semidefinite"
+    ):
         spatial.SpatialRobot(**batch, joint_kinds=robot.joint_kinds)

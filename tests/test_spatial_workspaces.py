@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import singularities, spatial_workspaces as sw, workspaces
+from spacearm.analysis import singularities, workspaces
+from spacearm.analysis import spatial_workspaces as sw
 
 from .conftest import random_robot
 
@@ -24,7 +25,9 @@ def test_reachable_radius_gradient_is_the_envelope():
     grad = jax.grad(lambda r: sw.reachable_radii(r).outer)(robot)
     exact = jax.grad(lambda r: workspaces.maximum_reachable_radius(r))(robot)
     for field in ("base_mass", "base_attach", "link_mass", "link_a", "link_b"):
-        np.testing.assert_allclose(np.asarray(getattr(grad, field)), np.asarray(getattr(exact, field)), rtol=1e-7, atol=1e-12)
+        np.testing.assert_allclose(
+            np.asarray(getattr(grad, field)), np.asarray(getattr(exact, field)), rtol=1e-7, atol=1e-12
+        )
 
 
 def test_path_independent_radius_dispatches_by_family():
@@ -106,7 +109,9 @@ def test_path_independent_radius_gradient_follows_the_moving_singular_set(seed):
     # branches of |K0 -+ ...| (kinematic_singularity_radius), differentiable in closed form.
     exact = jax.grad(workspaces.kinematic_singularity_radius)(robot)
     for field in ("base_mass", "base_attach", "link_mass", "link_a", "link_b"):
-        np.testing.assert_allclose(np.asarray(getattr(grad, field)), np.asarray(getattr(exact, field)), rtol=1e-6, atol=1e-10)
+        np.testing.assert_allclose(
+            np.asarray(getattr(grad, field)), np.asarray(getattr(exact, field)), rtol=1e-6, atol=1e-10
+        )
 
 
 def test_path_independent_radius_gradient_spatial_against_finite_differences():
@@ -120,7 +125,8 @@ def test_path_independent_radius_gradient_spatial_against_finite_differences():
 
     grad = jax.grad(radius)(robot)
     for field, index, h in (("base_mass", (), 0.125), ("mount_xyz", (2,), 2.5e-4)):
-        def shifted(delta):
+
+        def shifted(delta, field=field, index=index):
             return robot.replace(**{field: jnp.asarray(getattr(robot, field)).at[index].add(delta)})
 
         fd = (float(radius(shifted(h))) - float(radius(shifted(-h)))) / (2 * h)

@@ -44,12 +44,14 @@ def write(tmp_path, config, name="s.yaml"):
 
 
 def test_designs_follow_the_axes():
-    spec = load_sweep(sweep_config(
-        axes={
-            "l1_over_L": {"field": "arm.length_split", "values": [0.25, 0.5, 0.75]},
-            "ratio": {"field": "arm.mass_ratio", "values": [0.1, 0.4]},
-        }
-    ))
+    spec = load_sweep(
+        sweep_config(
+            axes={
+                "l1_over_L": {"field": "arm.length_split", "values": [0.25, 0.5, 0.75]},
+                "ratio": {"field": "arm.mass_ratio", "values": [0.1, 0.4]},
+            }
+        )
+    )
     robot, points = build_designs(spec)
     assert robot.batch_shape == (6,)
     np.testing.assert_allclose(robot.reach, 4.0, rtol=1e-15)  # L held fixed
@@ -63,14 +65,16 @@ def test_designs_follow_the_axes():
 
 
 def test_zip_and_ranges():
-    spec = load_sweep(sweep_config(
-        combine="zip",
-        axes={
-            "m0": {"field": "base.mass", "range": {"start": 500, "stop": 1500, "num": 3}},
-            "l2": {"field": "links[1].length", "range": {"start": 1.0, "stop": 3.0, "step": 1.0}},
-        },
-    ))
-    robot, points = build_designs(spec)
+    spec = load_sweep(
+        sweep_config(
+            combine="zip",
+            axes={
+                "m0": {"field": "base.mass", "range": {"start": 500, "stop": 1500, "num": 3}},
+                "l2": {"field": "links[1].length", "range": {"start": 1.0, "stop": 3.0, "step": 1.0}},
+            },
+        )
+    )
+    robot, _points = build_designs(spec)
     np.testing.assert_allclose(robot.base_mass, [500, 1000, 1500])
     np.testing.assert_allclose(np.asarray(robot.link_length)[:, 1], [1.0, 2.0, 3.0])
 
@@ -120,8 +124,12 @@ def test_workspace_areas_metric(tmp_path):
     for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
         areas = ws.normalized_workspace_areas(robot)
-        for column, key in [("S_fixed_vehicle", "fixed_vehicle"), ("S_attitude_constraint", "attitude_constraint"),
-                            ("S_maximum_reachable", "maximum_reachable"), ("S_guaranteed", "guaranteed")]:
+        for column, key in [
+            ("S_fixed_vehicle", "fixed_vehicle"),
+            ("S_attitude_constraint", "attitude_constraint"),
+            ("S_maximum_reachable", "maximum_reachable"),
+            ("S_guaranteed", "guaranteed"),
+        ]:
             np.testing.assert_allclose(table[column][i], float(areas[key]), rtol=1e-14)
         np.testing.assert_allclose(table["S_guaranteed"][i], table["S_G"][i], rtol=1e-14)
         assert table["eq9_holds"][i] == float(ws.attachment_condition(robot))
@@ -134,10 +142,12 @@ def test_straight_path_area_metric(tmp_path):
     from spacearm import analysis as ws
 
     phi_deg = [0.0, -60.0, 120.0]
-    spec = load_sweep(sweep_config(
-        axes={"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.5, 1.5]}},
-        metrics=[{"name": "straight_path_area", "phi_start_deg": phi_deg, "n_directions": 24}],
-    ))
+    spec = load_sweep(
+        sweep_config(
+            axes={"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.5, 1.5]}},
+            metrics=[{"name": "straight_path_area", "phi_start_deg": phi_deg, "n_directions": 24}],
+        )
+    )
     table = run_sweep(spec, tmp_path / "out", progress=False).table
     for i, ratio in enumerate([0.5, 1.5]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
@@ -150,10 +160,15 @@ def test_straight_path_area_metric(tmp_path):
 
 def test_axes_apply_in_a_fixed_order():
     """arm.mass_ratio is taken against the final base mass, whichever axis the file lists first."""
-    axes = {"ratio": {"field": "arm.mass_ratio", "values": [0.2]}, "m0": {"field": "base.mass", "values": [500.0, 2000.0]}}
+    axes = {
+        "ratio": {"field": "arm.mass_ratio", "values": [0.2]},
+        "m0": {"field": "base.mass", "values": [500.0, 2000.0]},
+    }
     robot, _ = build_designs(load_sweep(sweep_config(axes=axes)))
     reordered, _ = build_designs(load_sweep(sweep_config(axes=dict(reversed(list(axes.items()))))))
-    np.testing.assert_allclose(np.asarray(robot.link_mass).sum(axis=1) / np.asarray(robot.base_mass), [0.2, 0.2], rtol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(robot.link_mass).sum(axis=1) / np.asarray(robot.base_mass), [0.2, 0.2], rtol=1e-15
+    )
     np.testing.assert_allclose(np.sort(np.asarray(reordered.link_mass).sum(axis=1)), [100.0, 400.0], rtol=1e-15)
 
 
@@ -177,7 +192,10 @@ def test_manifest_git_state_is_taken_before_the_run_writes(tmp_path, monkeypatch
 
 def test_reordered_axes_never_reuse_chunks(tmp_path):
     """The axis order decides which design is in which row, so it is part of the resume key."""
-    axes = {"r": {"field": "base.attach", "values": [0.0, 1.0, 2.0]}, "b": {"field": "base.mass", "values": [500.0, 900.0]}}
+    axes = {
+        "r": {"field": "base.attach", "values": [0.0, 1.0, 2.0]},
+        "b": {"field": "base.mass", "values": [500.0, 900.0]},
+    }
     spec = load_sweep(sweep_config(axes=axes, metrics=["S_G"]))
     with pytest.raises(KeyboardInterrupt):
         run_sweep(spec, tmp_path / "o", progress=False, stop_after_chunks=2)
@@ -197,7 +215,9 @@ def test_cleanup_touches_only_what_a_sweep_wrote(tmp_path):
     (out / ".partial-mine" / "important.txt").write_text("keep")
     for name in ("notes.txt", "data.csv", "heatmap_x.png"):
         (out / name).write_text("user data")
-    (out / "manifest.json").write_text(json.dumps({"name": "my-dataset", "files": ["notes.txt", "data.csv", "heatmap_x.png"]}))
+    (out / "manifest.json").write_text(
+        json.dumps({"name": "my-dataset", "files": ["notes.txt", "data.csv", "heatmap_x.png"]})
+    )
     run_sweep(load_sweep(sweep_config(metrics=["S_M"])), out, progress=False)
     for name in ("notes.txt", "data.csv", "heatmap_x.png", ".partial-mine/important.txt"):
         assert (out / name).exists(), name
@@ -234,13 +254,21 @@ def test_resume_ignores_chunks_of_another_chunk_size_and_damaged_chunks(tmp_path
 
 
 def test_rerun_into_the_same_folder_removes_its_stale_figures(tmp_path):
-    axes = {"b0": {"field": "base.attach", "values": [0.0, 1.0]}, "m0": {"field": "base.mass", "values": [500.0, 900.0]}}
-    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M", "S_G"])), tmp_path / "o", progress=False,
-              outputs=(write_figures,))
+    axes = {
+        "b0": {"field": "base.attach", "values": [0.0, 1.0]},
+        "m0": {"field": "base.mass", "values": [500.0, 900.0]},
+    }
+    run_sweep(
+        load_sweep(sweep_config(axes=axes, metrics=["S_M", "S_G"])),
+        tmp_path / "o",
+        progress=False,
+        outputs=(write_figures,),
+    )
     assert (tmp_path / "o" / "heatmap_S_G.png").exists()
     (tmp_path / "o" / "mine.txt").write_text("a user's file")
-    run_sweep(load_sweep(sweep_config(axes=axes, metrics=["S_M"])), tmp_path / "o", progress=False,
-              outputs=(write_figures,))
+    run_sweep(
+        load_sweep(sweep_config(axes=axes, metrics=["S_M"])), tmp_path / "o", progress=False, outputs=(write_figures,)
+    )
     assert not (tmp_path / "o" / "heatmap_S_G.png").exists()
     assert (tmp_path / "o" / "heatmap_S_M.png").exists() and (tmp_path / "o" / "mine.txt").exists()
 
@@ -250,12 +278,21 @@ def test_rerun_into_the_same_folder_removes_its_stale_figures(tmp_path):
     [
         (dict(axes={}), r"axes: must be a non-empty mapping"),
         (dict(axes={"x": {"field": "base.attach", "values": []}}), r"axes\.x\.values: is empty"),
-        (dict(axes={"x": {"field": "base.atach", "values": [1]}}), r"unknown design field 'base.atach' \(did you mean 'base.attach'\?\)"),
-        (dict(axes={"x": {"field": "base.attach", "valeus": [1]}}), r"unknown key 'valeus' \(did you mean 'values'\?\)"),
+        (
+            dict(axes={"x": {"field": "base.atach", "values": [1]}}),
+            r"unknown design field 'base.atach' \(did you mean 'base.attach'\?\)",
+        ),
+        (
+            dict(axes={"x": {"field": "base.attach", "valeus": [1]}}),
+            r"unknown key 'valeus' \(did you mean 'values'\?\)",
+        ),
         (dict(metircs=["radii"]), r"unknown key 'metircs' \(did you mean 'metrics'\?\)"),
         (dict(metrics=["wbra"]), r"unknown metric 'wbra' \(did you mean 'wbar'\?\)"),
         (dict(robot="nowhere.yaml"), r"robot: no such robot file 'nowhere.yaml'"),
-        (dict(axes={"x": {"field": "base.attach", "values": ["far"]}}), r"axes\.x\.values\[0\]: must be a finite number"),
+        (
+            dict(axes={"x": {"field": "base.attach", "values": ["far"]}}),
+            r"axes\.x\.values\[0\]: must be a finite number",
+        ),
         (dict(axes={"x": {"field": "links[2].mass", "values": [1.0]}}), r"link index 2 out of range"),
         (dict(chunk_size=0), r"chunk_size: must be a positive integer"),
         (dict(metrics=[{"name": "wbar", "phi1_panels": 7}]), r"metrics\[0\]\.phi1_panels: must be even"),
@@ -271,29 +308,69 @@ def test_rerun_into_the_same_folder_removes_its_stale_figures(tmp_path):
             r"axes\.r \(base\.attach\) and axes\.q \(base\.attach\) both set base\.attach",
         ),
         (
-            dict(axes={"i0": {"field": "links[0].inertia", "values": [9.0]}, "m": {"field": "arm.mass", "values": [300.0]}}),
+            dict(
+                axes={
+                    "i0": {"field": "links[0].inertia", "values": [9.0]},
+                    "m": {"field": "arm.mass", "values": [300.0]},
+                }
+            ),
             r"both set links\[0\]\.inertia; give each design number one axis",
         ),
-        (dict(axes={"b": {"field": "base.attach", "range": {"start": 0.0, "stop": 1.0, "step": 1e-300}}}),
-         r"axes\.b\.range\.step: 1e-300 from 0 to 1 gives too many values"),
-        (dict(axes={"b": {"field": "base.attach", "range": {"start": -1e308, "stop": 1e308, "num": 3}}}),
-         r"axes\.b\.range\.start: must be at most 1e\+15 in magnitude, got -1e\+308"),
-        (dict(report="table2", metrics=[{"name": "wbar", "measure": "joint"}, "S_M", "S_G"],
-              axes={"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.0]}}),
-         r"report: table2 compares the area average of eq\. 12; drop wbar's measure: joint"),
-        (dict(report="table2", metrics=["S_M", "S_G"]), r"report: table2 needs the metrics wbar, S_M and S_G \(missing: wbar\)"),
-        (dict(report="table2", metrics=["wbar", "S_M", "S_G"], axes={"b0": {"field": "base.attach", "values": [0.0]}}),
-         r"report: table2 needs exactly one axis, b0_over_B0"),
-        (dict(report="table2", metrics=["wbar", "S_M", "S_G"], robot={**ROBOT_MAPPING, "base": {**ROBOT_MAPPING["base"], "mass": 900.0}}),
-         r"report: table2 compares with the paper's Table 1 robot; this robot's base_mass differs"),
-        (dict(metrics=[{"name": "straight_path_area", "phi_start_deg": [0, 1]}]),
-         r"metrics\[0\]\.phi_start_deg: needs 3 angles \[phi0, phi1, \.\.\., phi2\] for a 2-link robot, got 2"),
-        (dict(robot=THREE_LINKS, metrics=["wbar"]), r"metrics\[0\]: wbar's area average \(eq\. 12\) is defined for 2 links, the robot has 3"),
-        (dict(axes={"b": {"field": "base.attach", "range": {"start": 0.0, "stop": 1.0, "num": 10**12}}}),
-         r"axes\.b\.range: 1,000,000,000,000 designs \(num: 1000000000000\) need about [\d,]+ GiB"),
-        (dict(axes={a: {"field": f, "range": {"start": 0.1, "stop": 1.0, "num": 10**4}} for a, f in
-                    (("x", "base.attach"), ("y", "arm.mass_ratio"), ("z", "arm.length_split"))}),
-         r"axes: 1,000,000,000,000 designs \(10000 x 10000 x 10000\) need about"),
+        (
+            dict(axes={"b": {"field": "base.attach", "range": {"start": 0.0, "stop": 1.0, "step": 1e-300}}}),
+            r"axes\.b\.range\.step: 1e-300 from 0 to 1 gives too many values",
+        ),
+        (
+            dict(axes={"b": {"field": "base.attach", "range": {"start": -1e308, "stop": 1e308, "num": 3}}}),
+            r"axes\.b\.range\.start: must be at most 1e\+15 in magnitude, got -1e\+308",
+        ),
+        (
+            dict(
+                report="table2",
+                metrics=[{"name": "wbar", "measure": "joint"}, "S_M", "S_G"],
+                axes={"b0_over_B0": {"field": "base.attach", "relative": True, "values": [0.0]}},
+            ),
+            r"report: table2 compares the area average of eq\. 12; drop wbar's measure: joint",
+        ),
+        (
+            dict(report="table2", metrics=["S_M", "S_G"]),
+            r"report: table2 needs the metrics wbar, S_M and S_G \(missing: wbar\)",
+        ),
+        (
+            dict(
+                report="table2", metrics=["wbar", "S_M", "S_G"], axes={"b0": {"field": "base.attach", "values": [0.0]}}
+            ),
+            r"report: table2 needs exactly one axis, b0_over_B0",
+        ),
+        (
+            dict(
+                report="table2",
+                metrics=["wbar", "S_M", "S_G"],
+                robot={**ROBOT_MAPPING, "base": {**ROBOT_MAPPING["base"], "mass": 900.0}},
+            ),
+            r"report: table2 compares with the paper's Table 1 robot; this robot's base_mass differs",
+        ),
+        (
+            dict(metrics=[{"name": "straight_path_area", "phi_start_deg": [0, 1]}]),
+            r"metrics\[0\]\.phi_start_deg: needs 3 angles \[phi0, phi1, \.\.\., phi2\] for a 2-link robot, got 2",
+        ),
+        (
+            dict(robot=THREE_LINKS, metrics=["wbar"]),
+            r"metrics\[0\]: wbar's area average \(eq\. 12\) is defined for 2 links, the robot has 3",
+        ),
+        (
+            dict(axes={"b": {"field": "base.attach", "range": {"start": 0.0, "stop": 1.0, "num": 10**12}}}),
+            r"axes\.b\.range: 1,000,000,000,000 designs \(num: 1000000000000\) need about [\d,]+ GiB",
+        ),
+        (
+            dict(
+                axes={
+                    a: {"field": f, "range": {"start": 0.1, "stop": 1.0, "num": 10**4}}
+                    for a, f in (("x", "base.attach"), ("y", "arm.mass_ratio"), ("z", "arm.length_split"))
+                }
+            ),
+            r"axes: 1,000,000,000,000 designs \(10000 x 10000 x 10000\) need about",
+        ),
     ],
 )
 def test_invalid_sweeps_name_the_problem(change, message):
@@ -327,8 +404,10 @@ def test_override_null_of_a_missing_key_changes_nothing():
 
 
 def test_override_null_removes_a_key_and_ranges_may_descend():
-    spec = load_sweep(sweep_config(), overrides=[
-        "axes.b0_over_B0.values=null", "axes.b0_over_B0.range={start: 2.0, stop: 1.0, step: -0.5}"])
+    spec = load_sweep(
+        sweep_config(),
+        overrides=["axes.b0_over_B0.values=null", "axes.b0_over_B0.range={start: 2.0, stop: 1.0, step: -0.5}"],
+    )
     assert spec.axes[0].values.tolist() == [2.0, 1.5, 1.0]
 
 
@@ -362,13 +441,16 @@ def test_cli_sweep_with_set_override(tmp_path, capsys):
 
 
 def test_sharded_sweep_equals_single_device(tmp_path):
-    path = write(tmp_path, sweep_config(
-        axes={
-            "b0_over_B0": {"field": "base.attach", "relative": True, "range": {"start": 0, "stop": 2, "num": 7}},
-            "m0": {"field": "base.mass", "values": [500.0, 1000.0, 2000.0]},
-        },
-        chunk_size=5,
-    ))
+    path = write(
+        tmp_path,
+        sweep_config(
+            axes={
+                "b0_over_B0": {"field": "base.attach", "relative": True, "range": {"start": 0, "stop": 2, "num": 7}},
+                "m0": {"field": "base.mass", "values": [500.0, 1000.0, 2000.0]},
+            },
+            chunk_size=5,
+        ),
+    )
     single = tmp_path / "single"
     assert main(["sweep", str(path), "--out", str(single), "--quiet"]) == 0
     env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")

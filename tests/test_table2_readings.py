@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import spacearm as sa
+from spacearm.analysis import average_manipulability
 from spacearm.models.planar import closed_forms as kin
 from spacearm.studies import table2_readings as tv
-from spacearm.analysis import average_manipulability
 
 from .conftest import count_compiles, random_robot
 
@@ -51,8 +51,15 @@ def test_faithful_derivation_is_the_kinematics_module(n):
         ref_s, ref_m = kin.momentum_inertias(robot, phi)
         np.testing.assert_allclose(i_s, ref_s, rtol=1e-13)
         np.testing.assert_allclose(i_m, ref_m, rtol=1e-12, atol=1e-9)
-        np.testing.assert_allclose(tv.generalized_jacobian(tv.FAITHFUL, robot, phi), kin.generalized_jacobian(robot, phi), rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(tv.manipulability(tv.FAITHFUL, robot, phi), kin.manipulability(robot, phi), rtol=1e-11, atol=1e-13)
+        np.testing.assert_allclose(
+            tv.generalized_jacobian(tv.FAITHFUL, robot, phi),
+            kin.generalized_jacobian(robot, phi),
+            rtol=1e-12,
+            atol=1e-12,
+        )
+        np.testing.assert_allclose(
+            tv.manipulability(tv.FAITHFUL, robot, phi), kin.manipulability(robot, phi), rtol=1e-11, atol=1e-13
+        )
         coeffs, ref = tv.derivation_coefficients(tv.FAITHFUL, robot), kin.design_coefficients(robot)
         for field in ("tip", "centroids", "inertia_coupling", "inertia"):
             np.testing.assert_allclose(getattr(coeffs, field), getattr(ref, field), rtol=1e-13, atol=1e-12)
@@ -89,14 +96,17 @@ def test_departures_that_vanish_for_a_base_that_does_not_translate(table1, name)
         )
     # ... and at Table 1's masses they do differ.
     robot = with_b0(table1, 1.0)
-    assert np.max(np.abs(tv.manipulability(variant(name), robot, phi) - tv.manipulability(tv.FAITHFUL, robot, phi))) > 1e-3
+    assert (
+        np.max(np.abs(tv.manipulability(variant(name), robot, phi) - tv.manipulability(tv.FAITHFUL, robot, phi))) > 1e-3
+    )
 
 
 def test_momentum_about_joint1_is_about_the_base_centroid_when_they_coincide(table1):
     robot, phi = with_b0(table1, 0.0), postures()
     np.testing.assert_allclose(
         tv.momentum_inertias(variant("momentum about joint 1"), robot, phi)[0],
-        tv.momentum_inertias(variant("momentum about base centroid"), robot, phi)[0], rtol=1e-13,
+        tv.momentum_inertias(variant("momentum about base centroid"), robot, phi)[0],
+        rtol=1e-13,
     )
     # Pinned at joint 1 with b0 > 0 the base swings about the shoulder: I_S gains m0 b0^2 over
     # the momentum about the base centroid (its other terms are the arm's, about the same point shifted).
@@ -115,31 +125,48 @@ def test_base_orbital_term_is_the_m0_row_of_W(table1):
 def test_I0_about_joint1_is_faithful_at_b0_zero_and_a_heavier_base_otherwise(table1):
     phi = postures()
     robot = with_b0(table1, 0.0)
-    np.testing.assert_allclose(tv.manipulability(variant("I0 about joint 1"), robot, phi), tv.manipulability(tv.FAITHFUL, robot, phi), rtol=1e-13)
+    np.testing.assert_allclose(
+        tv.manipulability(variant("I0 about joint 1"), robot, phi),
+        tv.manipulability(tv.FAITHFUL, robot, phi),
+        rtol=1e-13,
+    )
     robot = with_b0(table1, 2.0)
     parallel_axis = robot.replace(base_inertia=np.float64(635.3 + 1000.0 * (2 * B0) ** 2))
-    np.testing.assert_allclose(tv.manipulability(variant("I0 about joint 1"), robot, phi), kin.manipulability(parallel_axis, phi), rtol=1e-12)
+    np.testing.assert_allclose(
+        tv.manipulability(variant("I0 about joint 1"), robot, phi), kin.manipulability(parallel_axis, phi), rtol=1e-12
+    )
 
 
 def test_no_base_inertia_freezes_the_tip_at_b0_zero(table1):
     # b0 = 0: w* = K1 K2 |sin phi2| I0 / I_S (faithful closed form) = 0 with I0 = 0.
     phi = postures()
-    np.testing.assert_allclose(tv.manipulability(variant("no base inertia"), with_b0(table1, 0.0), phi), 0.0, atol=1e-12)
+    np.testing.assert_allclose(
+        tv.manipulability(variant("no base inertia"), with_b0(table1, 0.0), phi), 0.0, atol=1e-12
+    )
     robot = with_b0(table1, 1.0)
     np.testing.assert_allclose(
         tv.manipulability(variant("no base inertia"), robot, phi),
-        kin.manipulability(robot.replace(base_inertia=np.float64(1e-12)), phi), rtol=1e-10, atol=1e-14,  # 0 is not a valid design
+        kin.manipulability(robot.replace(base_inertia=np.float64(1e-12)), phi),
+        rtol=1e-10,
+        atol=1e-14,  # 0 is not a valid design
     )
 
 
-@pytest.mark.parametrize(("name", "inertia"), [("I_i about joint i", lambda r: r.link_inertia + r.link_mass * r.link_a**2),
-                                               ("point-mass links", lambda r: np.full(2, 1e-12))])  # 0 is not a valid design
+@pytest.mark.parametrize(
+    ("name", "inertia"),
+    [
+        ("I_i about joint i", lambda r: r.link_inertia + r.link_mass * r.link_a**2),
+        ("point-mass links", lambda r: np.full(2, 1e-12)),
+    ],
+)  # 0 is not a valid design
 def test_link_inertia_departures_are_the_faithful_model_of_another_design(table1, name, inertia):
     phi = postures()
     for ratio in (0.0, 1.0):
         robot = with_b0(table1, ratio)
         other = robot.replace(link_inertia=np.asarray(inertia(robot), float))
-        np.testing.assert_allclose(tv.manipulability(variant(name), robot, phi), kin.manipulability(other, phi), rtol=1e-10, atol=1e-14)
+        np.testing.assert_allclose(
+            tv.manipulability(variant(name), robot, phi), kin.manipulability(other, phi), rtol=1e-10, atol=1e-14
+        )
 
 
 def test_no_cross_terms_is_the_posture_averaged_inertia(table1):
@@ -186,7 +213,9 @@ def test_sign_slip_mirrors_J_star_about_J_M(table1):
     robot, phi = with_b0(table1, 1.0), postures()
     j_m = kin.arm_jacobian(robot, phi)
     np.testing.assert_allclose(
-        tv.generalized_jacobian(variant("sign slip"), robot, phi) + kin.generalized_jacobian(robot, phi), 2 * j_m, atol=1e-12
+        tv.generalized_jacobian(variant("sign slip"), robot, phi) + kin.generalized_jacobian(robot, phi),
+        2 * j_m,
+        atol=1e-12,
     )
 
 
@@ -217,15 +246,25 @@ def test_averaging_rules_on_the_ground_robot(table1):
     # I0, m0 -> infinity: J* = J_M with K = (b0, l1, l2), w* = l1 l2 |sin phi2|, and each rule has a
     # closed form in x = l1 l2 / L^2 = 1/4: area x pi/4, joint x 2/pi, area / joint volume x/2,
     # square x pi/4 * pi x, area of w^2 x^2 <sin^3>/<sin> = x^2 2/3, inertial area x pi/4.
-    robots = sa.stack_robots([with_b0(table1, r).replace(base_mass=np.float64(1e12), base_inertia=np.float64(1e16)) for r in (0.0, 2.0)])
+    robots = sa.stack_robots(
+        [with_b0(table1, r).replace(base_mass=np.float64(1e12), base_inertia=np.float64(1e16)) for r in (0.0, 2.0)]
+    )
     stats = tv.grid_averages([tv.FAITHFUL], robots)
     x = 0.25
-    expected = {"area": x * math.pi / 4, "joint": x * 2 / math.pi, "area / joint volume": x / 2, "square": x * math.pi / 4 * math.pi * x,
-                "area of w^2": x * x * 2 / 3, "inertial area": x * math.pi / 4}
+    expected = {
+        "area": x * math.pi / 4,
+        "joint": x * 2 / math.pi,
+        "area / joint volume": x / 2,
+        "square": x * math.pi / 4 * math.pi * x,
+        "area of w^2": x * x * 2 / 3,
+        "inertial area": x * math.pi / 4,
+    }
     assert set(expected) | {"(b0+L)^2"} == set(tv.AVERAGES)
     for rule, value in expected.items():
         np.testing.assert_allclose(stats[rule][0], value, rtol=1e-5, err_msg=rule)
-    np.testing.assert_allclose(stats["(b0+L)^2"][0], x * math.pi / 4 * np.array([1.0, 16 / (2 * B0 + 4) ** 2]), rtol=1e-5)
+    np.testing.assert_allclose(
+        stats["(b0+L)^2"][0], x * math.pi / 4 * np.array([1.0, 16 / (2 * B0 + 4) ** 2]), rtol=1e-5
+    )
 
 
 def test_a_pole_of_w_star_is_reported_not_averaged(table1):

@@ -35,9 +35,13 @@ def test_joint_box_averages_finish_on_two_devices(tmp_path):
     code = "import sys; from spacearm.cli import main; sys.exit(main(sys.argv[1:]))"
     result = subprocess.run(
         [sys.executable, "-c", code, "sweep", str(sweep), "--out", str(tmp_path / "out"), "--quiet"],
-        env=env, capture_output=True, text=True, timeout=600,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert result.returncode == 0, result.stderr
-    rows = list(csv.DictReader(open(tmp_path / "out" / "table.csv")))
+    with open(tmp_path / "out" / "table.csv") as handle:
+        rows = list(csv.DictReader(handle))
     assert len(rows) == 2
     assert all(0.0 < float(row["gci"]) < 1.0 for row in rows)

@@ -36,8 +36,9 @@ def validate(tmp_path, config, capsys):
     return code, captured.out, captured.err
 
 
-@pytest.mark.parametrize("name", ["pareto-attachment.yaml", "pareto-6var.yaml", "table2.yaml", "masses.yaml",
-                                  "link-lengths.yaml"])
+@pytest.mark.parametrize(
+    "name", ["pareto-attachment.yaml", "pareto-6var.yaml", "table2.yaml", "masses.yaml", "link-lengths.yaml"]
+)
 def test_shipped_files_validate(name, capsys):
     assert main(["validate", str(ROOT / "sweeps" / name)]) == 0
     assert "valid" in capsys.readouterr().out
@@ -53,9 +54,15 @@ def test_shipped_files_validate(name, capsys):
         (dict(wbar={"measure": "volume"}), "wbar.measure: must be one of area, joint"),
         (dict(wbar=[4]), "wbar: must be a mapping"),
         (dict(objectives="wbar"), "objectives: must be a list"),
-        (dict(objectives=["wbar", "S_GG"]), "objectives[1]: must be one of wbar, S_G, S_M, got 'S_GG' (did you mean 'S_G'?)"),
+        (
+            dict(objectives=["wbar", "S_GG"]),
+            "objectives[1]: must be one of wbar, S_G, S_M, got 'S_GG' (did you mean 'S_G'?)",
+        ),
         (dict(reference_point=[0.0, "x"]), "reference_point[1]: must be a number"),
-        (dict(guaranteed="clampd"), "guaranteed: must be one of clamped, paper, got 'clampd' (did you mean 'clamped'?)"),
+        (
+            dict(guaranteed="clampd"),
+            "guaranteed: must be one of clamped, paper, got 'clampd' (did you mean 'clamped'?)",
+        ),
         (dict(search={"stpes": 3}), "search: unknown key 'stpes' (did you mean 'steps'?)"),
         (dict(search={"schedule": "linear"}), "search.schedule: must be one of geometric, cosine"),
         (dict(search={"learning_rate": -1.0}), "search.learning_rate: must be positive"),
@@ -65,9 +72,13 @@ def test_shipped_files_validate(name, capsys):
         (dict(baselines={"nsga2": {"time_limit": "soon"}}), "baselines.nsga2.time_limit: must be a number"),
         (dict(baselines={"nsga": {}}), "baselines: unknown key 'nsga' (did you mean 'nsga2'?)"),
         (dict(baselines={"grid": {"points": [10**6, 10**6]}}), "baselines.grid.points: 1,000,000,000,000 grid designs"),
-        (dict(fixed={"base_mass": 1000.0, "base_inertia": 635.3, "arm_mass": 200.0, "reach": 4.0, "links": 3},
-              variables={"b0": [0.0, 3.0]}),
-         "wbar: the area average (eq. 12) is defined for 2 links, fixed.links is 3"),
+        (
+            dict(
+                fixed={"base_mass": 1000.0, "base_inertia": 635.3, "arm_mass": 200.0, "reach": 4.0, "links": 3},
+                variables={"b0": [0.0, 3.0]},
+            ),
+            "wbar: the area average (eq. 12) is defined for 2 links, fixed.links is 3",
+        ),
         (dict(variables={"b0": [0.0, "3"]}), "variables.b0[1]: must be a number"),
     ],
 )
@@ -83,7 +94,10 @@ def test_invalid_design_problem_fails_validate(tmp_path, capsys, changes, field)
     [
         (dict(metrics=[{"name": "wbar", "ordr": 4}]), "metrics[0]: unknown key 'ordr' (did you mean 'order'?)"),
         (dict(metrics=[{"name": "wbar", "order": 0}]), "metrics[0].order: must be an integer >= 1, got 0"),
-        (dict(metrics=[{"name": "straight_path_area", "n_directions": 4}]), "metrics[0].n_directions: must be an integer >= 8"),
+        (
+            dict(metrics=[{"name": "straight_path_area", "n_directions": 4}]),
+            "metrics[0].n_directions: must be an integer >= 8",
+        ),
         (dict(metrics=[{"name": "radii", "scale": 2}]), "metrics[0]: this metric takes no options"),
         (dict(combine="zipped"), "combine: must be 'product' or 'zip'"),
         (dict(report="table3"), "report: unknown report 'table3'"),
@@ -113,28 +127,45 @@ def test_unknown_kind_and_missing_file(tmp_path, capsys):
 def _chain_urdf(joints: int) -> str:
     links = "".join(
         f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" '
-        f'iyz="0"/></inertial></link>' for i in range(joints + 1))
+        f'iyz="0"/></inertial></link>'
+        for i in range(joints + 1)
+    )
     chain = "".join(
         f'<joint name="j{i}" type="revolute"><origin xyz="0 0 0.1"/><parent link="l{i}"/><child link="l{i + 1}"/>'
         f'<axis xyz="0 {i % 2} {(i + 1) % 2}"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
-        for i in range(joints))
+        for i in range(joints)
+    )
     return f'<robot name="chain">{links}{chain}</robot>'
 
 
 def _chain_robot(tmp_path, joints: int, **arm) -> Path:
     (tmp_path / "chain.urdf").write_text(_chain_urdf(joints))
     path = tmp_path / "robot.yaml"
-    path.write_text(yaml.safe_dump({
-        "name": "chain", "base": {"mass": 100.0, "inertia": [[10, 0, 0], [0, 10, 0], [0, 0, 10]]},
-        "arm": {"urdf": "chain.urdf", "root_link": "l0", "tip": f"l{joints}", **arm}}))
+    path.write_text(
+        yaml.safe_dump(
+            {
+                "name": "chain",
+                "base": {"mass": 100.0, "inertia": [[10, 0, 0], [0, 10, 0], [0, 0, 10]]},
+                "arm": {"urdf": "chain.urdf", "root_link": "l0", "tip": f"l{joints}", **arm},
+            }
+        )
+    )
     return path
 
 
 def test_joint_box_metrics_on_more_than_10_joints_fail_validate(tmp_path, capsys):
     """Before: validate accepted them and the run refused without naming file or metric."""
     robot = _chain_robot(tmp_path, 12)
-    code, _, err = validate(tmp_path, {"name": "many", "robot": str(robot), "metrics": ["w_avg"],
-                                       "axes": {"m": {"field": "base.mass", "values": [100.0]}}}, capsys)
+    code, _, err = validate(
+        tmp_path,
+        {
+            "name": "many",
+            "robot": str(robot),
+            "metrics": ["w_avg"],
+            "axes": {"m": {"field": "base.mass", "values": [100.0]}},
+        },
+        capsys,
+    )
     assert code == 2
     assert "file.yaml: metrics[0]: joints: the joint-box averages support 1 to 10 joints, the robot has 12" in err
 
@@ -170,8 +201,9 @@ def test_size_options_have_upper_bounds(tmp_path, capsys):
     code, _, err = validate(tmp_path, problem(search={"directions": 10**8}), capsys)
     assert code == 2 and "search.directions: must be at most 4,096" in err
     # within every bound, yet too big together: the memory estimate and the fix
-    code, _, err = validate(tmp_path, sweep(metrics=[{"name": "wbar", "order": 64, "phi1_panels": 4096,
-                                                      "phi2_panels": 4096}]), capsys)
+    code, _, err = validate(
+        tmp_path, sweep(metrics=[{"name": "wbar", "order": 64, "phi1_panels": 4096, "phi2_panels": 4096}]), capsys
+    )
     assert code == 2 and "GiB" in err and "lower metric 'wbar' option order or phi1_panels/phi2_panels" in err
 
 

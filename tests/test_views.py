@@ -42,7 +42,9 @@ pytest.importorskip("plotly", reason="the 'view' extra (plotly) is not installed
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ["ur5-smallsat.yaml", "ets7.yaml", "arm3dof-100kg.yaml", "umetani1990.yaml"]
 NODE = shutil.which("node") or shutil.which("nodejs")
-CHROMIUM = next((shutil.which(name) for name in ("chromium", "chromium-browser", "google-chrome") if shutil.which(name)), None)
+CHROMIUM = next(
+    (shutil.which(name) for name in ("chromium", "chromium-browser", "google-chrome") if shutil.which(name)), None
+)
 needs_node = pytest.mark.skipif(NODE is None, reason="node is not installed (apt-get install nodejs)")
 needs_chromium = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (apt-get install chromium)")
 
@@ -62,8 +64,7 @@ def pages(robots, tmp_path_factory):
         "planar": write_arm_view(planar, out / "planar.html", np.radians([10.0, 40.0, 60.0])),
     }
     q, R, tip = _ur5_loop(ur5)
-    written["replay"] = write_replay_view(ur5, out / "replay.html", joints=q, base_rotation=R, tip=tip,
-                                          target=tip[-1])
+    written["replay"] = write_replay_view(ur5, out / "replay.html", joints=q, base_rotation=R, tip=tip, target=tip[-1])
     return written
 
 
@@ -100,10 +101,13 @@ def test_page_kinematics_match_the_library(robots, tmp_path, name):
     count = robot.n_links + 1 if planar else robot.n_joints
     q = rng.uniform(-np.pi, np.pi, size=(8, count))
     R = np.stack([rpy_matrix(r) for r in rng.uniform(-np.pi, np.pi, size=(8, 3))])
-    program = _page_scripts(page) + """
+    program = (
+        _page_scripts(page)
+        + """
     const d = JSON.parse(require("fs").readFileSync(0, "utf8"));
     const M = window.SPACEARM.model;
     console.log(JSON.stringify(d.q.map((q, i) => spacearmPose(M, q, d.R[i]).joints)));"""
+    )
     joints = np.array(_node(program, json.dumps(dict(q=q.tolist(), R=R.tolist()))))
     if planar:
         tips = np.asarray(sa.tip_position(robot, q))
@@ -112,7 +116,9 @@ def test_page_kinematics_match_the_library(robots, tmp_path, name):
         np.testing.assert_allclose(joints[:, :, 2], 0.0, atol=0)
     else:
         tips = np.asarray(sa.tip_position(robot, q, base_rotation=R))
-        outlines = np.stack([arm_points(robot, qk, Rk)[0] for qk, Rk in zip(q[:3], R[:3])])  # eager: 3 postures
+        outlines = np.stack(
+            [arm_points(robot, qk, Rk)[0] for qk, Rk in zip(q[:3], R[:3], strict=False)]
+        )  # eager: 3 postures
         np.testing.assert_allclose(joints[:3], outlines, rtol=0, atol=1e-9)
     np.testing.assert_allclose(joints[:, -1, : tips.shape[-1]], tips, rtol=0, atol=1e-9)
     assert np.ptp(tips, axis=0).max() > 0.1  # the postures differ: the comparison has teeth
@@ -121,11 +127,14 @@ def test_page_kinematics_match_the_library(robots, tmp_path, name):
 @needs_node
 def test_replay_frames_reproduce_the_recorded_tip(robots, pages):
     """(~10 s: the UR5 loop history compiles once.) Every frame of the replay drawn from its joints and bus attitude puts the tip on the recorded tip."""
-    program = _page_scripts(pages["replay"]) + """
+    program = (
+        _page_scripts(pages["replay"])
+        + """
     const D = window.SPACEARM, F = D.frames;
     console.log(JSON.stringify(F.q.map((q, k) => spacearmPose(D.model, q, F.R[k]).joints.slice(-1)[0])));"""
+    )
     drawn = np.array(_node(program))
-    q, R, tip = _ur5_loop(robots["ur5-smallsat.yaml"])
+    _q, R, tip = _ur5_loop(robots["ur5-smallsat.yaml"])
     assert drawn.shape == tip.shape and len(tip) > 10
     np.testing.assert_allclose(drawn, tip, rtol=0, atol=1e-9)
     angle = np.degrees(np.arccos((np.trace(R[0].T @ R[-1]) - 1) / 2))
@@ -148,8 +157,10 @@ def test_replay_from_npz_reads_both_layouts(robots, tmp_path):
 
 
 def test_view_command_writes_one_page(tmp_path, capsys):
-    assert main(["view", str(ROOT / "configs" / "ets7.yaml"), "--posture", "10,20,30,40,50,60",
-                 "--out", str(tmp_path)]) == 0
+    assert (
+        main(["view", str(ROOT / "configs" / "ets7.yaml"), "--posture", "10,20,30,40,50,60", "--out", str(tmp_path)])
+        == 0
+    )
     page = tmp_path / "ets7.html"
     assert 4.5e6 < page.stat().st_size < 5.5e6  # plotly.js (4.8 MB) + the model (a few kB)
     assert "MB, self-contained" in capsys.readouterr().out
@@ -160,8 +171,10 @@ def test_view_command_writes_one_page(tmp_path, capsys):
 def test_view_command_refuses_bad_input(tmp_path, capsys):
     assert main(["view", str(ROOT / "configs" / "ets7.yaml"), "--posture", "1,2", "--out", str(tmp_path)]) == 2
     assert "--posture: expected 6" in capsys.readouterr().err
-    assert main(["view", str(ROOT / "configs" / "umetani1990.yaml"), "--attitude-rpy", "1,2,3",
-                 "--out", str(tmp_path)]) == 2
+    assert (
+        main(["view", str(ROOT / "configs" / "umetani1990.yaml"), "--attitude-rpy", "1,2,3", "--out", str(tmp_path)])
+        == 2
+    )
     assert not list(tmp_path.iterdir())
 
 
@@ -173,33 +186,67 @@ def test_view_without_plotly_names_the_extra(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "plotly.offline", None)
     assert main(["view", str(ROOT / "configs" / "ur5-smallsat.yaml"), "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "'view' extra" in err and '.[view]' in err
+    assert len(err.splitlines()) == 1 and "'view' extra" in err and ".[view]" in err
     assert not tmp_path.exists() or not list(tmp_path.iterdir())
-    assert main(["reach", str(ROOT / "configs" / "umetani1990.yaml"), "--from", "0,-60,120", "--to", "2,1",
-                 "--out", str(tmp_path / "reach"), "--html"]) == 2  # checked before planning: nothing written
+    assert (
+        main(
+            [
+                "reach",
+                str(ROOT / "configs" / "umetani1990.yaml"),
+                "--from",
+                "0,-60,120",
+                "--to",
+                "2,1",
+                "--out",
+                str(tmp_path / "reach"),
+                "--html",
+            ]
+        )
+        == 2
+    )  # checked before planning: nothing written
     assert "'view' extra" in capsys.readouterr().err and not (tmp_path / "reach").exists()
 
 
 # Headless Chromium ------------------------------------------------------------------------
 
 _OFFLINE = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--hide-scrollbars",
     "--host-resolver-rules=MAP * ~NOTFOUND",  # no host name resolves: nothing can leave the machine
-    "--disable-background-networking", "--no-first-run", "--disable-extensions",
+    "--disable-background-networking",
+    "--no-first-run",
+    "--disable-extensions",
 ]
 
 
 def _render(page: Path, tmp_path: Path) -> tuple[np.ndarray, list[str]]:
     """Screenshot ``page`` (RGB array) and the URLs the page itself requested (Chromium's net log)."""
     shot, netlog = tmp_path / f"{page.stem}.png", tmp_path / f"{page.stem}.netlog.json"
-    subprocess.run([CHROMIUM, *_OFFLINE, f"--log-net-log={netlog}", "--window-size=1000,700",
-                    "--virtual-time-budget=8000", f"--screenshot={shot}", page.resolve().as_uri()],
-                   capture_output=True, timeout=120, check=False, env={**os.environ, "HOME": str(tmp_path)})
+    subprocess.run(
+        [
+            CHROMIUM,
+            *_OFFLINE,
+            f"--log-net-log={netlog}",
+            "--window-size=1000,700",
+            "--virtual-time-budget=8000",
+            f"--screenshot={shot}",
+            page.resolve().as_uri(),
+        ],
+        capture_output=True,
+        timeout=120,
+        check=False,
+        env={**os.environ, "HOME": str(tmp_path)},
+    )
     assert shot.exists(), f"chromium wrote no screenshot of {page}"
     log = json.loads(netlog.read_text())
     start = log["constants"]["logEventTypes"]["URL_REQUEST_START_JOB"]
-    requested = [e["params"]["url"] for e in log["events"] if e["type"] == start
-                 and "file://" in e["params"].get("network_isolation_key", "")]  # requests of the page, not the browser's
+    requested = [
+        e["params"]["url"]
+        for e in log["events"]
+        if e["type"] == start and "file://" in e["params"].get("network_isolation_key", "")
+    ]  # requests of the page, not the browser's
     image = (matplotlib.image.imread(shot)[..., :3] * 255).round().astype(int)
     return image, [url for url in requested if not url.startswith(("file:", "data:", "blob:"))]
 
@@ -214,7 +261,9 @@ def _pixels_near(image: np.ndarray, rgb, tolerance: int = 40) -> int:
 def test_pages_render_offline_in_chromium(pages, front_pages, shells_page, tmp_path, kind):
     """A few seconds each: the page draws the links (their blue) or the front's markers, and requests
     nothing from the network."""
-    page = {**pages, "front": front_pages["spatial"], "front3": front_pages["three"], "shells": shells_page["page"]}[kind]
+    page = {**pages, "front": front_pages["spatial"], "front3": front_pages["three"], "shells": shells_page["page"]}[
+        kind
+    ]
     image, requested = _render(page, tmp_path)
     plot = image[:, : image.shape[1] - 340]  # left of the control panel
     background = int((plot.min(axis=-1) >= 250).sum())
@@ -239,12 +288,29 @@ def test_network_check_sees_an_external_request(tmp_path):
 def test_reach_html_replays_the_planar_plan(tmp_path, capsys):
     """``spacearm reach --html``: reach.html beside reach.npz; its frames put the tip on the planned tips."""
     out = tmp_path / "reach"
-    assert main(["reach", str(ROOT / "configs" / "umetani1990.yaml"), "--from", "0,-60,120", "--to", "2,1",
-                 "--out", str(out), "--html"]) == 0
+    assert (
+        main(
+            [
+                "reach",
+                str(ROOT / "configs" / "umetani1990.yaml"),
+                "--from",
+                "0,-60,120",
+                "--to",
+                "2,1",
+                "--out",
+                str(out),
+                "--html",
+            ]
+        )
+        == 0
+    )
     assert "reach.html" in capsys.readouterr().out
-    program = _page_scripts(out / "reach.html") + """
+    program = (
+        _page_scripts(out / "reach.html")
+        + """
     const D = window.SPACEARM, F = D.frames;
     console.log(JSON.stringify(F.q.map((q) => spacearmPose(D.model, q).joints.slice(-1)[0])));"""
+    )
     drawn = np.array(_node(program))
     with np.load(out / "reach.npz") as history:
         tips = history["tips_m"]
@@ -264,22 +330,36 @@ def front_pages(tmp_path_factory):
     rng = np.random.default_rng(3)
     designs = problem.lower + rng.uniform(size=(12, len(problem.lower))) * (problem.upper - problem.lower)
     first = np.sort(rng.uniform(size=12))
-    objectives = np.stack([first, 1.0 - first ** 2] + [rng.uniform(size=12)] * (len(problem.objectives) - 2), axis=1)
-    result = SearchResult(method="gradient", designs=designs, objectives=objectives, checkpoints=[],
-                          evaluations=12, compile_seconds=0.0, run_seconds=0.0)
+    objectives = np.stack([first, 1.0 - first**2] + [rng.uniform(size=12)] * (len(problem.objectives) - 2), axis=1)
+    result = SearchResult(
+        method="gradient",
+        designs=designs,
+        objectives=objectives,
+        checkpoints=[],
+        evaluations=12,
+        compile_seconds=0.0,
+        run_seconds=0.0,
+    )
     (spatial,) = front_view(problem, {"gradient": result}, {}, out)
-    three = write_front_view(out / "front3.html", objective_names=["f1", "f2", "f3"], variable_names=["a", "b"],
-                             fronts={"nsga2": (rng.uniform(size=(30, 2)), rng.uniform(size=(30, 3)))})
+    three = write_front_view(
+        out / "front3.html",
+        objective_names=["f1", "f2", "f3"],
+        variable_names=["a", "b"],
+        fronts={"nsga2": (rng.uniform(size=(30, 2)), rng.uniform(size=(30, 3)))},
+    )
     return dict(problem=problem, designs=designs, objectives=objectives, spatial=spatial, three=three)
 
 
 @needs_node
 def test_front_robots_are_the_picked_designs(front_pages):
     """The robot a click on the front draws is that point's design (tip at zero joints, to 1e-9 m)."""
-    program = _page_scripts(front_pages["spatial"]) + """
+    program = (
+        _page_scripts(front_pages["spatial"])
+        + """
     const D = window.SPACEARM, T = D.traces[0];
     console.log(JSON.stringify(T.x.map((x, j) => [x, spacearmPose(D.robots[T.customdata[j]].model,
         D.robots[T.customdata[j]].posture, null).joints.slice(-1)[0]])));"""
+    )
     drawn = _node(program)
     problem, designs, objectives = front_pages["problem"], front_pages["designs"], front_pages["objectives"]
     assert len(drawn) == len(designs)
@@ -295,8 +375,13 @@ def _drive(page: Path, tmp_path: Path, script: str) -> dict:
     return the ``data-*`` attributes it left on <body> (``result``: JSON the script wrote)."""
     driven = tmp_path / f"driven-{page.name}"
     driven.write_text(page.read_text().replace("</body>", f"<script>{script}</script></body>"))
-    done = subprocess.run([CHROMIUM, *_OFFLINE, "--virtual-time-budget=8000", "--dump-dom", driven.resolve().as_uri()],
-                          capture_output=True, text=True, timeout=120, env={**os.environ, "HOME": str(tmp_path)})
+    done = subprocess.run(
+        [CHROMIUM, *_OFFLINE, "--virtual-time-budget=8000", "--dump-dom", driven.resolve().as_uri()],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "HOME": str(tmp_path)},
+    )
     body = re.search(r"<body([^>]*)>", done.stdout)
     assert body, done.stderr[-2000:]
     attributes = dict(re.findall(r'data-([a-z]+)="([^"]*)"', body.group(1)))
@@ -313,10 +398,13 @@ document.body.dataset.result = JSON.stringify((function () {
 def test_sliders_repose_the_arm_in_chromium(robots, pages, tmp_path):
     """Moving the joint and bus-attitude sliders redraws the links where the library puts them (1e-9 m)."""
     degrees = [20.0, -75.5, 100.0, -40.0, 65.0, 10.0, 15.0, -30.0, 45.0]  # six joints, then roll, pitch, yaw
-    script = f"""
+    script = (
+        f"""
     var inputs = document.querySelectorAll("#controls input[type=range]");
     {json.dumps(degrees)}.forEach(function (v, i) {{ inputs[i].value = v; inputs[i].dispatchEvent(new Event("input")); }});
-    """ + _READ_ARM
+    """
+        + _READ_ARM
+    )
     state = _drive(pages["ur5"], tmp_path, script)
     assert state.get("spacearm") == "ready" and "error" not in state
     drawn = np.array(json.loads(state["result"]))
@@ -329,11 +417,14 @@ def test_sliders_repose_the_arm_in_chromium(robots, pages, tmp_path):
 @pytest.mark.slow
 def test_replay_frame_slider_in_chromium(robots, pages, tmp_path):
     """Dragging the replay's frame slider to frame k puts the drawn tip on the recorded tip k."""
-    q, R, tip = _ur5_loop(robots["ur5-smallsat.yaml"])
+    _q, _R, tip = _ur5_loop(robots["ur5-smallsat.yaml"])
     k = len(tip) // 2
-    script = f"""
+    script = (
+        f"""
     var frame = document.querySelectorAll("#controls input[type=range]")[0];
-    frame.value = {k}; frame.dispatchEvent(new Event("input"));""" + _READ_ARM
+    frame.value = {k}; frame.dispatchEvent(new Event("input"));"""
+        + _READ_ARM
+    )
     state = _drive(pages["replay"], tmp_path, script)
     assert state.get("spacearm") == "ready" and "error" not in state
     np.testing.assert_allclose(json.loads(state["result"])[-1], tip[k], rtol=0, atol=1e-9)
@@ -347,11 +438,19 @@ def shells_page(tmp_path_factory):
     from spacearm.figures.views import shells_view
     from spacearm.studies import load_sweep
 
-    spec = load_sweep(dict(name="shells", robot=str(ROOT / "configs" / "arm3dof-100kg.yaml"),
-                           axes={"mass": {"field": "base.mass", "values": [50.0, 100.0, 400.0]}},
-                           metrics=[{"name": "reach_radii"}, {"name": "path_independent_radius"}]))
-    table = {"R_max_m": np.array([1.34, 1.47, 1.61]), "R_inner_m": np.array([0.02, 0.07, 0.12]),
-             "R_path_independent_m": np.array([0.03, np.inf, 0.18])}
+    spec = load_sweep(
+        dict(
+            name="shells",
+            robot=str(ROOT / "configs" / "arm3dof-100kg.yaml"),
+            axes={"mass": {"field": "base.mass", "values": [50.0, 100.0, 400.0]}},
+            metrics=[{"name": "reach_radii"}, {"name": "path_independent_radius"}],
+        )
+    )
+    table = {
+        "R_max_m": np.array([1.34, 1.47, 1.61]),
+        "R_inner_m": np.array([0.02, 0.07, 0.12]),
+        "R_path_independent_m": np.array([0.03, np.inf, 0.18]),
+    }
     out = tmp_path_factory.mktemp("shells")
     assert shells_view(spec, out, {"w_avg_m3": np.ones(3)}) == []  # no shell column: no page
     (page,) = shells_view(spec, out, table)
@@ -363,14 +462,23 @@ def test_shells_page_holds_each_designs_robot(shells_page):
     """Design k of the page is sweep point k (the bus mass moves the centroid, so the tip differs)."""
     from spacearm.studies.designs import build_designs
 
-    program = _page_scripts(shells_page["page"]) + """
+    program = (
+        _page_scripts(shells_page["page"])
+        + """
     const D = window.SPACEARM;
     console.log(JSON.stringify(D.designs.map((d) => [spacearmPose(d.model, d.posture, null).joints.slice(-1)[0],
         d.shells.map((s) => s.radius)])));"""
+    )
     drawn = _node(program)
     robot, _ = build_designs(shells_page["spec"])
-    expected = np.stack([np.asarray(sa.tip_position(jax.tree_util.tree_map(lambda leaf: leaf[k], robot),
-                                                    np.zeros(robot.n_joints))) for k in range(3)])
+    expected = np.stack(
+        [
+            np.asarray(
+                sa.tip_position(jax.tree_util.tree_map(lambda leaf, k=k: leaf[k], robot), np.zeros(robot.n_joints))
+            )
+            for k in range(3)
+        ]
+    )
     np.testing.assert_allclose([tip for tip, _ in drawn], expected, rtol=0, atol=1e-9)
     assert np.ptp(expected, axis=0).max() > 1e-3
     assert [radii for _, radii in drawn][1] == [1.47, 0.07, None]  # an infinite radius draws no sphere
@@ -379,8 +487,9 @@ def test_shells_page_holds_each_designs_robot(shells_page):
 def test_replay_names_the_planar_phases(robots, tmp_path):
     planar = robots["umetani1990.yaml"]
     phi = np.radians([[0.0, 30.0, 60.0], [5.0, 40.0, 50.0], [6.0, 41.0, 49.0]])
-    page = write_replay_view(planar, tmp_path / "r.html", phi=phi, tip=np.asarray(sa.tip_position(planar, phi)),
-                             phase=np.array([0, 1, 2]))
+    page = write_replay_view(
+        planar, tmp_path / "r.html", phi=phi, tip=np.asarray(sa.tip_position(planar, phi)), phase=np.array([0, 1, 2])
+    )
     data = json.loads(re.search(r"window\.SPACEARM = (\{.*?\});</script>", page.read_text()).group(1))
     assert data["frames"]["phase"] == ["repositioning move", "reorientation loop", "straight tip path"]
 

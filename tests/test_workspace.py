@@ -9,7 +9,6 @@ from spacearm import analysis as ws
 from . import reference
 from .conftest import count_compiles, random_robot
 
-
 GRID = dict(n_phi1=360, n_phi2=64)  # one compiled singular-set shape for every test
 
 
@@ -105,7 +104,9 @@ def test_maximum_reachable_radii_under_joint_limits():
     # Brute force on the law of cosines: |p|^2 = sum K^2 + 2 sum K_i K_j cos(theta_i - theta_j).
     K0, K1, K2 = np.asarray(sa.tip_coefficients(robot))
     q1, q2 = np.meshgrid(np.radians(np.linspace(-90, 90, 1801)), np.radians(np.linspace(30, 150, 1201)))
-    r = np.sqrt(K0**2 + K1**2 + K2**2 + 2 * K0 * K1 * np.cos(q1) + 2 * K0 * K2 * np.cos(q1 + q2) + 2 * K1 * K2 * np.cos(q2))
+    r = np.sqrt(
+        K0**2 + K1**2 + K2**2 + 2 * K0 * K1 * np.cos(q1) + 2 * K0 * K2 * np.cos(q1 + q2) + 2 * K1 * K2 * np.cos(q2)
+    )
     assert float(outer) == pytest.approx(r.max(), abs=1e-6) and float(outer) >= r.max() - 1e-12
     assert float(inner) == pytest.approx(r.min(), abs=1e-6) and float(inner) <= r.min() + 1e-12
     assert np.all(np.asarray(j_out) >= np.asarray(limited.joint_lower) - 1e-15)
@@ -222,7 +223,7 @@ def test_end_points_lie_on_their_lines_at_singularities(table1_paths):
 
 
 def test_fig3_workspace_reaches_area3_and_guaranteed_disk_is_not_safe(table1_paths):
-    robot, phis, ends = table1_paths
+    robot, _phis, ends = table1_paths
     radius = np.linalg.norm(np.asarray(ends.end_tip), axis=-1)
     r3, r_g = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
     assert radius[0].max() <= r3 + 1e-9 and radius[0].max() > r3 - 1e-3
@@ -294,5 +295,7 @@ def test_clearance_of_synthetic_star_sets():
         ends = c + radius * d
         expected = max(radius - np.linalg.norm(c), 0.0)
         assert float(ws.clearance_radius(c, ends)) == pytest.approx(expected, abs=5e-4)
-        inside = np.asarray(ws.inside_straight_path_workspace(c, ends, c + np.array([[0.99 * radius, 0.0], [0.0, -1.01 * radius]])))
+        inside = np.asarray(
+            ws.inside_straight_path_workspace(c, ends, c + np.array([[0.99 * radius, 0.0], [0.0, -1.01 * radius]]))
+        )
         np.testing.assert_array_equal(inside, [True, False])

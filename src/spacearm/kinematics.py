@@ -24,21 +24,21 @@ from ._core.linalg import adjugate, gram_determinant, gram_root_determinant, squ
 from .models.family import RobotFamily, family_of
 
 __all__ = [
-    "tip_position",
-    "generalized_jacobian",
-    "manipulability",
-    "manipulability_ellipsoid",
-    "base_rate_matrix",
     "base_rate",
+    "base_rate_matrix",
     "fixed_base_jacobian",
     "fixed_base_manipulability",
+    "generalized_jacobian",
     "generic_generalized_jacobian",
     "generic_manipulability",
     "generic_tip_position",
     "gram_determinant",
     "gram_root_determinant",
+    "manipulability",
+    "manipulability_ellipsoid",
     "square_determinant",
     "straight_path_rates",
+    "tip_position",
 ]
 
 

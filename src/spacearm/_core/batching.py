@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["map_leading", "bucket_size", "pad_leading", "shapes_of"]
+__all__ = ["bucket_size", "map_leading", "pad_leading", "shapes_of"]
 
 
 def shapes_of(tree):
@@ -60,11 +60,11 @@ def map_leading(function: Callable, *arrays: jax.Array, core_ndims: tuple[int, .
         The outputs with the broadcast leading batch shape in front.
     """
     arrays = [jnp.asarray(a) for a in arrays]
-    batch_shapes = [a.shape[: a.ndim - k] for a, k in zip(arrays, core_ndims)]
+    batch_shapes = [a.shape[: a.ndim - k] for a, k in zip(arrays, core_ndims, strict=False)]
     batch = jnp.broadcast_shapes(*batch_shapes)
     flat = [
         jnp.broadcast_to(a, batch + a.shape[a.ndim - k :]).reshape((-1,) + a.shape[a.ndim - k :])
-        for a, k in zip(arrays, core_ndims)
+        for a, k in zip(arrays, core_ndims, strict=False)
     ]
     if not batch:
         return function(*[f[0] for f in flat])

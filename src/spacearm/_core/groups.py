@@ -21,16 +21,16 @@ import jax.numpy as jnp
 import numpy as np
 
 __all__ = [
-    "hat",
-    "vee",
-    "expm",
-    "log",
-    "geodesic_distance",
-    "polar_rotation",
-    "fibonacci_sphere",
-    "Group",
     "SO2",
     "SO3",
+    "Group",
+    "expm",
+    "fibonacci_sphere",
+    "geodesic_distance",
+    "hat",
+    "log",
+    "polar_rotation",
+    "vee",
 ]
 
 

@@ -12,7 +12,7 @@ import itertools
 import jax
 import jax.numpy as jnp
 
-__all__ = ["gram_determinant", "gram_root_determinant", "square_determinant", "adjugate", "symmetric_eigenvalues"]
+__all__ = ["adjugate", "gram_determinant", "gram_root_determinant", "square_determinant", "symmetric_eigenvalues"]
 
 
 def gram_determinant(J: jax.Array) -> jax.Array:

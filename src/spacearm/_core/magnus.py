@@ -35,20 +35,20 @@ from .groups import expm, safe_norm
 __all__ = [
     "DEFAULT_ORDER",
     "DEFAULT_STEPS",
+    "check_order",
     "composite_gauss",
     "line_integral",
-    "step_nodes",
-    "step_generators",
     "path_rotation",
     "path_rotation_history",
-    "check_order",
+    "step_generators",
+    "step_nodes",
 ]
 
 DEFAULT_ORDER = 6
 DEFAULT_STEPS = 4
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def composite_gauss(nodes: int, pieces: int) -> tuple[np.ndarray, np.ndarray]:
     """Composite Gauss-Legendre rule on [0, 1]: ``pieces`` equal panels of ``nodes`` points."""
     x, w = np.polynomial.legendre.leggauss(nodes)
@@ -213,5 +213,3 @@ def path_rotation_history(
     partial = jax.lax.associative_scan(jnp.matmul, factors, axis=factors.ndim - 3)
     eye = jnp.broadcast_to(jnp.eye(3, dtype=partial.dtype), partial.shape[:-3] + (1, 3, 3))
     return jnp.concatenate([eye, partial], axis=-3)
-
-

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 
 from .schema import check_memory
 
-__all__ = ["TEMPORARIES", "working_numbers", "check_working_memory"]
+__all__ = ["TEMPORARIES", "check_working_memory", "working_numbers"]
 
 # The temporaries XLA keeps alive beside the arrays a kernel names (products, gradients).
 TEMPORARIES = 16
@@ -51,8 +51,9 @@ def working_numbers(name: str, options: Mapping, n: int, *, joint_average: bool 
     return 4096.0 * (n + 1), ""
 
 
-def check_working_memory(where: str, designs_at_once: int, numbers: float, what: str, advice: str,
-                         extra_bytes: float = 0.0) -> float:
+def check_working_memory(
+    where: str, designs_at_once: int, numbers: float, what: str, advice: str, extra_bytes: float = 0.0
+) -> float:
     """Refuse work whose estimate (``designs_at_once`` x ``numbers`` x `TEMPORARIES` float64
     numbers, plus ``extra_bytes``) is over half of this machine's memory; return the estimate
     in bytes. `ConfigError` names ``where``, the estimate and ``advice``."""

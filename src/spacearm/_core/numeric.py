@@ -74,8 +74,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, min_compi
 PEER_TIMEOUT_S = 60.0  # how long a process of a distributed job waits for its peers
 
 
-def join_processes(coordinator: str, num_processes: int, process_id: int, *,
-                   timeout_s: float = PEER_TIMEOUT_S) -> None:
+def join_processes(coordinator: str, num_processes: int, process_id: int, *, timeout_s: float = PEER_TIMEOUT_S) -> None:
     """Join ``num_processes`` processes into one JAX job (``jax.distributed``), CPU
     collectives over gloo, so ``jax.devices()`` spans every process and a sharded
     ``jit`` runs across them. Call before anything starts JAX's backend.
@@ -92,8 +91,10 @@ def join_processes(coordinator: str, num_processes: int, process_id: int, *,
     """
     jax.config.update("jax_cpu_collectives_implementation", "gloo")
     seconds = max(1, int(math.ceil(timeout_s)))
-    message = (f"process {process_id} of {num_processes}: the processes did not all join at {coordinator} within "
-               f"{seconds} s (start every process, or wait longer with --peer-timeout)")
+    message = (
+        f"process {process_id} of {num_processes}: the processes did not all join at {coordinator} within "
+        f"{seconds} s (start every process, or wait longer with --peer-timeout)"
+    )
     # jaxlib's own connect timeout ends the process with a C++ stack (a fatal log), so this
     # process keeps its own clock, a little shorter, and leaves with one line instead.
     joined = threading.Event()
@@ -105,11 +106,16 @@ def join_processes(coordinator: str, num_processes: int, process_id: int, *,
 
     threading.Thread(target=give_up, name="spacearm-join-timeout", daemon=True).start()
     try:
-        jax.distributed.initialize(coordinator_address=coordinator, num_processes=num_processes,
-                                   process_id=process_id, initialization_timeout=seconds + 30,
-                                   # twice the wait: a peer that is gone is reported by spacearm's own
-                                   # waits (one line) before the service's heartbeat check aborts the process
-                                   heartbeat_timeout_seconds=2 * seconds, shutdown_timeout_seconds=seconds)
+        jax.distributed.initialize(
+            coordinator_address=coordinator,
+            num_processes=num_processes,
+            process_id=process_id,
+            initialization_timeout=seconds + 30,
+            # twice the wait: a peer that is gone is reported by spacearm's own
+            # waits (one line) before the service's heartbeat check aborts the process
+            heartbeat_timeout_seconds=2 * seconds,
+            shutdown_timeout_seconds=seconds,
+        )
     except Exception as error:  # jaxlib's runtime error (UNAVAILABLE, ...)
         reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
         raise RunError(f"{message}; {reason}") from None
@@ -138,7 +144,8 @@ def use_every_cpu_core() -> int:
 def _cgroup_cpu_limit() -> int | None:
     """The CPU quota of this container (cgroup v2 ``cpu.max``), rounded up; None when unlimited."""
     try:
-        quota, period = open("/sys/fs/cgroup/cpu.max").read().split()[:2]
+        with open("/sys/fs/cgroup/cpu.max") as limits:
+            quota, period = limits.read().split()[:2]
     except (OSError, ValueError):
         return None
     if quota == "max":

@@ -26,17 +26,17 @@ __all__ = [
     "MAX_YAML_DEPTH",
     "MAX_YAML_NODES",
     "SIZE_LIMITS",
-    "quote",
-    "read_yaml",
+    "check_keys",
+    "check_memory",
+    "choice",
     "describe_yaml_error",
     "did_you_mean",
-    "check_keys",
+    "integer",
     "is_number",
     "number",
-    "integer",
-    "choice",
     "number_list",
-    "check_memory",
+    "quote",
+    "read_yaml",
     "robot_file_name",
 ]
 
@@ -93,8 +93,10 @@ class _StrictLoader(yaml.SafeLoader):
                 key = (key_node.tag, key_node.value)
                 if key in seen:
                     first = seen[key].start_mark.line + 1
-                    raise _Refused(f"line {key_node.start_mark.line + 1}: duplicate key {quote(key_node.value)} "
-                                   f"(first given on line {first}); each key may appear once")
+                    raise _Refused(
+                        f"line {key_node.start_mark.line + 1}: duplicate key {quote(key_node.value)} "
+                        f"(first given on line {first}); each key may appear once"
+                    )
                 seen[key] = key_node
         return super().construct_mapping(node, deep=deep)
 
@@ -114,8 +116,10 @@ def _check_size(root: yaml.Node) -> None:
             count = 1 + sum(sizes[id(c)][0] for c in children)
             depth = 1 + max((sizes[id(c)][1] for c in children), default=0)
             if count > MAX_YAML_NODES:
-                raise _Refused(f"line {node.start_mark.line + 1}: the document expands to more than "
-                               f"{MAX_YAML_NODES:,} values (aliases repeated inside aliases?)")
+                raise _Refused(
+                    f"line {node.start_mark.line + 1}: the document expands to more than "
+                    f"{MAX_YAML_NODES:,} values (aliases repeated inside aliases?)"
+                )
             if depth > MAX_YAML_DEPTH:
                 raise _Refused(f"line {node.start_mark.line + 1}: values nest more than {MAX_YAML_DEPTH} levels deep")
             sizes[key] = (count, depth)
@@ -261,12 +265,14 @@ def integer(where: str, value: Any, *, least: int | None = None, most: int | Non
     if not isinstance(value, int) or isinstance(value, bool) or (least is not None and value < least):
         bound = f" >= {least}" if least is not None else ""
         if isinstance(value, float) and value.is_integer() and (least is None or value >= least):
-            raise ConfigError(f"{where}: must be an integer{bound}, got the float {quote(value)} (write it without "
-                              "a dot or exponent)")
+            raise ConfigError(
+                f"{where}: must be an integer{bound}, got the float {quote(value)} (write it without a dot or exponent)"
+            )
         raise ConfigError(f"{where}: must be an integer{bound}, got {quote(value)}")
     if most is not None and value > most:
-        raise ConfigError(f"{where}: must be at most {most:,} (a size; larger values would not fit in memory "
-                          f"or time), got {value:,}")
+        raise ConfigError(
+            f"{where}: must be at most {most:,} (a size; larger values would not fit in memory or time), got {value:,}"
+        )
     return value
 
 

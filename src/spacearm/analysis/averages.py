@@ -74,21 +74,21 @@ from .._core.linalg import gram_root_determinant, symmetric_eigenvalues
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
 from ..models.spatial.metrics import dynamic_manipulability
-from .manipulability_average import average_manipulability as planar_average_manipulability
 from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
+from .manipulability_average import average_manipulability as planar_average_manipulability
 
 __all__ = [
+    "METRICS",
     "JointAverage",
-    "joint_average",
-    "joint_averages",
-    "posture_quantities",
-    "posture_metrics",
-    "average_manipulability",
-    "joint_average_manipulability",
-    "global_conditioning_index",
     "average_base_disturbance",
     "average_dynamic_manipulability",
-    "METRICS",
+    "average_manipulability",
+    "global_conditioning_index",
+    "joint_average",
+    "joint_average_manipulability",
+    "joint_averages",
+    "posture_metrics",
+    "posture_quantities",
 ]
 
 
@@ -273,7 +273,7 @@ def _forward(plan: _Plan, robot, shifts, budget: _Budget):
     dtype = jnp.result_type(float)
 
     def cond(state):
-        blocks, _, done = state
+        _blocks, _, done = state
         return ~done
 
     def body(state):
@@ -349,9 +349,10 @@ def _estimate_batched(robot, shifts, budget: _Budget, plan: _Plan, designs_per_c
     size = 1
     for s in batch:
         size *= s
-    flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch):])), robot)
-    out = jax.lax.map(lambda design: _estimate_one(plan, design, shifts, budget), flat,
-                      batch_size=min(designs_per_chunk, size))
+    flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch) :])), robot)
+    out = jax.lax.map(
+        lambda design: _estimate_one(plan, design, shifts, budget), flat, batch_size=min(designs_per_chunk, size)
+    )
     return jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch + y.shape[1:]), out)
 
 
@@ -410,12 +411,17 @@ def joint_averages(
     min_blocks = min(max_blocks, max(1, -(-min_samples // per_block)))
     points = max_blocks * block if min_blocks == max_blocks else None
     plan = _Plan(metrics, int(randomizations), int(block), points)
-    budget = _Budget(jnp.asarray(tolerances, jnp.result_type(float)), jnp.asarray(min_blocks, jnp.int32),
-                     jnp.asarray(max_blocks, jnp.int32))
+    budget = _Budget(
+        jnp.asarray(tolerances, jnp.result_type(float)),
+        jnp.asarray(min_blocks, jnp.int32),
+        jnp.asarray(max_blocks, jnp.int32),
+    )
     shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
     out = _estimate_batched(robot, shifts, budget, plan, designs_per_chunk)
-    return {metric: JointAverage(out.value[..., i], out.error[..., i], out.samples[..., i])
-            for i, metric in enumerate(metrics)}
+    return {
+        metric: JointAverage(out.value[..., i], out.error[..., i], out.samples[..., i])
+        for i, metric in enumerate(metrics)
+    }
 
 
 def joint_average(
@@ -452,9 +458,17 @@ def joint_average(
         `JointAverage` with ``(...)`` fields. ``value`` is differentiable in the
         design (``jax.grad``); under ``vmap`` or ``jit`` it works as well.
     """
-    return joint_averages(robot, (metric,), rtol=rtol, randomizations=randomizations, block=block,
-                          min_samples=min_samples, max_samples=max_samples, seed=seed,
-                          designs_per_chunk=designs_per_chunk)[metric]
+    return joint_averages(
+        robot,
+        (metric,),
+        rtol=rtol,
+        randomizations=randomizations,
+        block=block,
+        min_samples=min_samples,
+        max_samples=max_samples,
+        seed=seed,
+        designs_per_chunk=designs_per_chunk,
+    )[metric]
 
 
 def joint_average_manipulability(robot, **options) -> JointAverage:
@@ -497,4 +511,9 @@ def average_dynamic_manipulability(robot, **options) -> JointAverage:
     return joint_average(robot, "dynamic_manipulability", **options)
 
 
-__all__ += ["manipulability_metric", "inverse_condition_metric", "base_disturbance_metric", "dynamic_manipulability_metric"]
+__all__ += [
+    "base_disturbance_metric",
+    "dynamic_manipulability_metric",
+    "inverse_condition_metric",
+    "manipulability_metric",
+]

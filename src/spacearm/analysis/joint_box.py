@@ -39,14 +39,14 @@ from ..models.family import family_of
 
 __all__ = [
     "MAX_SOBOL_DIMENSION",
+    "box_postures",
+    "check_joint_box",
+    "digital_shifts",
+    "joint_box",
     "joint_kinds",
     "periodic_joints",
-    "joint_box",
-    "check_joint_box",
-    "box_postures",
     "sobol_direction_numbers",
     "sobol_points",
-    "digital_shifts",
 ]
 
 # Joe & Kuo (2008), new-joe-kuo-6.21201: (degree s, coefficients a, initial m_1..m_s)
@@ -154,14 +154,17 @@ def check_joint_box(robot) -> None:
         return
     kinds = joint_kinds(robot)
     if not 1 <= len(kinds) <= MAX_SOBOL_DIMENSION:
-        raise ConfigError(f"joints: the joint-box averages support 1 to {MAX_SOBOL_DIMENSION} joints, "
-                          f"the robot has {len(kinds)}")
+        raise ConfigError(
+            f"joints: the joint-box averages support 1 to {MAX_SOBOL_DIMENSION} joints, the robot has {len(kinds)}"
+        )
     lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
     names = getattr(getattr(robot, "labels", None), "joint_names", ()) or ()
     for i, kind in enumerate(kinds):
         if kind == "prismatic" and not (np.all(np.isfinite(lower[..., i])) and np.all(np.isfinite(upper[..., i]))):
             label = f"'{names[i]}'" if i < len(names) else f"{i}"
-            raise ConfigError(f"joints[{i}] {label}: a prismatic joint needs finite limits for a joint-box average or search")
+            raise ConfigError(
+                f"joints[{i}] {label}: a prismatic joint needs finite limits for a joint-box average or search"
+            )
 
 
 def box_postures(robot, unit: jax.Array) -> jax.Array:

@@ -63,18 +63,23 @@ from ..models.planar.closed_forms import (
 from ..models.planar.robot import PlanarRobot
 from .manipulability_maps import grid_average
 
-__all__ = ["average_manipulability", "fixed_base_average_manipulability", "check_average_options"]
+__all__ = ["average_manipulability", "check_average_options", "fixed_base_average_manipulability"]
 
 _MEASURES = ("area", "joint")
 _ELBOWS = ("down", "up", "both")
 _RULES = ("adaptive", "product")
 # Smallest allowed value of each integer option of average_manipulability.
-_INTEGER_OPTIONS = {"phi1_panels": 2, "phi2_panels": 1, "order": 1, "newton_steps": 0, "designs_per_chunk": 1, "n_points_joint": 2}
+_INTEGER_OPTIONS = {
+    "phi1_panels": 2,
+    "phi2_panels": 1,
+    "order": 1,
+    "newton_steps": 0,
+    "designs_per_chunk": 1,
+    "n_points_joint": 2,
+}
 
 
 # Areas (Table 2) ---------------------------------------------------------------------
-
-
 
 
 # The average w-bar (eq. 12) ---------------------------------------------------------
@@ -137,11 +142,11 @@ def _fourier_forms(coeffs: DesignCoefficients, cos1, sin1):
     h2 = (inertia[2] + W[2, 2], W[0, 2] * cos1 + W[1, 2], -W[0, 2] * sin1)
     tip1 = (K[1] * sin1, K[2] * sin1, K[2] * cos1)  # K1 sin1 + K2 sin12
     tip2 = (0.0, K[0] * sin1, K[0] * cos1 + K[1])  # K0 sin12 + K1 sin2
-    total = tuple(a + b + c for a, b, c in zip(h0, h1, h2))
-    h12 = tuple(a + b for a, b in zip(h1, h2))
+    total = tuple(a + b + c for a, b, c in zip(h0, h1, h2, strict=False))
+    h12 = tuple(a + b for a, b in zip(h1, h2, strict=False))
     free = product(total, (0.0, 0.0, 1.0))  # sin2 (h0 + h1 + h2)
     first, second = product(h2, tip1), product(h12, tip2)
-    numerator = [K[1] * K[2] * f + K[0] * a - K[2] * b for f, a, b in zip(free, first, second)]
+    numerator = [K[1] * K[2] * f + K[0] * a - K[2] * b for f, a, b in zip(free, first, second, strict=False)]
     shape = jnp.shape(cos1)
     return (
         jnp.stack([jnp.broadcast_to(c, shape) for c in numerator], axis=-1),
@@ -165,7 +170,9 @@ def _panel_rotations(centers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for c in centers:
         cos, sin, cos2, sin2 = math.cos(c), math.sin(c), math.cos(2 * c), math.sin(2 * c)
         # Rows: coefficients in phi2; columns: in d (cos phi2 = cos c cos d - sin c sin d, ...).
-        rotate = np.array([[1, 0, 0, 0, 0], [0, cos, -sin, 0, 0], [0, sin, cos, 0, 0], [0, 0, 0, cos2, -sin2], [0, 0, 0, sin2, cos2]])
+        rotate = np.array(
+            [[1, 0, 0, 0, 0], [0, cos, -sin, 0, 0], [0, sin, cos, 0, 0], [0, 0, 0, cos2, -sin2], [0, 0, 0, sin2, cos2]]
+        )
         numerator.append(rotate)
         denominator.append(rotate[:3, :3])
     return np.concatenate(numerator, axis=1), np.concatenate(denominator, axis=1)
@@ -257,7 +264,16 @@ def _edge_crossings(coeffs: DesignCoefficients):
     return jnp.where(valid, cosines, 0.0), valid
 
 
-def _wbar_two_link(robot: PlanarRobot, measure: str, elbow: str, phi1_panels: int, phi2_panels: int, order: int, newton_steps: int, rule: str):
+def _wbar_two_link(
+    robot: PlanarRobot,
+    measure: str,
+    elbow: str,
+    phi1_panels: int,
+    phi2_panels: int,
+    order: int,
+    newton_steps: int,
+    rule: str,
+):
     """w-bar of one n = 2 design (see the module docstring for the rule)."""
     coeffs = design_coefficients(robot)
     lengths = robot.link_length
@@ -310,7 +326,7 @@ def _wbar_two_link(robot: PlanarRobot, measure: str, elbow: str, phi1_panels: in
         cos, sin = _cos_sin(offset, half)
         basis = (cos, sin, cos * cos - sin * sin, 2.0 * sin * cos)
         coefficient = [numerator[:, :, None, None, k] for k in range(5)]
-        values = coefficient[0] + sum(c * b for c, b in zip(coefficient[1:], basis))
+        values = coefficient[0] + sum(c * b for c, b in zip(coefficient[1:], basis, strict=False))
         coefficient = [denominator[:, :, None, None, k] for k in range(3)]
         values = jnp.abs(values) / (coefficient[0] + coefficient[1] * cos + coefficient[2] * sin)
         if measure == "area":
@@ -333,11 +349,8 @@ def _wbar_two_link(robot: PlanarRobot, measure: str, elbow: str, phi1_panels: in
         inner = jnp.sum(integrand(jnp.broadcast_to(phi2, (phi1.shape[0], count))), axis=-1) * step
     total = jnp.sum(inner * phi1_weights)
     span = hi - lo
-    if measure == "area":
-        # int l1 l2 |sin phi2| over the strip: 2 pi l1 l2 * (2 per sheet of width pi).
-        denominator = 2.0 * jnp.pi * l1 * l2 * 2.0 * (span / math.pi)
-    else:
-        denominator = 2.0 * jnp.pi * span
+    # Area: int l1 l2 |sin phi2| over the strip, 2 pi l1 l2 * (2 per sheet of width pi).
+    denominator = 2.0 * jnp.pi * l1 * l2 * 2.0 * (span / math.pi) if measure == "area" else 2.0 * jnp.pi * span
     return total / denominator / robot.reach**2
 
 
@@ -357,7 +370,9 @@ def check_average_options(*, where: str = "", **options) -> None:
     for name, least in _INTEGER_OPTIONS.items():
         integer(f"{where}{name}", options.get(name, least), least=least)  # bounded by SIZE_LIMITS too
     if options.get("phi1_panels", 2) % 2:
-        raise ConfigError(f"{where}phi1_panels: must be even so that phi1 = 0 is a panel edge, got {options['phi1_panels']}")
+        raise ConfigError(
+            f"{where}phi1_panels: must be even so that phi1 = 0 is a panel edge, got {options['phi1_panels']}"
+        )
 
 
 def average_manipulability(
@@ -412,8 +427,15 @@ def average_manipulability(
         ConfigError: for an unknown option, or measure="area" with n != 2.
     """
     check_average_options(
-        measure=measure, elbow=elbow, phi1_panels=phi1_panels, phi2_panels=phi2_panels, order=order,
-        newton_steps=newton_steps, rule=rule, designs_per_chunk=designs_per_chunk, n_points_joint=n_points_joint,
+        measure=measure,
+        elbow=elbow,
+        phi1_panels=phi1_panels,
+        phi2_panels=phi2_panels,
+        order=order,
+        newton_steps=newton_steps,
+        rule=rule,
+        designs_per_chunk=designs_per_chunk,
+        n_points_joint=n_points_joint,
     )
     n = robot.n_links
     if n != 2 and measure == "area":
@@ -438,9 +460,21 @@ def average_manipulability(
 
 @functools.partial(
     jax.jit,
-    static_argnames=("measure", "elbow", "phi1_panels", "phi2_panels", "order", "newton_steps", "rule", "designs_per_chunk", "n_points_joint"),
+    static_argnames=(
+        "measure",
+        "elbow",
+        "phi1_panels",
+        "phi2_panels",
+        "order",
+        "newton_steps",
+        "rule",
+        "designs_per_chunk",
+        "n_points_joint",
+    ),
 )
-def _average_jit(robot, *, measure, elbow, phi1_panels, phi2_panels, order, newton_steps, rule, designs_per_chunk, n_points_joint):
+def _average_jit(
+    robot, *, measure, elbow, phi1_panels, phi2_panels, order, newton_steps, rule, designs_per_chunk, n_points_joint
+):
     n = robot.n_links
 
     def single(design: PlanarRobot):
@@ -451,7 +485,7 @@ def _average_jit(robot, *, measure, elbow, phi1_panels, phi2_panels, order, newt
     batch = robot.batch_shape
     if not batch:
         return single(robot)
-    flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (-1, *jnp.shape(x)[len(batch):])), robot)
+    flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (-1, *jnp.shape(x)[len(batch) :])), robot)
     size = int(np.prod(batch))
     values = jax.lax.map(single, flat, batch_size=min(designs_per_chunk, size))
     return jnp.reshape(values, batch)
@@ -473,5 +507,3 @@ def fixed_base_average_manipulability(robot: PlanarRobot, *, measure: str = "are
     l1, l2 = robot.link_length[..., 0], robot.link_length[..., 1]
     factor = {"area": math.pi / 4.0, "joint": 2.0 / math.pi}[measure]
     return l1 * l2 / robot.reach**2 * factor
-
-

@@ -22,13 +22,21 @@ from ..models.planar.closed_forms import (
 )
 from ..models.planar.robot import PlanarRobot
 
+
 def check_single_design(robot: PlanarRobot, where: str) -> None:
     """Refuse a batch of designs where a function takes one design (vmap over designs instead)."""
     if robot.batch_shape:
         raise ConfigError(f"{where}: takes one design; vmap over a batch of designs (batch shape {robot.batch_shape})")
 
 
-__all__ = ["check_single_design", "joint_grid", "manipulability_map", "grid_average", "inverse_kinematics", "workspace_map"]
+__all__ = [
+    "check_single_design",
+    "grid_average",
+    "inverse_kinematics",
+    "joint_grid",
+    "manipulability_map",
+    "workspace_map",
+]
 
 # Posture grids and maps --------------------------------------------------------------
 

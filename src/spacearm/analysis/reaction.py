@@ -39,13 +39,13 @@ from ..models.spatial.robot import SpatialRobot
 from ..motion import dop853
 
 __all__ = [
-    "reaction_null_space",
-    "disturbance",
-    "disturbance_map",
     "DisturbanceMap",
     "ReactionFreePath",
+    "disturbance",
+    "disturbance_map",
     "reaction_free_rates",
     "reaction_free_tip_path",
+    "reaction_null_space",
 ]
 
 
@@ -114,8 +114,11 @@ def disturbance_map(robot: SpatialRobot, q: jax.Array) -> DisturbanceMap:
     _, s, vt = jnp.linalg.svd(C, full_matrices=True)
     smallest = s[..., -1] if n <= 3 else jnp.zeros_like(s[..., -1])
     return DisturbanceMap(
-        largest=s[..., 0], smallest=smallest, singular_values=s,
-        least_disturbing=vt[..., -1, :], most_disturbing=vt[..., 0, :],
+        largest=s[..., 0],
+        smallest=smallest,
+        singular_values=s,
+        least_disturbing=vt[..., -1, :],
+        most_disturbing=vt[..., 0, :],
     )
 
 
@@ -223,7 +226,7 @@ def reaction_free_tip_path(
     batch = np.broadcast_shapes(q_start.shape[:-1], direction.shape[:-1], R0.shape[:-2], length.shape)
     count = math.prod(batch)
     padded = bucket_size(count)  # one program per power of two of paths, not per batch size
-    flat = lambda x, core: jnp.broadcast_to(x, batch + core).reshape((-1,) + core)  # noqa: E731
+    flat = lambda x, core: jnp.broadcast_to(x, batch + core).reshape((-1,) + core)
     inputs = pad_leading((flat(q_start, (n,)), flat(R0, (3, 3)), flat(direction, (3,)), flat(length, ())), padded)
     out = _reaction_free_flat(robot, *inputs, int(steps))
     return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), out)

@@ -23,7 +23,6 @@ from ..models.planar.robot import PlanarRobot
 __all__ = ["SingularSet", "dynamic_singularities", "path_independent_radius"]
 
 
-
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class SingularSet:
@@ -129,4 +128,3 @@ def path_independent_radius(robot: PlanarRobot, **grid) -> jax.Array:
     Compare `guaranteed_radius` (eq. 8), which considers phi_2 = 0 only.
     """
     return jnp.nanmin(dynamic_singularities(robot, **grid).radius, axis=(-2, -1))
-

@@ -47,25 +47,33 @@ import numpy as np
 from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_determinant, tip_position
 from ..models.family import family_of
 from ..motion.spatial_paths import spatial_straight_tip_path
+from .joint_box import (
+    box_postures,
+    check_joint_box,
+    digital_shifts,
+    joint_box,
+    periodic_joints,
+    sobol_direction_numbers,
+    sobol_points,
+)
 from .singularities import path_independent_radius as planar_path_independent_radius
 from .workspaces import maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius
 from .workspaces import maximum_reachable_radius as planar_maximum_reachable_radius
-from .joint_box import box_postures, check_joint_box, digital_shifts, joint_box, periodic_joints, sobol_direction_numbers, sobol_points
 
 __all__ = [
+    "GuaranteedWorkspace",
     "ReachableRadii",
     "SingularPostures",
-    "GuaranteedWorkspace",
-    "reachable_radii",
-    "maximum_reachable_radius",
-    "maximum_reachable_inner_radius",
-    "singularity_measure",
-    "singular_postures",
-    "singular_radius",
-    "path_independent_radius",
+    "StraightPathWorkspace",
     "guaranteed_workspace",
     "icosphere_directions",
-    "StraightPathWorkspace",
+    "maximum_reachable_inner_radius",
+    "maximum_reachable_radius",
+    "path_independent_radius",
+    "reachable_radii",
+    "singular_postures",
+    "singular_radius",
+    "singularity_measure",
     "spatial_straight_path_workspace",
 ]
 
@@ -191,7 +199,7 @@ def _reachable(robot, starts: int, steps, seed, rate):
     lower, upper = joint_box(robot)
     results = []
     for sign in (-1.0, 1.0):  # inner: minimize |tip|^2; outer: maximize
-        u = _adam_search(lambda u: -sign * radius_sq(u), u0, wraps, steps, rate)
+        u = _adam_search(lambda u, sign=sign: -sign * radius_sq(u), u0, wraps, steps, rate)
         values = jax.vmap(radius_sq)(u)
         best = jax.lax.stop_gradient(u[jnp.argmax(sign * values)])
         # Envelope theorem: the radius at the optimizer's box coordinates, differentiable
@@ -461,8 +469,9 @@ def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, 
         q, q_radius_sq = jax.lax.cond(t == chunks, lambda: candidates_of(buffer), lambda: (q, q_radius_sq))
         chunk = jax.lax.dynamic_slice_in_dim(buffer, jnp.minimum(t, chunks - 1) * candidates, candidates)
         start = jax.lax.cond(projecting, lambda: chunk, lambda: tangent_step(t - chunks, q))
-        moved = _newton_project(robot, start, jacobian, jnp.where(projecting, projection_steps, newton_steps),
-                                lower, upper, wraps)
+        moved = _newton_project(
+            robot, start, jacobian, jnp.where(projecting, projection_steps, newton_steps), lower, upper, wraps
+        )
         buffer = jnp.where(projecting, jax.lax.dynamic_update_slice_in_dim(buffer, moved, t * candidates, 0), buffer)
         moved_radius_sq = _tip_radius_sq(robot, moved)
         on_set = jnp.abs(singularity_measure(robot, moved, jacobian)) <= tolerance
@@ -510,7 +519,9 @@ def singular_radius(
         included). Joints at a limit at the minimum move with the limit.
     """
     check_joint_box(robot)
-    return _singular_radius(robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed)
+    return _singular_radius(
+        robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed
+    )
 
 
 # Families with a dedicated scan of the dynamic singular set for two joints (the planar
@@ -573,7 +584,7 @@ def icosphere_directions(subdivisions: int = 4) -> np.ndarray:
     for _ in range(subdivisions):
         midpoint: dict[tuple[int, int], int] = {}
 
-        def middle(a: int, b: int) -> int:
+        def middle(a: int, b: int, midpoint: dict = midpoint) -> int:
             key = (min(a, b), max(a, b))
             if key not in midpoint:
                 m = points[a] + points[b]
@@ -633,7 +644,9 @@ def spatial_straight_path_workspace(
     directions = jnp.asarray(icosphere_directions(subdivisions), jnp.result_type(float))
     q_start = jnp.asarray(q_start, directions.dtype)
     k = directions.shape[0]
-    rotation = None if base_rotation is None else jnp.broadcast_to(jnp.asarray(base_rotation, directions.dtype), (k, 3, 3))
+    rotation = (
+        None if base_rotation is None else jnp.broadcast_to(jnp.asarray(base_rotation, directions.dtype), (k, 3, 3))
+    )
     paths = spatial_straight_tip_path(
         robot, jnp.broadcast_to(q_start, (k, q_start.shape[-1])), directions, base_rotation=rotation, **path_options
     )

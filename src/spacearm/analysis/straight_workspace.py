@@ -15,23 +15,22 @@ import numpy as np
 from ..kinematics import manipulability, tip_position
 from ..models.planar.robot import PlanarRobot
 from ..motion import straight_tip_path
-from .singularities import path_independent_radius
 from .joint_box import joint_box
+from .singularities import path_independent_radius
 from .workspaces import guaranteed_radius, kinematic_singularity_radius, maximum_reachable_radius
 
 __all__ = [
-    "evenly_spaced_directions",
-    "straight_path_ends",
-    "straight_path_workspace",
-    "straight_path_union_radius",
-    "straight_path_intersection_radius",
     "clearance_radius",
+    "evenly_spaced_directions",
     "inside_straight_path_workspace",
     "random_joint_postures",
+    "straight_path_ends",
+    "straight_path_intersection_radius",
     "straight_path_study",
+    "straight_path_union_radius",
+    "straight_path_workspace",
     "summarize_straight_paths",
 ]
-
 
 
 def evenly_spaced_directions(n_directions: int, dtype=None) -> jax.Array:

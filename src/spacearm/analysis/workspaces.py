@@ -57,20 +57,20 @@ from ..models.planar.robot import PlanarRobot
 from .joint_box import joint_box
 
 __all__ = [
-    "fixed_vehicle_radius",
-    "fixed_vehicle_inner_radius",
-    "fixed_vehicle_center",
+    "attachment_condition",
     "attitude_constraint",
     "attitude_constraint_inner_radius",
-    "maximum_reachable_radius",
-    "maximum_reachable_inner_radius",
+    "fixed_vehicle_center",
+    "fixed_vehicle_inner_radius",
+    "fixed_vehicle_radius",
     "guaranteed_radius",
     "kinematic_singularity_radius",
-    "attachment_condition",
+    "maximum_reachable_inner_radius",
+    "maximum_reachable_radii",
+    "maximum_reachable_radius",
     "normalized_areas",
     "normalized_workspace_areas",
     "workspace_relations",
-    "maximum_reachable_radii",
 ]
 
 
@@ -191,8 +191,7 @@ def normalized_workspace_areas(robot: PlanarRobot) -> dict[str, jax.Array]:
     return {
         "fixed_vehicle": (robot.reach**2 - fixed_vehicle_inner_radius(robot) ** 2) / L2,
         "attitude_constraint": (r2**2 - attitude_constraint_inner_radius(robot) ** 2) / L2,
-        "maximum_reachable": (maximum_reachable_radius(robot) ** 2 - maximum_reachable_inner_radius(robot) ** 2)
-        / L2,
+        "maximum_reachable": (maximum_reachable_radius(robot) ** 2 - maximum_reachable_inner_radius(robot) ** 2) / L2,
         "maximum_reachable_disk": maximum_reachable_radius(robot) ** 2 / L2,
         "guaranteed": guaranteed_radius(robot) ** 2 / L2,
     }
@@ -284,5 +283,3 @@ def maximum_reachable_radii(robot: PlanarRobot, points_per_axis: int | None = No
         points_per_axis = max(9, int(round(2.0e5 ** (1.0 / n))))
     (inner, j_in), (outer, j_out) = _reach_extremes(robot, points_per_axis, zoom_levels)
     return inner, outer, j_in, j_out
-
-

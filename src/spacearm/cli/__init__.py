@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from .._core.errors import ConfigError, RunError
 from .._core.numeric import enable_compilation_cache, enable_x64, use_every_cpu_core
 
-__all__ = ["main", "console_main", "build_parser", "COMMANDS", "EXIT_INVALID", "EXIT_FAILED"]
+__all__ = ["COMMANDS", "EXIT_FAILED", "EXIT_INVALID", "build_parser", "console_main", "main"]
 
 EXIT_INVALID = 2
 EXIT_FAILED = 1
@@ -85,8 +85,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{name}: error: the input nests too deeply", file=sys.stderr)
         return EXIT_INVALID
     except MemoryError:
-        print(f"{name}: error: out of memory; make the run smaller (fewer designs, a smaller chunk_size)",
-              file=sys.stderr)
+        print(
+            f"{name}: error: out of memory; make the run smaller (fewer designs, a smaller chunk_size)", file=sys.stderr
+        )
         return EXIT_FAILED
     except OSError as error:  # a read-only or full disk under --out, a vanished file
         where = f"{error.filename}: " if error.filename else ""

@@ -13,8 +13,14 @@ class LazyEpilogHelp(argparse.Action):
     registers with ``add_help=False`` and this action, so building the parser stays light.
     """
 
-    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
-                 help="show this help message and exit", epilog: Callable[[], str] | None = None):
+    def __init__(
+        self,
+        option_strings,
+        dest=argparse.SUPPRESS,
+        default=argparse.SUPPRESS,
+        help="show this help message and exit",
+        epilog: Callable[[], str] | None = None,
+    ):
         super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
         self.epilog = epilog
 

@@ -15,7 +15,9 @@ def register(subparsers) -> None:
         help="regenerate every paper figure into results/figures/",
         description="Regenerate the paper's figures (and ours) as PNG files.",
     )
-    parser.add_argument("--out", default="results/figures", metavar="DIR", help="output folder (default results/figures)")
+    parser.add_argument(
+        "--out", default="results/figures", metavar="DIR", help="output folder (default results/figures)"
+    )
     parser.add_argument("--only", metavar="NAMES", help="comma-separated figure names, e.g. fig2,fig7")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 

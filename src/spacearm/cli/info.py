@@ -8,8 +8,11 @@ import sys
 
 
 def register(subparsers) -> None:
-    subparsers.add_parser("info", help="versions, devices and the float64 flag",
-                          description="Print versions, devices and the float64 flag.")
+    subparsers.add_parser(
+        "info",
+        help="versions, devices and the float64 flag",
+        description="Print versions, devices and the float64 flag.",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

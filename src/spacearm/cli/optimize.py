@@ -15,22 +15,37 @@ def register(subparsers) -> None:
         description=(
             "Search the Pareto front of the objectives declared in FILE (e.g. sweeps/pareto-ur5-arm.yaml) "
             "and write pareto.csv, summary.json and figures into results/<name>/ or --out; print a summary "
-            "table. NSGA-II, when the file declares it, runs 3x the search's wall time (compile included)."),
+            "table. NSGA-II, when the file declares it, runs 3x the search's wall time (compile included)."
+        ),
     )
     parser.add_argument("file", help="problem YAML, e.g. sweeps/pareto-attachment.yaml")
     parser.add_argument("--out", help="output folder (default results/<name>/)")
     parser.add_argument("--no-baselines", action="store_true", help="skip the grid and NSGA-II baselines")
-    parser.add_argument("--method", choices=("hybrid", "scalarized"), default="hybrid",
-                        help="hybrid: evolution + set-based hypervolume-gradient steps (default); scalarized: "
-                             "the Chebyshev gradient search of the file's search: section")
-    parser.add_argument("--max-seconds", type=float, default=None,
-                        help="stop the hybrid search after this run time (s); overrides hybrid.max_seconds")
-    parser.add_argument("--nsga2-factor", type=float, default=3.0,
-                        help="NSGA-II's wall time as a multiple of the search's, compile included (default 3)")
     parser.add_argument(
-        "--cost-ratio", action="store_true",
+        "--method",
+        choices=("hybrid", "scalarized"),
+        default="hybrid",
+        help="hybrid: evolution + set-based hypervolume-gradient steps (default); scalarized: "
+        "the Chebyshev gradient search of the file's search: section",
+    )
+    parser.add_argument(
+        "--max-seconds",
+        type=float,
+        default=None,
+        help="stop the hybrid search after this run time (s); overrides hybrid.max_seconds",
+    )
+    parser.add_argument(
+        "--nsga2-factor",
+        type=float,
+        default=3.0,
+        help="NSGA-II's wall time as a multiple of the search's, compile included (default 3)",
+    )
+    parser.add_argument(
+        "--cost-ratio",
+        action="store_true",
         help="time a value-and-gradient against a value on one batch apart (compiles one more program); "
-             "by default the ratio is read off the search's own timed calls")
+        "by default the ratio is read off the search's own timed calls",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,9 +65,18 @@ def run(args: argparse.Namespace) -> int:
         hybrid = dataclasses.replace(hybrid, max_seconds=args.max_seconds)
     out_dir = Path(args.out) if args.out else Path("results") / problem.name
     outputs = (plot_results, *_html_outputs())
-    run_problem(problem, out_dir, method=args.method, hybrid=hybrid, baselines=not args.no_baselines, config=config,
-                outputs=outputs, command=sys.argv, cost_ratio="measured" if args.cost_ratio else "search",
-                nsga2_time_factor=args.nsga2_factor)
+    run_problem(
+        problem,
+        out_dir,
+        method=args.method,
+        hybrid=hybrid,
+        baselines=not args.no_baselines,
+        config=config,
+        outputs=outputs,
+        command=sys.argv,
+        cost_ratio="measured" if args.cost_ratio else "search",
+        nsga2_time_factor=args.nsga2_factor,
+    )
     return 0
 
 

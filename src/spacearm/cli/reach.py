@@ -50,20 +50,29 @@ def register(subparsers) -> None:
         "write --from=-10,20,30 when the first value is negative",
     )
     parser.add_argument(
-        "--to", dest="target", required=True, metavar="X,Y[,Z]",
+        "--to",
+        dest="target",
+        required=True,
+        metavar="X,Y[,Z]",
         help="target in the inertial frame, m, origin at the system centroid: X,Y planar, X,Y,Z spatial "
         "(--to=-2,1 for a negative x)",
     )
     parser.add_argument(
-        "--attitude-rpy", dest="attitude", default=None, metavar="R,P,Y",
+        "--attitude-rpy",
+        dest="attitude",
+        default=None,
+        metavar="R,P,Y",
         help="spatial robots: the bus attitude at the start as roll, pitch, yaw (URDF convention), "
         "degrees (radians with --radians); default the identity",
     )
     parser.add_argument("--radians", action="store_true", help="read --from in radians")
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
     parser.add_argument("--animate", action="store_true", help="also write reach.gif")
-    parser.add_argument("--html", action="store_true",
-                        help="also write reach.html: an interactive offline replay (needs the 'view' extra)")
+    parser.add_argument(
+        "--html",
+        action="store_true",
+        help="also write reach.html: an interactive offline replay (needs the 'view' extra)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -150,7 +159,8 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
         f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
         f"bus rotation   {np.degrees(plan.bus_turn):.6f} deg from start to end ({loop} the straight path)",
         f"straight path  {plan.straight_length:.6f} m",
-        "end joints     " + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
+        "end joints     "
+        + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m",
         f"figure         {figure_path}",

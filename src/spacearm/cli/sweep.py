@@ -51,21 +51,44 @@ def register(subparsers) -> None:
     parser.add_argument("-h", "--help", action=LazyEpilogHelp, epilog=_epilog)
     parser.add_argument("file", help="the sweep YAML file")
     parser.add_argument("--out", metavar="DIR", help="output folder (default: the file's 'output', or results/<name>)")
-    parser.add_argument("--set", metavar="KEY=VALUE", action="append",
-                        help="override a key of the sweep file (dotted path, YAML value); repeatable")
+    parser.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        action="append",
+        help="override a key of the sweep file (dotted path, YAML value); repeatable",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     group = parser.add_argument_group(
-        "many processes (jax.distributed; each defaults to its SPACEARM_* environment variable)")
-    group.add_argument("--coordinator", metavar="HOST:PORT", default=os.environ.get("SPACEARM_COORDINATOR") or None,
-                       help="process 0's address; every process gives the same (SPACEARM_COORDINATOR)")
-    group.add_argument("--num-processes", metavar="N", type=int, default=os.environ.get("SPACEARM_NUM_PROCESSES") or None,
-                       help="how many processes run the sweep together (SPACEARM_NUM_PROCESSES)")
-    group.add_argument("--process-id", metavar="I", type=int, default=os.environ.get("SPACEARM_PROCESS_ID") or None,
-                       help="this process's rank, 0..N-1; process 0 writes the results (SPACEARM_PROCESS_ID)")
-    group.add_argument("--peer-timeout", metavar="SECONDS", type=float,
-                       default=float(os.environ.get("SPACEARM_PEER_TIMEOUT") or 60.0),
-                       help="how long to wait for the other processes before giving up with one line "
-                            "(SPACEARM_PEER_TIMEOUT; default 60)")
+        "many processes (jax.distributed; each defaults to its SPACEARM_* environment variable)"
+    )
+    group.add_argument(
+        "--coordinator",
+        metavar="HOST:PORT",
+        default=os.environ.get("SPACEARM_COORDINATOR") or None,
+        help="process 0's address; every process gives the same (SPACEARM_COORDINATOR)",
+    )
+    group.add_argument(
+        "--num-processes",
+        metavar="N",
+        type=int,
+        default=os.environ.get("SPACEARM_NUM_PROCESSES") or None,
+        help="how many processes run the sweep together (SPACEARM_NUM_PROCESSES)",
+    )
+    group.add_argument(
+        "--process-id",
+        metavar="I",
+        type=int,
+        default=os.environ.get("SPACEARM_PROCESS_ID") or None,
+        help="this process's rank, 0..N-1; process 0 writes the results (SPACEARM_PROCESS_ID)",
+    )
+    group.add_argument(
+        "--peer-timeout",
+        metavar="SECONDS",
+        type=float,
+        default=float(os.environ.get("SPACEARM_PEER_TIMEOUT") or 60.0),
+        help="how long to wait for the other processes before giving up with one line "
+        "(SPACEARM_PEER_TIMEOUT; default 60)",
+    )
 
 
 def _join(args: argparse.Namespace) -> bool:
@@ -76,11 +99,15 @@ def _join(args: argparse.Namespace) -> bool:
     if not any(given):
         return False
     if not all(given):
-        raise ConfigError("a distributed sweep needs all three of --coordinator (SPACEARM_COORDINATOR), "
-                          "--num-processes (SPACEARM_NUM_PROCESSES) and --process-id (SPACEARM_PROCESS_ID)")
+        raise ConfigError(
+            "a distributed sweep needs all three of --coordinator (SPACEARM_COORDINATOR), "
+            "--num-processes (SPACEARM_NUM_PROCESSES) and --process-id (SPACEARM_PROCESS_ID)"
+        )
     if args.num_processes < 1 or not 0 <= args.process_id < args.num_processes:
-        raise ConfigError(f"--process-id {args.process_id}: must be in 0..{args.num_processes - 1} "
-                          f"(--num-processes {args.num_processes})")
+        raise ConfigError(
+            f"--process-id {args.process_id}: must be in 0..{args.num_processes - 1} "
+            f"(--num-processes {args.num_processes})"
+        )
     host, _, port = args.coordinator.rpartition(":")
     if not host or not port.isdigit():
         raise ConfigError(f"--coordinator {args.coordinator}: must be HOST:PORT, e.g. 127.0.0.1:8476")
@@ -119,8 +146,14 @@ def _run(args: argparse.Namespace) -> int:
     print(spec.summary(), file=sys.stderr)
     try:
         # The table, the grids and the report, then the figures (listed in the manifest).
-        result = run_sweep(spec, out_dir, progress=not args.quiet, command=sys.argv,
-                           outputs=(write_figures, _shells_view), peer_timeout_s=args.peer_timeout)
+        result = run_sweep(
+            spec,
+            out_dir,
+            progress=not args.quiet,
+            command=sys.argv,
+            outputs=(write_figures, _shells_view),
+            peer_timeout_s=args.peer_timeout,
+        )
     except OSError as error:  # e.g. a read-only file system under --out
         raise ConfigError(f"--out {out_dir}: cannot write the results ({error.strerror or error})") from None
     if not result.manifest:  # a distributed sweep's other processes: process 0 wrote the results
@@ -128,8 +161,10 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     print(format_table(result.table))
     timings = result.manifest["timings_s"]
-    print(f"wrote {out_dir}/ ({len(result.files)} files; compile {timings['compile']:.1f} s, "
-          f"run {timings['run']:.1f} s, wall {timings['wall']:.1f} s)")
+    print(
+        f"wrote {out_dir}/ ({len(result.files)} files; compile {timings['compile']:.1f} s, "
+        f"run {timings['run']:.1f} s, wall {timings['wall']:.1f} s)"
+    )
     return 0
 
 
@@ -167,8 +202,9 @@ def format_table(table: dict[str, np.ndarray], max_rows: int = ROWS_SHOWN) -> st
     if rows > max_rows:
         body.append(["..."] * len(names))
         for label, reduce in (("min", np.nanmin), ("median", np.nanmedian), ("max", np.nanmax)):
-            body.append([label if name == "design" else _cell(float(reduce(np.asarray(table[name], float))))
-                         for name in names])
+            body.append(
+                [label if name == "design" else _cell(float(reduce(np.asarray(table[name], float)))) for name in names]
+            )
     widths = [max(len(name), *(len(row[j]) for row in body)) for j, name in enumerate(names)]
     text = ["  ".join(name.rjust(w) for name, w in zip(names, widths, strict=True))]
     text += ["  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)) for row in body]

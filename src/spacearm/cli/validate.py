@@ -22,15 +22,21 @@ def check_problem_memory(where: str, problem) -> float:
     runs = problem.search.directions * problem.search.starts
     if hasattr(problem, "wbar_options"):  # planar: the w-bar quadrature dominates
         n = problem.n_links
-        numbers, option = (working_numbers("wbar", problem.wbar_options, n) if "wbar" in problem.objectives
-                           else (4096.0 * (n + 1), ""))
+        numbers, option = (
+            working_numbers("wbar", problem.wbar_options, n) if "wbar" in problem.objectives else (4096.0 * (n + 1), "")
+        )
         option = f"wbar.{option.split(' or ')[0]}" if option else ""
     else:  # spatial: the joint-box samples of each objective
         numbers, option = working_numbers("objectives", {"samples": problem.samples}, problem.base.n_joints)
         option = "average.samples"
     advice = "lower search.directions or search.starts" + (f", or {option}" if option else "")
-    return check_working_memory(f"{where}: search", runs, 3 * numbers,  # value and gradient
-                                f"{runs:,} search runs (directions x starts)", advice)
+    return check_working_memory(
+        f"{where}: search",
+        runs,
+        3 * numbers,  # value and gradient
+        f"{runs:,} search runs (directions x starts)",
+        advice,
+    )
 
 
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:

@@ -40,13 +40,18 @@ def register(subparsers) -> None:
     )
     parser.add_argument("robot", help="robot YAML file, e.g. configs/ur5-smallsat.yaml or configs/umetani1990.yaml")
     parser.add_argument(
-        "--posture", default=None, metavar="Q1,Q2,..",
+        "--posture",
+        default=None,
+        metavar="Q1,Q2,..",
         help="first posture shown, DEGREES (radians with --radians; m for prismatic joints): spatial robots "
         "the joints, planar robots the base attitude then the joints; default all zero "
         "(write --posture=-10,20 when the first value is negative)",
     )
     parser.add_argument(
-        "--attitude-rpy", dest="attitude", default=None, metavar="R,P,Y",
+        "--attitude-rpy",
+        dest="attitude",
+        default=None,
+        metavar="R,P,Y",
         help="spatial robots: the first bus attitude as roll, pitch, yaw (URDF convention), degrees",
     )
     parser.add_argument("--radians", action="store_true", help="read --posture and --attitude-rpy in radians")
@@ -63,8 +68,9 @@ def run(args: argparse.Namespace) -> int:
     plotly_bundle()  # the extra is checked before any work (MissingViewExtra: exit 2)
     robot = load_robot(args.robot)
     if not isinstance(robot, (PlanarRobot, SpatialRobot)):
-        raise ConfigError(f"{args.robot}: spacearm view draws planar and single-arm spatial robots, "
-                          f"not a {type(robot).__name__} yet")
+        raise ConfigError(
+            f"{args.robot}: spacearm view draws planar and single-arm spatial robots, not a {type(robot).__name__} yet"
+        )
     planar = isinstance(robot, PlanarRobot)
     count = robot.n_links + 1 if planar else robot.n_joints
     posture = None
@@ -76,7 +82,9 @@ def run(args: argparse.Namespace) -> int:
     attitude = None
     if args.attitude is not None:
         if planar:
-            raise ConfigError("--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude")
+            raise ConfigError(
+                "--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude"
+            )
         attitude = _numbers(args.attitude, 3, "--attitude-rpy")
         if not args.radians:
             attitude = np.radians(attitude)

@@ -18,8 +18,12 @@ from .search import SearchResult
 __all__ = ["grid_search", "nsga2_search"]
 
 
-def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chunk: int | None = None,
-                reference: Sequence[float] | None = None) -> SearchResult:
+def grid_search(
+    problem: DesignProblem,
+    points: Sequence[int] | None = None,
+    chunk: int | None = None,
+    reference: Sequence[float] | None = None,
+) -> SearchResult:
     """Dense grid baseline: every design of the outer-product grid over the bounds.
 
     Evaluated in fixed-size chunks (the last one padded) with one compiled program.
@@ -28,7 +32,7 @@ def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chu
     reference = problem.reference_point if reference is None else reference
     points = tuple(points or problem.grid_points or (21,) * len(problem.variables))
     chunk = int(chunk or problem.grid_chunk)
-    axes = [np.linspace(v.lower, v.upper, p) for v, p in zip(problem.variables, points)]
+    axes = [np.linspace(v.lower, v.upper, p) for v, p in zip(problem.variables, points, strict=False)]
     mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(axes))
     total = mesh.shape[0]
     chunk = min(chunk, total)
@@ -40,7 +44,7 @@ def grid_search(problem: DesignProblem, points: Sequence[int] | None = None, chu
     start = time.perf_counter()
     values = []
     for begin in range(0, total, chunk):
-        block = mesh[begin:begin + chunk]
+        block = mesh[begin : begin + chunk]
         padded = np.concatenate([block, np.repeat(block[-1:], chunk - block.shape[0], axis=0)])
         values.append(np.asarray(compiled(jnp.asarray(padded)))[: block.shape[0]])
     run_seconds = time.perf_counter() - start
@@ -125,8 +129,9 @@ def nsga2_search(
     checkpoints, count = [], 0
     for k, entry in enumerate(log):
         count += entry[1].shape[0]
-        checkpoints.append(dict(evaluations=count, seconds=entry[2],
-                                hypervolume=float(hv[k]) if hv is not None else float("nan")))
+        checkpoints.append(
+            dict(evaluations=count, seconds=entry[2], hypervolume=float(hv[k]) if hv is not None else float("nan"))
+        )
     return SearchResult(
         method="nsga2",
         designs=designs,

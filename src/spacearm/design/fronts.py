@@ -10,8 +10,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["nondominated_mask", "nondominated", "hypervolume", "hypervolume_2d", "hypervolume_history",
-           "reference_from_population"]
+__all__ = [
+    "hypervolume",
+    "hypervolume_2d",
+    "hypervolume_history",
+    "nondominated",
+    "nondominated_mask",
+    "reference_from_population",
+]
 
 
 def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
@@ -40,7 +46,7 @@ def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
         return mask
     rows = np.flatnonzero(finite)
     try:
-        import moocore  # noqa: PLC0415 - optional extra: its C filter is O(N log N) for three objectives
+        import moocore  # noqa: PLC0415
     except ImportError:  # pragma: no cover - optional extra
         moocore = None
     if moocore is not None and rows.size:
@@ -48,10 +54,10 @@ def nondominated_mask(objectives: np.ndarray) -> np.ndarray:
     else:  # pragma: no cover - pairwise dominance, vectorized in blocks of rows
         others = f[rows]
         for begin in range(0, rows.size, 512):
-            block = others[begin:begin + 512]
+            block = others[begin : begin + 512]
             geq = np.all(others[None, :, :] >= block[:, None, :], axis=2)
             gt = np.any(others[None, :, :] > block[:, None, :], axis=2)
-            mask[rows[begin:begin + 512]] = ~np.any(geq & gt, axis=1)
+            mask[rows[begin : begin + 512]] = ~np.any(geq & gt, axis=1)
     # Drop exact duplicates after the first.
     _, first = np.unique(f[mask], axis=0, return_index=True)
     keep = np.flatnonzero(mask)[np.sort(first)]
@@ -108,9 +114,11 @@ def hypervolume(objectives: np.ndarray, reference: Sequence[float]) -> float:
     if f.shape[0] == 0:
         return 0.0
     try:
-        import moocore  # noqa: PLC0415 - optional extra, needed for m >= 3 only
+        import moocore  # noqa: PLC0415
     except ImportError as error:  # pragma: no cover - optional extra
-        raise ImportError("hypervolume of 3 or more objectives needs moocore (pip install 'spacearm[optimize]')") from error
+        raise ImportError(
+            "hypervolume of 3 or more objectives needs moocore (pip install 'spacearm[optimize]')"
+        ) from error
     return float(moocore.hypervolume(f[nondominated_mask(f)], ref=reference, maximise=True))
 
 

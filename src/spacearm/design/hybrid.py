@@ -47,7 +47,7 @@ from .fronts import hypervolume, nondominated_mask, reference_from_population
 from .hypervolume import layer_hypervolume_gradients
 from .search import SearchResult, _densify
 
-__all__ = ["HybridSettings", "hybrid_search", "parse_hybrid", "reference_from_population", "nondominated_ranks"]
+__all__ = ["HybridSettings", "hybrid_search", "nondominated_ranks", "parse_hybrid", "reference_from_population"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,8 +211,9 @@ def _programs(problem, population: int, m: int):
     return pulls, layer_gradients
 
 
-def hybrid_search(problem, settings: HybridSettings | None = None,
-                  reference: Sequence[float] | None = None) -> SearchResult:
+def hybrid_search(
+    problem, settings: HybridSettings | None = None, reference: Sequence[float] | None = None
+) -> SearchResult:
     """The hybrid search (see the module docstring) on a design problem.
 
     Args:
@@ -272,7 +273,9 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
     f_start = np.concatenate([value_of(start_designs[:population]), value_of(start_designs[population:])])
     if reference is None:
         reference = reference_from_population(f_start, settings.reference_margin)
-        reference_from = f"nadir of the first {2 * population} designs' front minus {settings.reference_margin} of its range"
+        reference_from = (
+            f"nadir of the first {2 * population} designs' front minus {settings.reference_margin} of its range"
+        )
     else:
         reference_from = "problem"
     reference = np.asarray(reference, dtype=np.float64)
@@ -286,18 +289,23 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
 
     def record():
         nonlocal front_f, front_z
-        merged = np.concatenate([front_f, *values[recorded[0]:]])
-        merged_z = np.concatenate([front_z, *unit_designs[recorded[0]:]])
+        merged = np.concatenate([front_f, *values[recorded[0] :]])
+        merged_z = np.concatenate([front_z, *unit_designs[recorded[0] :]])
         recorded[0] = len(values)
         keep = nondominated_mask(merged)
         front_f, front_z = merged[keep], merged_z[keep]
-        checkpoints.append(dict(evaluations=counts["value"] + counts["value_and_gradient"],
-                                seconds=time.perf_counter() - start, hypervolume=hypervolume(front_f, reference)))
+        checkpoints.append(
+            dict(
+                evaluations=counts["value"] + counts["value_and_gradient"],
+                seconds=time.perf_counter() - start,
+                hypervolume=hypervolume(front_f, reference),
+            )
+        )
 
     record()
     accepted_total, generation = 0, 0
     stop_reason = "generations"
-    for generation in range(1, settings.generations + 1):
+    for generation in range(1, settings.generations + 1):  # noqa: B007 (the count is reported after the loop)
         # 2a. Refinement: one hypervolume-gradient step per member, its own layer's gradient.
         ranks = nondominated_ranks(f)
         weights = np.array(layer_gradients(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
@@ -358,11 +366,16 @@ def hybrid_search(problem, settings: HybridSettings | None = None,
         evaluations=counts["value"] + counts["value_and_gradient"],
         compile_seconds=float(sum(compile_seconds.values())),
         run_seconds=run_seconds,
-        extra=dict(reference_point=[float(r) for r in reference], reference_point_from=reference_from,
-                   population=population, generations=generation, stop_reason=stop_reason,
-                   value_evaluations=counts["value"], value_and_gradient_evaluations=counts["value_and_gradient"],
-                   accepted_gradient_steps=accepted_total,
-                   compile_seconds_by_program={k: float(v) for k, v in compile_seconds.items()},
-                   settings=dataclasses.asdict(settings)),
+        extra=dict(
+            reference_point=[float(r) for r in reference],
+            reference_point_from=reference_from,
+            population=population,
+            generations=generation,
+            stop_reason=stop_reason,
+            value_evaluations=counts["value"],
+            value_and_gradient_evaluations=counts["value_and_gradient"],
+            accepted_gradient_steps=accepted_total,
+            compile_seconds_by_program={k: float(v) for k, v in compile_seconds.items()},
+            settings=dataclasses.asdict(settings),
+        ),
     )
-

@@ -27,7 +27,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-__all__ = ["exact_hypervolume", "hypervolume_gradient", "hypervolume_contributions", "layer_hypervolume_gradients"]
+__all__ = ["exact_hypervolume", "hypervolume_contributions", "hypervolume_gradient", "layer_hypervolume_gradients"]
 
 
 def _clipped(points: jax.Array, reference: jax.Array, mask: jax.Array) -> jax.Array:
@@ -76,8 +76,10 @@ def exact_hypervolume(points: jax.Array, reference: jax.Array, mask: jax.Array |
     points = jnp.asarray(points)
     reference = jnp.asarray(reference, dtype=points.dtype)
     if points.ndim != 2 or points.shape[1] not in (2, 3, 4) or reference.shape != (points.shape[1],):
-        raise ValueError(f"exact_hypervolume: points must be (N, m) with m in 2..4 and reference (m,); "
-                         f"got {points.shape} and {reference.shape}")
+        raise ValueError(
+            f"exact_hypervolume: points must be (N, m) with m in 2..4 and reference (m,); "
+            f"got {points.shape} and {reference.shape}"
+        )
     if points.shape[0] == 0:
         return jnp.zeros((), points.dtype)
     mask = jnp.ones(points.shape[0], dtype=bool) if mask is None else jnp.asarray(mask, dtype=bool)
@@ -104,7 +106,8 @@ def hypervolume_contributions(points: jax.Array, reference: jax.Array, mask: jax
     mask = jnp.ones(count, dtype=bool) if mask is None else jnp.asarray(mask, dtype=bool)
     total = exact_hypervolume(points, reference, mask)
     without = jax.vmap(lambda i: exact_hypervolume(points, reference, mask & (jnp.arange(count) != i)))(
-        jnp.arange(count))
+        jnp.arange(count)
+    )
     return jnp.where(mask, total - without, 0.0)
 
 

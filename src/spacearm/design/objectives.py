@@ -19,18 +19,26 @@ from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
 from ..models.spatial.fields import arm_mass
 
-__all__ = ["OBJECTIVES", "AVERAGE_OBJECTIVES", "SPATIAL_OBJECTIVES", "objectives_for", "guaranteed_area",
-           "maximum_reachable_area", "objective", "DESIGN_OBJECTIVES",
-           "total_mass_objective"]
+__all__ = [
+    "AVERAGE_OBJECTIVES",
+    "DESIGN_OBJECTIVES",
+    "OBJECTIVES",
+    "SPATIAL_OBJECTIVES",
+    "guaranteed_area",
+    "maximum_reachable_area",
+    "objective",
+    "objectives_for",
+    "total_mass_objective",
+]
 
 OBJECTIVES = ("wbar", "S_G", "S_M")
 
 # Objective name -> (joint_average metric, sign): all maximized.
 AVERAGE_OBJECTIVES = {
-    "w_avg": ("manipulability", 1.0),              # mean translational w*, m^3
-    "gci": ("conditioning", 1.0),                   # global conditioning index, mean 1/kappa(J*_v)
+    "w_avg": ("manipulability", 1.0),  # mean translational w*, m^3
+    "gci": ("conditioning", 1.0),  # global conditioning index, mean 1/kappa(J*_v)
     "low_disturbance": ("base_disturbance", -1.0),  # minus the mean ||C_w||_F, rad/rad
-    "w_d_avg": ("dynamic_manipulability", 1.0),     # mean dynamic manipulability
+    "w_d_avg": ("dynamic_manipulability", 1.0),  # mean dynamic manipulability
 }
 SPATIAL_OBJECTIVES = AVERAGE_OBJECTIVES
 
@@ -83,8 +91,9 @@ def total_mass_objective(robot) -> jax.Array:
     return -(robot.base_mass + arm_mass(robot))
 
 
-def objective(name: str, *, wbar_options: Mapping[str, Any] | None = None,
-              clamp_guaranteed: bool = True) -> Callable[[PlanarRobot], jax.Array]:
+def objective(
+    name: str, *, wbar_options: Mapping[str, Any] | None = None, clamp_guaranteed: bool = True
+) -> Callable[[PlanarRobot], jax.Array]:
     """The objective ``name`` as ``f(robot) -> scalar`` (options checked by the problem's loader).
 
     Args:

@@ -52,16 +52,16 @@ from ..models.planar import fields as planar_fields
 from .objectives import AVERAGE_OBJECTIVES, objective, objectives_for
 
 __all__ = [
-    "Variable",
-    "SearchSettings",
-    "VariableBounds",
-    "DesignProblem",
-    "problem_from_mapping",
-    "load_problem",
-    "variable_names_for",
-    "parse_search",
-    "parse_baselines",
     "WBAR_OPTIONS",
+    "DesignProblem",
+    "SearchSettings",
+    "Variable",
+    "VariableBounds",
+    "load_problem",
+    "parse_baselines",
+    "parse_search",
+    "problem_from_mapping",
+    "variable_names_for",
 ]
 
 # The options of analysis.average_manipulability a problem's ``wbar:`` section may set.
@@ -189,9 +189,14 @@ class DesignProblem(VariableBounds):
         return _design(self.base, tuple(v.field for v in self.variables), jnp.asarray(x))
 
     def _program(self) -> _Program:
-        return _Program(tuple(v.field for v in self.variables), self.objectives,
-                        tuple(sorted(self.wbar_options.items())), self.clamp_guaranteed, self.samples,
-                        self.randomizations)
+        return _Program(
+            tuple(v.field for v in self.variables),
+            self.objectives,
+            tuple(sorted(self.wbar_options.items())),
+            self.clamp_guaranteed,
+            self.samples,
+            self.randomizations,
+        )
 
     def objective_function(self) -> Callable[[jax.Array], jax.Array]:
         """``f(x)``: ``(d,)`` variables -> ``(m,)`` objectives (maximized); pure, differentiable.
@@ -234,16 +239,25 @@ def _evaluate(program: _Program, base, x: jax.Array, seed) -> jax.Array:
     """``(m,)`` objectives of one ``(d,)`` variable vector set on ``base``."""
     robot = _design(base, program.fields, x)
     values: list[Any] = [None] * len(program.objectives)
-    averaged = [(i, *AVERAGE_OBJECTIVES[name]) for i, name in enumerate(program.objectives)
-                if name in AVERAGE_OBJECTIVES]
+    averaged = [
+        (i, *AVERAGE_OBJECTIVES[name]) for i, name in enumerate(program.objectives) if name in AVERAGE_OBJECTIVES
+    ]
     for i, name in enumerate(program.objectives):
         if name not in AVERAGE_OBJECTIVES:
-            values[i] = objective(name, wbar_options=dict(program.wbar_options),
-                                  clamp_guaranteed=program.clamp_guaranteed)(robot)
+            values[i] = objective(
+                name, wbar_options=dict(program.wbar_options), clamp_guaranteed=program.clamp_guaranteed
+            )(robot)
     if averaged:
-        means = joint_averages(robot, tuple(metric for _, metric, _ in averaged), randomizations=program.randomizations,
-                               block=max(1, program.samples // program.randomizations), min_samples=program.samples,
-                               max_samples=program.samples, seed=seed, designs_per_chunk=1)
+        means = joint_averages(
+            robot,
+            tuple(metric for _, metric, _ in averaged),
+            randomizations=program.randomizations,
+            block=max(1, program.samples // program.randomizations),
+            min_samples=program.samples,
+            max_samples=program.samples,
+            seed=seed,
+            designs_per_chunk=1,
+        )
         for i, metric, sign in averaged:
             values[i] = sign * means[metric].value
     return jnp.stack(values)
@@ -256,8 +270,21 @@ def _evaluate_batch(program: _Program, base, xs: jax.Array, seed) -> jax.Array:
 
 # YAML ---------------------------------------------------------------------------------
 
-_TOP_KEYS = {"name", "description", "robot", "fixed", "variables", "objectives", "reference_point", "wbar",
-             "guaranteed", "average", "search", "baselines", "hybrid"}  # hybrid: read by spacearm.design.hybrid.parse_hybrid
+_TOP_KEYS = {
+    "name",
+    "description",
+    "robot",
+    "fixed",
+    "variables",
+    "objectives",
+    "reference_point",
+    "wbar",
+    "guaranteed",
+    "average",
+    "search",
+    "baselines",
+    "hybrid",
+}  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _FIXED_KEYS = {"base_mass", "base_inertia", "arm_mass", "reach", "links"}
 _AVERAGE_KEYS = {"samples", "randomizations", "seed"}
 _SEARCH_KEYS = {f.name for f in dataclasses.fields(SearchSettings)}
@@ -285,10 +312,17 @@ def _uniform_rod_arm(source: str, fixed: Mapping[str, Any]) -> tuple[PlanarRobot
             raise ConfigError(f"{source}: fixed.{key}: must be positive, got {physical[key]}")
     length, mass = physical["reach"] / links, physical["arm_mass"] / links
     base = PlanarRobot(
-        base_mass=np.float64(physical["base_mass"]), base_inertia=np.float64(physical["base_inertia"]),
-        base_attach=np.float64(0.0), link_mass=np.full(links, mass), link_inertia=np.full(links, mass * length**2 / 12.0),
-        link_a=np.full(links, length / 2), link_b=np.full(links, length / 2), joint_lower=np.full(links, -np.inf),
-        joint_upper=np.full(links, np.inf), name=source)
+        base_mass=np.float64(physical["base_mass"]),
+        base_inertia=np.float64(physical["base_inertia"]),
+        base_attach=np.float64(0.0),
+        link_mass=np.full(links, mass),
+        link_inertia=np.full(links, mass * length**2 / 12.0),
+        link_a=np.full(links, length / 2),
+        link_b=np.full(links, length / 2),
+        joint_lower=np.full(links, -np.inf),
+        joint_upper=np.full(links, np.inf),
+        name=source,
+    )
     return base, dict(physical, links=links)
 
 
@@ -314,8 +348,9 @@ def _check_planar_ranges(source: str, box: Mapping[str, tuple[float, float, str]
                 raise ConfigError(f"{source}: {box[key][2]}: must stay above 0, got lower value {box[key][0]}")
         if keys and sum(box[key][1] for key in keys) + (n - 1 - len(keys)) / n >= 1:
             names = ", ".join(box[key][2] for key in keys)
-            raise ConfigError(f"{source}: {names}: the upper values must sum below 1 so the last link keeps a share "
-                              f"of {total}")
+            raise ConfigError(
+                f"{source}: {names}: the upper values must sum below 1 so the last link keeps a share of {total}"
+            )
     for i in range(n):
         key = f"links[{i}].centroid"
         if key in box and (box[key][0] < 0 or box[key][1] > 1):
@@ -324,8 +359,9 @@ def _check_planar_ranges(source: str, box: Mapping[str, tuple[float, float, str]
         raise ConfigError(f"{source}: {box['base.attach'][2]}: must not be negative")
 
 
-def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
-                         base_dir: str | os.PathLike | None = None) -> DesignProblem:
+def problem_from_mapping(
+    config: Mapping[str, Any], *, source: str = "problem", base_dir: str | os.PathLike | None = None
+) -> DesignProblem:
     """Build a `DesignProblem` of either family from its YAML mapping; checks every section.
 
     Args:
@@ -382,7 +418,7 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
             raise ConfigError(f"{where}: must stay positive, got lower bound {lower}")
         variables.append(Variable(str(key), lower, upper, field))
     for i, first in enumerate(variables):
-        for second in variables[i + 1:]:
+        for second in variables[i + 1 :]:
             if fields.conflicting_number(first.field, second.field, base):
                 raise ConfigError(f"{source}: variables: {first.name} and {second.name} set the same design number")
 
@@ -409,7 +445,9 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
 
     # Objectives of the family, their options.
     allowed = objectives_for(family.name)
-    raw_objectives = config.get("objectives", list(allowed[:2]) if family.name == "planar" else ["w_avg", "low_disturbance"])
+    raw_objectives = config.get(
+        "objectives", list(allowed[:2]) if family.name == "planar" else ["w_avg", "low_disturbance"]
+    )
     if not isinstance(raw_objectives, (list, tuple)):
         raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
     objectives = tuple(choice(f"{source}: objectives[{i}]", v, allowed) for i, v in enumerate(raw_objectives))
@@ -421,8 +459,10 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
     reference = config.get("reference_point", None if averaged else [0.0] * len(objectives))
     if reference is not None:
         if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
-            raise ConfigError(f"{source}: reference_point: one number per objective, or none (objectives maximized; "
-                              "low_disturbance is minus the mean ||C_w||_F)")
+            raise ConfigError(
+                f"{source}: reference_point: one number per objective, or none (objectives maximized; "
+                "low_disturbance is minus the mean ||C_w||_F)"
+            )
         reference = tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
 
     wbar = config.get("wbar", {}) or {}
@@ -453,13 +493,27 @@ def problem_from_mapping(config: Mapping[str, Any], *, source: str = "problem",
         fixed_summary.update(samples=samples, randomizations=randomizations, seed=seed)
 
     search = parse_search(source, config.get("search", {}))
-    grid_points, grid_chunk, nsga2 = parse_baselines(source, config.get("baselines", {}), len(variables),
-                                                     len(objectives))
+    grid_points, grid_chunk, nsga2 = parse_baselines(
+        source, config.get("baselines", {}), len(variables), len(objectives)
+    )
     return DesignProblem(
-        name=name, base=base, variables=tuple(variables), objectives=objectives, reference_point=reference,
-        robot_file=robot_file, fixed=fixed_summary, wbar_options=dict(wbar), clamp_guaranteed=guaranteed == "clamped",
-        samples=samples, randomizations=randomizations, seed=seed, search=search, grid_points=grid_points,
-        grid_chunk=grid_chunk, nsga2=nsga2, description=description,
+        name=name,
+        base=base,
+        variables=tuple(variables),
+        objectives=objectives,
+        reference_point=reference,
+        robot_file=robot_file,
+        fixed=fixed_summary,
+        wbar_options=dict(wbar),
+        clamp_guaranteed=guaranteed == "clamped",
+        samples=samples,
+        randomizations=randomizations,
+        seed=seed,
+        search=search,
+        grid_points=grid_points,
+        grid_chunk=grid_chunk,
+        nsga2=nsga2,
+        description=description,
     )
 
 
@@ -505,8 +559,11 @@ def parse_baselines(source: str, baselines: Any, n_variables: int, n_objectives:
         points = grid["points"]
         if isinstance(points, int) and not isinstance(points, bool):
             points = [points] * n_variables
-        if (not isinstance(points, (list, tuple)) or len(points) != n_variables
-                or not all(isinstance(p, int) and not isinstance(p, bool) and p >= 2 for p in points)):
+        if (
+            not isinstance(points, (list, tuple))
+            or len(points) != n_variables
+            or not all(isinstance(p, int) and not isinstance(p, bool) and p >= 2 for p in points)
+        ):
             raise ConfigError(f"{source}: baselines.grid.points: one integer >= 2 per variable is required")
         grid_points = tuple(points)
         _check_grid_size(f"{source}: baselines.grid.points", grid_points, n_objectives)
@@ -515,7 +572,9 @@ def parse_baselines(source: str, baselines: Any, n_variables: int, n_objectives:
     if baselines.get("nsga2") is not None:
         raw = baselines["nsga2"]
         if not isinstance(raw, Mapping):
-            raise ConfigError(f"{source}: baselines.nsga2: must be a mapping (population, evaluations, seed, time_limit)")
+            raise ConfigError(
+                f"{source}: baselines.nsga2: must be a mapping (population, evaluations, seed, time_limit)"
+            )
         check_keys(f"{source}: baselines.nsga2: ", raw, _NSGA_KEYS)
         where = f"{source}: baselines.nsga2"
         nsga2 = {
@@ -537,8 +596,9 @@ def _check_grid_size(where: str, points: Sequence[int], n_objectives: int) -> No
     check_memory(where, need, f"{count:,} grid designs ({' x '.join(map(str, points))})", "use fewer points")
 
 
-def load_problem(source: str | os.PathLike | Mapping[str, Any], *, name: str | None = None,
-                 base_dir: str | os.PathLike | None = None) -> DesignProblem:
+def load_problem(
+    source: str | os.PathLike | Mapping[str, Any], *, name: str | None = None, base_dir: str | os.PathLike | None = None
+) -> DesignProblem:
     """Load a design problem of either family from a YAML file (or its parsed mapping).
 
     Args:

@@ -15,18 +15,18 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .._core.errors import ConfigError
 from ..io import build_manifest, write_csv, write_json
 from ..io import manifest as provenance
-import numpy as np
-
 from .baselines import grid_search, nsga2_search
 from .fronts import hypervolume
 from .hybrid import HybridSettings, hybrid_search
 from .problem import DesignProblem
 from .search import SearchResult, pareto_search, value_and_grad_cost_ratio
 
-__all__ = ["run_problem", "TARGET_FRACTION", "NSGA2_TIME_FACTOR", "ProblemOutput", "METHODS", "summary_table"]
+__all__ = ["METHODS", "NSGA2_TIME_FACTOR", "TARGET_FRACTION", "ProblemOutput", "run_problem", "summary_table"]
 
 METHODS = ("hybrid", "scalarized")
 # NSGA-II runs this many times the main search's wall time (compile included on both sides).
@@ -61,11 +61,16 @@ def _grid_convergence(problem: DesignProblem, grid: SearchResult, reference: Seq
     seconds_per_design = grid.run_seconds / grid.evaluations
     rows = []
     for level in _nested_grid_levels(points):
-        strides = [(p - 1) // (q - 1) for p, q in zip(points, level)]
+        strides = [(p - 1) // (q - 1) for p, q in zip(points, level, strict=False)]
         sub = values[tuple(slice(None, None, s) for s in strides)].reshape(-1, values.shape[-1])
-        rows.append(dict(points=list(level), evaluations=int(sub.shape[0]),
-                         seconds=seconds_per_design * sub.shape[0],
-                         hypervolume=hypervolume(sub, reference)))
+        rows.append(
+            dict(
+                points=list(level),
+                evaluations=int(sub.shape[0]),
+                seconds=seconds_per_design * sub.shape[0],
+                hypervolume=hypervolume(sub, reference),
+            )
+        )
     return rows
 
 
@@ -115,10 +120,14 @@ def summary_table(summary: Mapping[str, Any]) -> str:
     lines = [f"{'method':<11}{'hypervolume':>14}{'of best':>10}{'evaluations':>13}{'run s':>9}{'compile s':>11}"]
     for name, row in summary["methods"].items():
         share = row["hypervolume"] / best if best else float("nan")
-        lines.append(f"{name:<11}{row['hypervolume']:>14.7g}{share:>10.4%}{row['evaluations']:>13d}"
-                     f"{row['run_seconds']:>9.2f}{row['compile_seconds']:>11.2f}")
-    lines.append(f"reference point {', '.join(f'{r:.6g}' for r in summary['reference_point'])} "
-                 f"({summary['reference_point_from']}); best known hypervolume {best:.7g} (all methods' designs)")
+        lines.append(
+            f"{name:<11}{row['hypervolume']:>14.7g}{share:>10.4%}{row['evaluations']:>13d}"
+            f"{row['run_seconds']:>9.2f}{row['compile_seconds']:>11.2f}"
+        )
+    lines.append(
+        f"reference point {', '.join(f'{r:.6g}' for r in summary['reference_point'])} "
+        f"({summary['reference_point_from']}); best known hypervolume {best:.7g} (all methods' designs)"
+    )
     against = summary.get("against_nsga2")
     if against:
         main = summary["method"]
@@ -126,16 +135,30 @@ def summary_table(summary: Mapping[str, Any]) -> str:
         lines.append(
             f"NSGA-II ran {against['nsga2_wall_seconds']:.1f} s wall ({against['nsga2_wall_factor']:.3g}x {main}'s "
             f"{against['main_wall_seconds']:.1f} s, compile included) to {against['nsga2_final_hypervolume']:.7g}; "
-            + (f"{main} reached it at {reached:.1f} s wall (NSGA-II at {against['nsga2_wall_seconds_to_own_final']:.1f}"
-               f" s: ratio {against['wall_time_ratio']:.3g})" if reached is not None else f"{main} did not reach it"))
+            + (
+                f"{main} reached it at {reached:.1f} s wall (NSGA-II at {against['nsga2_wall_seconds_to_own_final']:.1f}"
+                f" s: ratio {against['wall_time_ratio']:.3g})"
+                if reached is not None
+                else f"{main} did not reach it"
+            )
+        )
     return "\n".join(lines)
 
 
-def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: str = "hybrid",
-                hybrid: HybridSettings | None = None, baselines: bool = True, config: Mapping | None = None,
-                log: Callable[[str], None] = print, outputs: Sequence[ProblemOutput] = (),
-                command: Sequence[str] | None = None, cost_ratio: str = "search",
-                nsga2_time_factor: float = NSGA2_TIME_FACTOR) -> dict:
+def run_problem(
+    problem: DesignProblem,
+    out_dir: str | os.PathLike,
+    *,
+    method: str = "hybrid",
+    hybrid: HybridSettings | None = None,
+    baselines: bool = True,
+    config: Mapping | None = None,
+    log: Callable[[str], None] = print,
+    outputs: Sequence[ProblemOutput] = (),
+    command: Sequence[str] | None = None,
+    cost_ratio: str = "search",
+    nsga2_time_factor: float = NSGA2_TIME_FACTOR,
+) -> dict:
     """Run the design search and the declared baselines; write results atomically.
 
     Writes into ``out_dir``: ``pareto.csv`` (the main search's front: the variables by
@@ -172,8 +195,10 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: s
     started = time.perf_counter()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    log(f"optimize {problem.name} ({method}): {len(problem.variables)} variables "
-        f"({', '.join(problem.variable_names)}), objectives {', '.join(problem.objectives)}")
+    log(
+        f"optimize {problem.name} ({method}): {len(problem.variables)} variables "
+        f"({', '.join(problem.variable_names)}), objectives {', '.join(problem.objectives)}"
+    )
     if method == "hybrid":
         main_key = "hybrid"
         main = hybrid_search(problem, hybrid)
@@ -181,20 +206,27 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: s
         main_key = "gradient"
         main = pareto_search(problem)
         if cost_ratio == "measured":
-            ratio = value_and_grad_cost_ratio(problem, gradient=problem.search.gradient,
-                                              batch=problem.search.initial_samples)
+            ratio = value_and_grad_cost_ratio(
+                problem, gradient=problem.search.gradient, batch=problem.search.initial_samples
+            )
         else:
             ratio = main.extra["value_and_gradient_seconds_per_design"] / main.extra["value_seconds_per_design"]
         main.extra["value_and_gradient_cost_ratio"] = ratio
         main.extra["value_and_gradient_cost_ratio_from"] = cost_ratio
         main.extra["equivalent_value_evaluations"] = (
-            main.extra["value_evaluations"] + ratio * main.extra["value_and_gradient_evaluations"])
+            main.extra["value_evaluations"] + ratio * main.extra["value_and_gradient_evaluations"]
+        )
     reference = [float(r) for r in main.extra["reference_point"]]
-    reference_from = "problem" if getattr(problem, "reference_point", None) is not None else (
-        main.extra.get("reference_point_from", "the main search's first designs"))
+    reference_from = (
+        "problem"
+        if getattr(problem, "reference_point", None) is not None
+        else (main.extra.get("reference_point_from", "the main search's first designs"))
+    )
     main_wall = main.compile_seconds + main.run_seconds
-    log(f"  {main_key}: {main.evaluations} evaluations, compile {main.compile_seconds:.1f} s, "
-        f"run {main.run_seconds:.2f} s, hypervolume {main.checkpoints[-1]['hypervolume']:.7g}")
+    log(
+        f"  {main_key}: {main.evaluations} evaluations, compile {main.compile_seconds:.1f} s, "
+        f"run {main.run_seconds:.2f} s, hypervolume {main.checkpoints[-1]['hypervolume']:.7g}"
+    )
 
     results = {main_key: main}
     grid_rows = None
@@ -202,8 +234,10 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: s
         grid = grid_search(problem, reference=reference)
         results["grid"] = grid
         grid_rows = _grid_convergence(problem, grid, reference)
-        log(f"  grid {'x'.join(map(str, problem.grid_points))}: {grid.evaluations} evaluations, "
-            f"run {grid.run_seconds:.2f} s, hypervolume {grid.checkpoints[-1]['hypervolume']:.7g}")
+        log(
+            f"  grid {'x'.join(map(str, problem.grid_points))}: {grid.evaluations} evaluations, "
+            f"run {grid.run_seconds:.2f} s, hypervolume {grid.checkpoints[-1]['hypervolume']:.7g}"
+        )
     if baselines and problem.nsga2 is not None:
         options = dict(problem.nsga2)
         population = int(options.get("population", 40))
@@ -214,12 +248,20 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: s
         limit = nsga2_time_factor * main_wall - charged
         if options.get("time_limit") is not None:
             limit = min(limit, float(options["time_limit"]))
-        nsga = nsga2_search(problem, population=population, evaluations=10**12, seed=int(options.get("seed", 0)),
-                            time_limit=max(limit, 1e-3), reference=reference)
+        nsga = nsga2_search(
+            problem,
+            population=population,
+            evaluations=10**12,
+            seed=int(options.get("seed", 0)),
+            time_limit=max(limit, 1e-3),
+            reference=reference,
+        )
         nsga.compile_seconds = max(nsga.compile_seconds, charged)
         results["nsga2"] = nsga
-        log(f"  nsga2 (population {population}): {nsga.evaluations} evaluations, "
-            f"run {nsga.run_seconds:.2f} s, hypervolume {nsga.checkpoints[-1]['hypervolume']:.7g}")
+        log(
+            f"  nsga2 (population {population}): {nsga.evaluations} evaluations, "
+            f"run {nsga.run_seconds:.2f} s, hypervolume {nsga.checkpoints[-1]['hypervolume']:.7g}"
+        )
 
     grid_hv = results["grid"].checkpoints[-1]["hypervolume"] if "grid" in results else None
     # The best-known hypervolume: every design any method evaluated, together.
@@ -236,26 +278,36 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: s
         reference_point_from=reference_from,
         hypervolume=main.checkpoints[-1]["hypervolume"],
         best_known_hypervolume=best_known,
-        fraction_of_best_known={name: r.checkpoints[-1]["hypervolume"] / best_known if best_known > 0 else None
-                                for name, r in results.items()},
+        fraction_of_best_known={
+            name: r.checkpoints[-1]["hypervolume"] / best_known if best_known > 0 else None
+            for name, r in results.items()
+        },
         evaluation_counting=(
             "one evaluation = the objective vector of one design. A value-and-gradient (the hybrid's gradient "
             "steps, the scalarized search's steps) counts as one evaluation; the hybrid reports value_evaluations "
             "and value_and_gradient_evaluations apart, the scalarized search its measured value_and_gradient_cost_"
-            "ratio. Grid and NSGA-II evaluate values only."),
-        timing=("run_seconds exclude compilation (compile_seconds, measured apart); wall_seconds = both. Every "
-                "comparison against NSGA-II counts compile on both sides. Checkpoints include each method's own "
-                "bookkeeping (pymoo's overhead for NSGA-II); archive hypervolumes are computed after the run for "
-                "NSGA-II and the grid, inside the run for the main search"),
+            "ratio. Grid and NSGA-II evaluate values only."
+        ),
+        timing=(
+            "run_seconds exclude compilation (compile_seconds, measured apart); wall_seconds = both. Every "
+            "comparison against NSGA-II counts compile on both sides. Checkpoints include each method's own "
+            "bookkeeping (pymoo's overhead for NSGA-II); archive hypervolumes are computed after the run for "
+            "NSGA-II and the grid, inside the run for the main search"
+        ),
         methods={name: _method_summary(result, grid_hv) for name, result in results.items()},
     )
     if grid_rows is not None:
         summary["methods"]["grid"]["nested_grids"] = grid_rows
     if grid_hv is not None:
         target = TARGET_FRACTION * grid_hv
-        comparison = dict(kind="time to reach the target hypervolume", grid_hypervolume=grid_hv,
-                          target_fraction=TARGET_FRACTION, target_hypervolume=target,
-                          main_seconds=main.seconds_to(target), main_evaluations=main.evaluations_to(target))
+        comparison = dict(
+            kind="time to reach the target hypervolume",
+            grid_hypervolume=grid_hv,
+            target_fraction=TARGET_FRACTION,
+            target_hypervolume=target,
+            main_seconds=main.seconds_to(target),
+            main_evaluations=main.evaluations_to(target),
+        )
         if "nsga2" in results:
             nsga = results["nsga2"]
             comparison.update(nsga2_seconds=nsga.seconds_to(target), nsga2_evaluations=nsga.evaluations_to(target))
@@ -292,9 +344,13 @@ def run_problem(problem: DesignProblem, out_dir: str | os.PathLike, *, method: s
         summary["config"] = dict(config)
     write_json(out_dir / "summary.json", summary)
     timings = {"wall": time.perf_counter() - started}
-    data = build_manifest(dict(config) if config is not None else {"problem": problem.name},
-                          command=list(command) if command is not None else sys.argv, timings=timings,
-                          git=code_state, extra={"files": summary["files"]})
+    data = build_manifest(
+        dict(config) if config is not None else {"problem": problem.name},
+        command=list(command) if command is not None else sys.argv,
+        timings=timings,
+        git=code_state,
+        extra={"files": summary["files"]},
+    )
     write_json(out_dir / "manifest.json", data)
     log(summary_table(summary))
     log(f"  wrote {out_dir}: {', '.join(summary['files'])}")

@@ -124,8 +124,7 @@ def _ray_weights(targets: np.ndarray, utopia: np.ndarray) -> np.ndarray:
     return weights
 
 
-def _front_rays(front_f: np.ndarray, front_x: np.ndarray, count: int, nadir, scale, utopia,
-                blend: float = 0.25):
+def _front_rays(front_f: np.ndarray, front_x: np.ndarray, count: int, nadir, scale, utopia, blend: float = 0.25):
     """Re-aim ``count`` rays at points spread along the current front.
 
     The front (sorted by f1) is a polyline in normalized objective space. Its points
@@ -172,8 +171,7 @@ def _densify(front_f: np.ndarray, front_x: np.ndarray, count: int) -> np.ndarray
     return np.concatenate(rows)[:count]
 
 
-def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None,
-                  reference=None) -> SearchResult:
+def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None, reference=None) -> SearchResult:
     """Gradient-based Pareto search: vmapped projected Adam over Chebyshev scalarizations.
 
     1. ``initial_samples`` random designs (value only) give a first front, ideal
@@ -275,11 +273,22 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     start = time.perf_counter()
     x_first = lower_np + width_np * z_samples
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
-        value_ready = pool.submit(lambda: jax.block_until_ready(evaluate_batch(x_first)))  # compiles (or hits the cache)
-        chunk_shapes = (z_runs, state_shapes, step_sizes[: settings.chunk], np.ones((runs, m)),
-                        np.ones(m), np.zeros(m), np.ones(m))
-        chunk_shapes = jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(np.shape(x), dtype)
-                                              if not isinstance(x, jax.ShapeDtypeStruct) else x, chunk_shapes)
+        value_ready = pool.submit(
+            lambda: jax.block_until_ready(evaluate_batch(x_first))
+        )  # compiles (or hits the cache)
+        chunk_shapes = (
+            z_runs,
+            state_shapes,
+            step_sizes[: settings.chunk],
+            np.ones((runs, m)),
+            np.ones(m),
+            np.zeros(m),
+            np.ones(m),
+        )
+        chunk_shapes = jax.tree_util.tree_map(
+            lambda x: jax.ShapeDtypeStruct(np.shape(x), dtype) if not isinstance(x, jax.ShapeDtypeStruct) else x,
+            chunk_shapes,
+        )
         run_chunk = jax.jit(run_chunk).lower(*chunk_shapes).compile()
         value_ready.result()
     compile_seconds = time.perf_counter() - start
@@ -301,8 +310,9 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
     reference = [float(r) for r in reference]
     keep = nondominated_mask(f_samples)
     front_f, front_x = f_samples[keep], x_samples[keep]
-    checkpoints.append(dict(evaluations=evaluations, seconds=time.perf_counter() - start,
-                            hypervolume=hypervolume(front_f, reference)))
+    checkpoints.append(
+        dict(evaluations=evaluations, seconds=time.perf_counter() - start, hypervolume=hypervolume(front_f, reference))
+    )
 
     # Objective scales never fall below the spread (10th-90th percentile) of the initial
     # samples: while the archive front covers only a flat stretch (a range near zero in
@@ -336,20 +346,25 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
             # their own trajectories (multi-start survives re-aiming: a start elsewhere
             # can still find a part of the front the archive has not seen).
             order = np.argsort(front_f[:, 0])
-            ray_targets, x_start = _front_rays(front_f[order], front_x[order], settings.directions,
-                                               nadir, scale, utopia)
+            ray_targets, x_start = _front_rays(
+                front_f[order], front_x[order], settings.directions, nadir, scale, utopia
+            )
             z_runs[first] = (x_start - lower_np) / width_np
-        weights = np.repeat(_ray_weights(ray_targets, utopia) if m == 2 else 1.0 / (utopia - ray_targets),
-                            settings.starts, axis=0)
-        sizes = step_sizes[steps_done: steps_done + settings.chunk]
+        weights = np.repeat(
+            _ray_weights(ray_targets, utopia) if m == 2 else 1.0 / (utopia - ray_targets), settings.starts, axis=0
+        )
+        sizes = step_sizes[steps_done : steps_done + settings.chunk]
         sizes = np.concatenate([sizes, np.full(settings.chunk - sizes.size, final)])
         if state is None or settings.reset_adam:
             state = initial_state()
         tic = time.perf_counter()
         # NumPy arguments go straight to the compiled program (jnp.asarray would compile
         # a staging program per shape).
-        z, state, zs, fs = run_chunk(*(np.asarray(x, dtype) for x in (z_runs,)), state,
-                                     *(np.asarray(x, dtype) for x in (sizes, weights, utopia, nadir, scale)))
+        z, state, zs, fs = run_chunk(
+            *(np.asarray(x, dtype) for x in (z_runs,)),
+            state,
+            *(np.asarray(x, dtype) for x in (sizes, weights, utopia, nadir, scale)),
+        )
         z_runs = np.array(z)
         gradient_seconds.append((time.perf_counter() - tic) / (settings.chunk * runs))
         fs = np.asarray(fs).reshape(-1, m)
@@ -377,8 +392,13 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
             merged_f, merged_x = np.concatenate([front_f, f_new]), np.concatenate([front_x, x_new])
             keep = nondominated_mask(merged_f)
             front_f, front_x = merged_f[keep], merged_x[keep]
-        checkpoints.append(dict(evaluations=evaluations, seconds=time.perf_counter() - start,
-                                hypervolume=hypervolume(front_f, reference)))
+        checkpoints.append(
+            dict(
+                evaluations=evaluations,
+                seconds=time.perf_counter() - start,
+                hypervolume=hypervolume(front_f, reference),
+            )
+        )
     run_seconds = time.perf_counter() - start
     return SearchResult(
         method="gradient",
@@ -388,20 +408,27 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         evaluations=evaluations,
         compile_seconds=compile_seconds,
         run_seconds=run_seconds,
-        extra=dict(reference_point=reference, directions=settings.directions, starts=settings.starts, steps=steps_done,
-                   gradient=settings.gradient, value_evaluations=settings.initial_samples + densified,
-                   densify_evaluations=densified,
-                   value_and_gradient_evaluations=evaluations - settings.initial_samples - densified,
-                   # Seconds per design of the fastest value call and the fastest chunk of
-                   # value-and-gradient steps of this run: their quotient is the cost ratio,
-                   # read off the compiled programs the search runs anyway.
-                   value_seconds_per_design=min(value_seconds),
-                   value_and_gradient_seconds_per_design=min(gradient_seconds) if gradient_seconds else float("nan")),
+        extra=dict(
+            reference_point=reference,
+            directions=settings.directions,
+            starts=settings.starts,
+            steps=steps_done,
+            gradient=settings.gradient,
+            value_evaluations=settings.initial_samples + densified,
+            densify_evaluations=densified,
+            value_and_gradient_evaluations=evaluations - settings.initial_samples - densified,
+            # Seconds per design of the fastest value call and the fastest chunk of
+            # value-and-gradient steps of this run: their quotient is the cost ratio,
+            # read off the compiled programs the search runs anyway.
+            value_seconds_per_design=min(value_seconds),
+            value_and_gradient_seconds_per_design=min(gradient_seconds) if gradient_seconds else float("nan"),
+        ),
     )
 
 
-def value_and_grad_cost_ratio(problem: DesignProblem, *, gradient: str = "reverse", batch: int = 64,
-                              repeats: int = 5) -> float:
+def value_and_grad_cost_ratio(
+    problem: DesignProblem, *, gradient: str = "reverse", batch: int = 64, repeats: int = 5
+) -> float:
     """Measured wall time of a batched value-and-gradient over a batched value (same batch).
 
     Used to convert the gradient search's evaluation count into value-only

@@ -10,7 +10,7 @@ from __future__ import annotations
 from .objectives import SPATIAL_OBJECTIVES as SPATIAL_OBJECTIVES
 from .problem import DesignProblem, load_problem, problem_from_mapping
 
-__all__ = ["SpatialDesignProblem", "SPATIAL_OBJECTIVES", "spatial_problem_from_mapping", "load_design_problem"]
+__all__ = ["SPATIAL_OBJECTIVES", "SpatialDesignProblem", "load_design_problem", "spatial_problem_from_mapping"]
 
 SpatialDesignProblem = DesignProblem
 spatial_problem_from_mapping = problem_from_mapping

@@ -35,8 +35,9 @@ _STYLE = {
 }
 
 
-def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], summary: Mapping,
-                 out_dir: Path) -> list[Path]:
+def plot_results(
+    problem: DesignProblem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path
+) -> list[Path]:
     """The front in objective space, the front designs in variable space, convergence.
 
     ``front.png``, ``designs.png``, ``convergence.png`` (see the module docstring). Fits
@@ -44,9 +45,11 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     """
     main = summary.get("method", "gradient")
     if len(problem.objectives) != 2:
-        return [_pairwise_front(problem, results, summary, out_dir, main),
-                _parallel_coordinates(problem, results[main], out_dir),
-                _convergence(problem, results, summary, out_dir)]
+        return [
+            _pairwise_front(problem, results, summary, out_dir, main),
+            _parallel_coordinates(problem, results[main], out_dir),
+            _convergence(problem, results, summary, out_dir),
+        ]
     written = []
     names = problem.objectives
     # 1. Objective space.
@@ -54,8 +57,14 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     if "grid" in results:
         grid = results["grid"]
         step = max(1, grid.objectives.shape[0] // 6000)
-        ax.scatter(grid.objectives[::step, 0], grid.objectives[::step, 1], s=2, color="0.85",
-                   label=f"grid designs ({grid.evaluations}, every {step}th shown)", rasterized=True)
+        ax.scatter(
+            grid.objectives[::step, 0],
+            grid.objectives[::step, 1],
+            s=2,
+            color="0.85",
+            label=f"grid designs ({grid.evaluations}, every {step}th shown)",
+            rasterized=True,
+        )
     for method in ("grid", "nsga2", main):
         if method in results:
             result = results[method]
@@ -88,12 +97,20 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
         fig, ax = plt.subplots(figsize=(7.0, 5.5))
         if "grid" in results:
             gf = results["grid"].front()
-            ax.plot(results["grid"].designs[gf, 0], results["grid"].designs[gf, 1], "s", ms=3, mfc="none",
-                    color="0.6", label="grid front designs")
-        points = ax.scatter(designs[:, 0], designs[:, 1], c=objectives[:, 1], s=8, cmap="viridis",
-                            label=f"{main} front designs")
+            ax.plot(
+                results["grid"].designs[gf, 0],
+                results["grid"].designs[gf, 1],
+                "s",
+                ms=3,
+                mfc="none",
+                color="0.6",
+                label="grid front designs",
+            )
+        points = ax.scatter(
+            designs[:, 0], designs[:, 1], c=objectives[:, 1], s=8, cmap="viridis", label=f"{main} front designs"
+        )
         fig.colorbar(points, ax=ax, label=_LABELS.get(names[1], names[1]))
-        for v, set_limits in zip(problem.variables, (ax.set_xlim, ax.set_ylim)):
+        for v, set_limits in zip(problem.variables, (ax.set_xlim, ax.set_ylim), strict=False):
             pad = 0.02 * (v.upper - v.lower)  # designs on a bound stay visible
             set_limits(v.lower - pad, v.upper + pad)
         ax.set_xlabel(_UNITS.get(problem.variables[0].name, problem.variables[0].name))
@@ -109,10 +126,15 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
             ax = axes[j // cols][j % cols]
             if "nsga2" in results:
                 nf = results["nsga2"].front()
-                ax.plot(results["nsga2"].objectives[nf, 1], results["nsga2"].designs[nf, j], "x", ms=3,
-                        color=_STYLE["nsga2"]["color"], label="NSGA-II front")
-            ax.plot(objectives[:, 1], designs[:, j], ".", ms=3, color=_STYLE[main]["color"],
-                    label=f"{main} front")
+                ax.plot(
+                    results["nsga2"].objectives[nf, 1],
+                    results["nsga2"].designs[nf, j],
+                    "x",
+                    ms=3,
+                    color=_STYLE["nsga2"]["color"],
+                    label="NSGA-II front",
+                )
+            ax.plot(objectives[:, 1], designs[:, j], ".", ms=3, color=_STYLE[main]["color"], label=f"{main} front")
             ax.set_ylim(variable.lower, variable.upper)
             ax.set_xlabel(_LABELS.get(names[1], names[1]), fontsize=8)
             ax.set_ylabel(_UNITS.get(variable.name, variable.name))
@@ -130,8 +152,7 @@ def plot_results(problem: DesignProblem, results: Mapping[str, SearchResult], su
     return written
 
 
-def _pairwise_front(problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path,
-                    main: str) -> Path:
+def _pairwise_front(problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path, main: str) -> Path:
     """Every pair of objectives, the main search's front colored by a third objective,
     NSGA-II's front as grey crosses."""
     names = problem.objectives
@@ -140,13 +161,14 @@ def _pairwise_front(problem, results: Mapping[str, SearchResult], summary: Mappi
     fig, axes = plt.subplots(1, len(pairs), figsize=(5.0 * len(pairs), 4.4), squeeze=False)
     result = results[main]
     front = result.objectives[result.front()]
-    for ax, (i, j) in zip(axes[0], pairs):
+    for ax, (i, j) in zip(axes[0], pairs, strict=False):
         third = next(k for k in range(m) if k not in (i, j))
         if "nsga2" in results:
             other = results["nsga2"].objectives[results["nsga2"].front()]
             ax.plot(other[:, i], other[:, j], "x", ms=3, color="0.6", label=f"NSGA-II front ({other.shape[0]})")
-        points = ax.scatter(front[:, i], front[:, j], c=front[:, third], s=9, cmap="viridis",
-                            label=f"{main} front ({front.shape[0]})")
+        points = ax.scatter(
+            front[:, i], front[:, j], c=front[:, third], s=9, cmap="viridis", label=f"{main} front ({front.shape[0]})"
+        )
         fig.colorbar(points, ax=ax, label=_LABELS.get(names[third], names[third]))
         ax.set_xlabel(_LABELS.get(names[i], names[i]))
         ax.set_ylabel(_LABELS.get(names[j], names[j]))

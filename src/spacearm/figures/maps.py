@@ -77,7 +77,7 @@ def _draw_arm(ax, robot, phi_arm, color="k"):
     lengths = np.asarray(robot.link_length)
     theta = np.cumsum(phi_arm)
     points = [np.zeros(2)]
-    for length, angle in zip(lengths, theta):
+    for length, angle in zip(lengths, theta, strict=False):
         points.append(points[-1] + length * np.array([np.cos(angle), np.sin(angle)]))
     points = np.array(points)
     ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2, ms=4, label="arm (dots: joints and tip)")
@@ -87,8 +87,11 @@ def _draw_base(ax, robot, color="0.5"):
     """The base as a box around its centroid at (-b0, 0) in the robot frame (Table 1: 2.6 m wide),
     labelled for a legend."""
     b0 = float(robot.base_attach)
-    ax.add_patch(_plt().Rectangle((-b0 - 1.2, -1.2), 2.4 + 0.2, 2.4, fill=True, alpha=0.25, color=color,
-                                  label="base (drawn as a 2.6 m box)"))
+    ax.add_patch(
+        _plt().Rectangle(
+            (-b0 - 1.2, -1.2), 2.4 + 0.2, 2.4, fill=True, alpha=0.25, color=color, label="base (drawn as a 2.6 m box)"
+        )
+    )
     ax.plot(-b0, 0, "kx", ms=6, ls="none", label="base centroid")
 
 
@@ -144,7 +147,9 @@ def fig8(out_dir: Path) -> list[Path]:
     plt = _plt()
     robot = _table1()
     fig, axes = plt.subplots(1, 2, figsize=(10, 5))
-    for ax, elbow, label in zip(axes, ("down", "up"), ("(a) posture 1, elbow-down", "(b) posture 2, elbow-up")):
+    for ax, elbow, label in zip(
+        axes, ("down", "up"), ("(a) posture 1, elbow-down", "(b) posture 2, elbow-up"), strict=False
+    ):
         phi_arm, _ = inverse_kinematics(robot, FIG8_TIP, elbow=elbow)
         phi_arm = np.asarray(phi_arm)
         _draw_base(ax, robot)
@@ -152,7 +157,9 @@ def fig8(out_dir: Path) -> list[Path]:
         _ellipse(ax, robot, phi_arm, scale=0.6)
         w = float(manipulability(robot, np.concatenate([[0.0], phi_arm]))) / float(robot.reach) ** 2
         deg = np.degrees(phi_arm)
-        ax.set_title(f"{label}\nphi1 = {deg[0]:.1f} deg, phi2 = {deg[1]:.1f} deg, w*/L^2 x 40 = {40 * w:.2f}", fontsize=9)
+        ax.set_title(
+            f"{label}\nphi1 = {deg[0]:.1f} deg, phi2 = {deg[1]:.1f} deg, w*/L^2 x 40 = {40 * w:.2f}", fontsize=9
+        )
         ax.set_aspect("equal")
         ax.set_xlim(-3.5, 4.0)
         ax.set_ylim(-2.5, 4.0)
@@ -170,7 +177,7 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
     fig, axes = plt.subplots(2, len(robots), figsize=(4.2 * len(robots), 8.4))
     axes = np.atleast_2d(axes).reshape(2, -1)
     filled = None
-    for column, (robot, label) in enumerate(zip(robots, labels)):
+    for column, (robot, label) in enumerate(zip(robots, labels, strict=False)):
         ax = axes[0, column]
         K = np.asarray(tip_coefficients(robot))
         arm, reach = K[1:].sum(), float(robot.reach)
@@ -183,7 +190,9 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
             ax.add_patch(plt.Circle(centre, radius, fill=False, color=color, lw=1.4, label=name))
         # Fixed-Vehicle workspace drawn as in the paper's Fig. 4: radius L about the origin
         # (that placement gives eq. 9's condition for Area 3 to contain Area 1).
-        ax.add_patch(plt.Circle((0, 0), reach, fill=False, color="0.5", ls="--", lw=1.0, label="Fixed Vehicle (radius L)"))
+        ax.add_patch(
+            plt.Circle((0, 0), reach, fill=False, color="0.5", ls="--", lw=1.0, label="Fixed Vehicle (radius L)")
+        )
         ax.plot(0, 0, "k+", ms=8, ls="none", label="system centroid (origin)")
         limit = 6.8
         ax.set_xlim(-limit, limit)

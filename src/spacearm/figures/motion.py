@@ -13,6 +13,7 @@ values below are ours and are stated in the figures.
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -105,10 +106,12 @@ def fig2(out_dir: Path) -> list[Path]:
         offset = 1.5 if name == "forward" else -1.5
         pts = corners / DEG + offset
         ax_joint.plot(pts[:, 0], pts[:, 1], "-", color=colors[name], lw=1.8, label=label)
-        for a, b in zip(pts[:-1], pts[1:]):
+        for a, b in itertools.pairwise(pts):
             mid = 0.5 * (a + b)
             ax_joint.annotate(
-                "", xy=mid + 0.08 * (b - a), xytext=mid - 0.08 * (b - a),
+                "",
+                xy=mid + 0.08 * (b - a),
+                xytext=mid - 0.08 * (b - a),
                 arrowprops=dict(arrowstyle="->", color=colors[name], lw=1.8),
             )
     for k, corner in enumerate(loop[:-1] / DEG):
@@ -134,8 +137,14 @@ def fig2(out_dir: Path) -> list[Path]:
         )
         moved = np.linalg.norm(tips[-1] - tips[0])
         ax_inertial.plot(*tips[-1], "*", color=colors[name], ms=12)
-        ax_inertial.annotate(f"tip moved {moved:.3f} m", tips[-1], textcoords="offset points",
-                             xytext=(8, -14 if name == "forward" else 8), color=colors[name], fontsize=9)
+        ax_inertial.annotate(
+            f"tip moved {moved:.3f} m",
+            tips[-1],
+            textcoords="offset points",
+            xytext=(8, -14 if name == "forward" else 8),
+            color=colors[name],
+            fontsize=9,
+        )
     ax_inertial.plot(0, 0, "k+", ms=12)
     ax_inertial.set_xlabel(r"$X_A$ [m] (origin: system centroid)")
     ax_inertial.set_ylabel(r"$Y_A$ [m]")
@@ -169,7 +178,10 @@ def fig3a(out_dir: Path) -> list[Path]:
     _draw_robot(ax, robot, FIG3_START, "black", "start (0, -60, 120) deg")
     kind = "kinematic" if bool(path.kinematic) else "dynamic"
     _draw_robot(
-        ax, robot, end, "tab:red",
+        ax,
+        robot,
+        end,
+        "tab:red",
         f"end: ({end[0] / DEG:.2f}, {end[1] / DEG:.2f}, {end[2] / DEG:.2f}) deg, det J* = 0 ({kind})",
     )
     ax.plot(tips[:, 0], tips[:, 1], "-", color="tab:red", lw=2.5, alpha=0.6)
@@ -185,7 +197,9 @@ def fig3a(out_dir: Path) -> list[Path]:
     L2 = float(robot.reach) ** 2
     ax_w.plot(travelled, np.asarray(manipulability(robot, postures)) / L2, label=r"$w^*/L^2$ (free-floating, eq. 11)")
     ax_w.plot(
-        travelled, np.asarray(fixed_base_manipulability(robot, postures[:, 1:])) / L2, "--",
+        travelled,
+        np.asarray(fixed_base_manipulability(robot, postures[:, 1:])) / L2,
+        "--",
         label=r"fixed-base $w/L^2$ ($\propto |\sin\phi_2|$)",
     )
     ax_w.axhline(0, color="k", lw=0.8)
@@ -244,7 +258,10 @@ def fig9(out_dir: Path) -> list[Path]:
         phi = study["postures"][k]
         major, minor = _ellipse(ax, robot, phi, colors[k])
         _draw_robot(
-            ax, robot, phi, colors[k],
+            ax,
+            robot,
+            phi,
+            colors[k],
             f"{names[k]}: ({phi[1] / DEG:.0f}, {phi[2] / DEG:.0f}) deg; J* axes {major:.2f}, {minor:.2f} m/rad",
             robot_frame=True,
         )
@@ -259,8 +276,11 @@ def fig9(out_dir: Path) -> list[Path]:
     ax.set_title("(Fig. 8) two postures, same tip; ellipses of J* (x0.5)")
     for k in range(2):
         ax_att.plot(
-            study["travelled"][k], (study["history"][k, :, 0] - study["postures"][k, 0]) / DEG,
-            color=colors[k], lw=2, label=f"{names[k]}: peak {study['peak'][k] / DEG:.2f} deg",
+            study["travelled"][k],
+            (study["history"][k, :, 0] - study["postures"][k, 0]) / DEG,
+            color=colors[k],
+            lw=2,
+            label=f"{names[k]}: peak {study['peak'][k] / DEG:.2f} deg",
         )
     ax_att.axvline(FIG9_DISTANCE, color="k", lw=0.8, ls=":")
     ax_att.set_xlabel(f"tip path length travelled [m] (out {FIG9_DISTANCE} m along $Y_R$, then back)")

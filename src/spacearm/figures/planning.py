@@ -44,7 +44,6 @@ def _draw_robot(ax, robot, phi, color, label, alpha=1.0):
     ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, alpha=alpha, label=label)
 
 
-
 def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -> Path:
     """Draw a reach plan (PNG, written atomically).
 
@@ -75,7 +74,9 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
         after = np.asarray(straight_path_workspace(robot, phi_after, n_directions=n_directions))
         after = np.vstack([after, after[:1]])
         ax.fill(after[:, 0], after[:, 1], color="tab:blue", alpha=0.08)
-        ax.plot(after[:, 0], after[:, 1], color="tab:blue", lw=1.0, ls=":", label="Straight-Path workspace after the loop")
+        ax.plot(
+            after[:, 0], after[:, 1], color="tab:blue", lw=1.0, ls=":", label="Straight-Path workspace after the loop"
+        )
 
     styles = {
         PHASE_REPOSITION: ("tab:purple", "tip: joint repositioning"),
@@ -97,8 +98,11 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
     ax.set_aspect("equal")
     ax.set_xlabel("x (m), inertial frame")
     ax.set_ylabel("y (m)")
-    title = {"straight": "straight tip path", "reorient": "reorientation loop, then straight path",
-             "reposition": "joint repositioning, reorientation loop, straight path"}[plan.mode]
+    title = {
+        "straight": "straight tip path",
+        "reorient": "reorientation loop, then straight path",
+        "reposition": "joint repositioning, reorientation loop, straight path",
+    }[plan.mode]
     ax.set_title(
         f"{robot.name}: {title}\nbase turned {np.degrees(plan.delta_phi0):.1f} deg, "
         f"joint travel {plan.joint_travel:.1f} rad, tip error {plan.error:.1e} m",

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..models.planar.closed_forms import centroid_positions
 
-__all__ = ["robot_outline", "base_square"]
+__all__ = ["base_square", "robot_outline"]
 
 _SQUARE = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1], [1, 1]])
 

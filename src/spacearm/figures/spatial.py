@@ -113,11 +113,18 @@ def fig_spatial_loop(out_dir: Path) -> list[Path]:
     everything = []
     for i, k in enumerate(picks):
         color = cmap(i / (len(picks) - 1))
-        _draw(ax, robot, q[k], R[k], color, alpha=0.9 if k in (0, len(q) - 1) else 0.45,
-              label="start" if k == 0 else ("end (joints back, bus turned)" if k == len(q) - 1 else None))
+        _draw(
+            ax,
+            robot,
+            q[k],
+            R[k],
+            color,
+            alpha=0.9 if k in (0, len(q) - 1) else 0.45,
+            label="start" if k == 0 else ("end (joints back, bus turned)" if k == len(q) - 1 else None),
+        )
         chain, bus = arm_points(robot, q[k], R[k])
         everything.append(np.vstack([chain, bus_corners(bus, R[k])]))
-    tips = np.array([arm_points(robot, qk, Rk)[0][-1] for qk, Rk in zip(q, R)])
+    tips = np.array([arm_points(robot, qk, Rk)[0][-1] for qk, Rk in zip(q, R, strict=False)])
     ax.plot(*tips.T, color="C3", lw=1.0, label="tip")
     angle = float(np.linalg.norm(np.asarray(log(jnp.asarray(R[0].T @ R[-1])))))
     ax.set_title(f"UR5 on a 500 kg bus: closed joint loop turns the bus by {np.degrees(angle):.2f} deg")
@@ -161,7 +168,9 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     q0, direction = LOOP_START, np.array([0.3, -0.5, 0.8])
     end = spatial_straight_tip_path(robot, q0, direction, 0.6)
     lengths = np.linspace(0.0, float(end.length), 25)
-    samples = spatial_straight_tip_path(robot, np.broadcast_to(q0, (25, 6)), np.broadcast_to(direction, (25, 3)), lengths)
+    samples = spatial_straight_tip_path(
+        robot, np.broadcast_to(q0, (25, 6)), np.broadcast_to(direction, (25, 3)), lengths
+    )
     q, R = np.asarray(samples.end_joints), np.asarray(samples.end_rotation)
     tips = np.asarray(samples.end_tip)
     fig = plt.figure(figsize=(11, 5))
@@ -169,8 +178,10 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     _draw(ax, robot, q[0], R[0], "C0", label="start")
     _draw(ax, robot, q[-1], R[-1], "C3", label="end")
     ax.plot(*tips.T, "k-", lw=1.5, label="tip path")
-    ends = [np.vstack([arm_points(robot, q[k], R[k])[0], bus_corners(arm_points(robot, q[k], R[k])[1], R[k])])
-            for k in (0, -1)]
+    ends = [
+        np.vstack([arm_points(robot, q[k], R[k])[0], bus_corners(arm_points(robot, q[k], R[k])[1], R[k])])
+        for k in (0, -1)
+    ]
     _equal(ax, np.vstack(ends + [tips]))
     reason = {0: "J*_v loses rank", 1: "0.6 m reached", 2: "joint limit", 3: "approaching rank loss"}[int(end.reason)]
     ax.set_title(f"straight tip path, {float(end.length):.3f} m ({reason})", fontsize=10)
@@ -214,7 +225,8 @@ def draw_spatial_reach(robot, plan, path) -> Path:
     points.append(np.vstack(arm_points(robot, joints[-1], rotations[-1])))
     ax.scatter(*np.asarray(plan.target), color="C3", marker="x", s=40, label="target")
     ax.set_title(
-        f"reach ({plan.mode}): bus turned {np.degrees(plan.bus_turn):.2f} deg, tip error {plan.error:.1e} m", fontsize=10
+        f"reach ({plan.mode}): bus turned {np.degrees(plan.bus_turn):.2f} deg, tip error {plan.error:.1e} m",
+        fontsize=10,
     )
     _equal(ax, np.vstack(points))
     ax.legend(fontsize=8, loc="upper left")

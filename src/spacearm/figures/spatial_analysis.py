@@ -21,9 +21,9 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..io import save_figure
-from ..analysis.spatial_workspaces import guaranteed_workspace, singular_postures, singularity_measure
 from ..analysis.joint_box import joint_box
+from ..analysis.spatial_workspaces import guaranteed_workspace, singular_postures, singularity_measure
+from ..io import save_figure
 from ..kinematics import manipulability, tip_position
 from ..models import load_robot
 from . import figure
@@ -54,7 +54,7 @@ def _shell(ax, radius, **style):
 def spatial_shells(out_dir: Path) -> list[Path]:
     fig = Figure(figsize=(11, 5), layout="constrained")
     axes = fig.subplots(1, len(ROBOTS))
-    for ax, (config, label, _) in zip(np.atleast_1d(axes), ROBOTS):
+    for ax, (config, label, _) in zip(np.atleast_1d(axes), ROBOTS, strict=False):
         robot = load_robot(_config_path(config))
         lower, upper = (np.asarray(x) for x in joint_box(robot))
         q = lower + (upper - lower) * np.random.default_rng(0).random((20000, robot.n_joints))
@@ -86,7 +86,7 @@ def spatial_shells(out_dir: Path) -> list[Path]:
 def spatial_wstar_slices(out_dir: Path) -> list[Path]:
     fig = Figure(figsize=(12, 4.5), layout="constrained")
     axes = fig.subplots(1, len(ROBOTS))
-    for ax, (config, label, (i, j)) in zip(np.atleast_1d(axes), ROBOTS):
+    for ax, (config, label, (i, j)) in zip(np.atleast_1d(axes), ROBOTS, strict=False):
         robot = load_robot(_config_path(config))
         lower, upper = (np.asarray(x) for x in joint_box(robot))
         a = np.linspace(lower[i], upper[i], 241)

@@ -17,7 +17,7 @@ from ..studies.spec import SweepSpec
 from ..studies.table2 import B0, FIG10_RATIOS
 from .maps import draw_fig10
 
-__all__ = ["write_figures", "sweep_figures", "report_figures", "axis_label", "column_label", "COLUMN_LABELS"]
+__all__ = ["COLUMN_LABELS", "axis_label", "column_label", "report_figures", "sweep_figures", "write_figures"]
 
 # Table columns in words, with their units: the labels of the figures.
 COLUMN_LABELS: dict[str, str] = {
@@ -62,11 +62,13 @@ def report_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarra
     """The figure of the sweep's report: ``fig10.png`` for ``report: table2`` (b0/B0 = 0, 1, 2)."""
     if spec.report != "table2":
         return []
-    return [draw_fig10(
-        Path(out_dir) / "fig10.png",
-        [spec.robot.replace(base_attach=np.float64(B0 * r)) for r in FIG10_RATIOS],
-        [f"b0/B0 = {r:g}" for r in FIG10_RATIOS],
-    )]
+    return [
+        draw_fig10(
+            Path(out_dir) / "fig10.png",
+            [spec.robot.replace(base_attach=np.float64(B0 * r)) for r in FIG10_RATIOS],
+            [f"b0/B0 = {r:g}" for r in FIG10_RATIOS],
+        )
+    ]
 
 
 def axis_label(axis: Axis) -> str:
@@ -96,15 +98,19 @@ def sweep_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray
             grid = flat.reshape(spec.shape)
             fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
             # Cells by index, labelled with the values, so uneven axes draw as even cells.
-            mesh = ax.pcolormesh(np.arange(len(ax1.values)), np.arange(len(ax0.values)), grid, shading="nearest",
-                                 cmap="viridis")
+            mesh = ax.pcolormesh(
+                np.arange(len(ax1.values)), np.arange(len(ax0.values)), grid, shading="nearest", cmap="viridis"
+            )
             fig.colorbar(mesh, ax=ax, label=column_label(column))
             if grid.size > 1 and np.ptp(grid) > 0 and min(grid.shape) > 1:
-                contours = ax.contour(np.arange(len(ax1.values)), np.arange(len(ax0.values)), grid, colors="white",
-                                      linewidths=0.6)
+                contours = ax.contour(
+                    np.arange(len(ax1.values)), np.arange(len(ax0.values)), grid, colors="white", linewidths=0.6
+                )
                 ax.clabel(contours, fontsize=7, fmt="%.3g")
-            for axis, set_ticks, set_labels in ((ax1, ax.set_xticks, ax.set_xticklabels),
-                                                (ax0, ax.set_yticks, ax.set_yticklabels)):
+            for axis, set_ticks, set_labels in (
+                (ax1, ax.set_xticks, ax.set_xticklabels),
+                (ax0, ax.set_yticks, ax.set_yticklabels),
+            ):
                 ticks = np.unique(np.linspace(0, len(axis.values) - 1, min(len(axis.values), 7)).round().astype(int))
                 set_ticks(ticks)
                 set_labels([f"{axis.values[t]:.3g}" for t in ticks])
@@ -112,21 +118,22 @@ def sweep_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray
             ax.set_ylabel(axis_label(ax0))
             title = f"{spec.name}: {column_label(column)}"
             if column in errors:
-                title += (f"\nstandard error ≤ {np.max(errors[column]):.2g} "
-                          f"(the colour range spans {np.ptp(grid):.2g})")
+                title += f"\nstandard error ≤ {np.max(errors[column]):.2g} (the colour range spans {np.ptp(grid):.2g})"
             ax.set_title(title, fontsize=9)
             paths.append(save_figure(fig, out_dir / f"heatmap_{column}.png", dpi=130))
             plt.close(fig)
     elif len(spec.axes) == 1 or spec.combine == "zip":
         axis = spec.axes[0]
-        fig, axes = plt.subplots(1, len(varying), figsize=(3.6 * len(varying), 3.2), constrained_layout=True,
-                                 squeeze=False)
+        fig, axes = plt.subplots(
+            1, len(varying), figsize=(3.6 * len(varying), 3.2), constrained_layout=True, squeeze=False
+        )
         x = np.asarray(axis.values, float)
-        for ax, (column, flat) in zip(axes[0], varying.items()):
+        for ax, (column, flat) in zip(axes[0], varying.items(), strict=False):
             if column in errors:
                 error = errors[column]
-                ax.fill_between(x, flat - 2 * error, flat + 2 * error, color="C0", alpha=0.25, lw=0,
-                                label="± 2 standard errors")
+                ax.fill_between(
+                    x, flat - 2 * error, flat + 2 * error, color="C0", alpha=0.25, lw=0, label="± 2 standard errors"
+                )
                 ax.errorbar(x, flat, yerr=2 * error, fmt="o-", color="C0", ms=4, capsize=3, label="estimate")
                 ax.legend(fontsize=7)
             else:

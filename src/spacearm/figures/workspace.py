@@ -73,8 +73,12 @@ def fig3(out_dir: Path) -> list[Path]:
     ax.fill(closed[:, 0], closed[:, 1], color="tab:blue", alpha=0.25, label="Straight-Path Workspace (360 directions)")
     ax.plot(closed[:, 0], closed[:, 1], "tab:blue", lw=1)
     folded = np.abs(np.asarray(ends.end_posture)[:, 2]) > np.pi / 2
-    ax.plot(boundary[folded, 0], boundary[folded, 1], ".", color="tab:red", ms=3, label="ends at the folded-arm singularity")
-    _circle(ax, (0, 0), float(ws.maximum_reachable_radius(robot)), color="k", ls="--", lw=1, label="Area 3, $K_0+K_1+K_2$")
+    ax.plot(
+        boundary[folded, 0], boundary[folded, 1], ".", color="tab:red", ms=3, label="ends at the folded-arm singularity"
+    )
+    _circle(
+        ax, (0, 0), float(ws.maximum_reachable_radius(robot)), color="k", ls="--", lw=1, label="Area 3, $K_0+K_1+K_2$"
+    )
     _circle(ax, (0, 0), float(ws.guaranteed_radius(robot)), color="tab:green", ls="--", lw=1, label="eq. (8) radius")
     _draw_robot(ax, robot, phi, color="0.3")
     ax.plot(*start, "ko", ms=5, label="start tip")
@@ -106,7 +110,9 @@ def _fig4_panel(ax, robot, title):
     ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ok = bool(ws.attachment_condition(robot))
     bound = float(robot.total_mass / robot.base_mass * (robot.reach - K[1:].sum()))
-    ax.set_title(f"{title}\nb0 = {float(robot.base_attach):.2f} m; eq. (9) needs b0 >= {bound:.2f} m: {'holds' if ok else 'fails'}")
+    ax.set_title(
+        f"{title}\nb0 = {float(robot.base_attach):.2f} m; eq. (9) needs b0 >= {bound:.2f} m: {'holds' if ok else 'fails'}"
+    )
     ax.legend(loc="lower left", fontsize=7)
     ax.set_aspect("equal")
     ax.set_xlabel("$X_A$ [m]")
@@ -123,7 +129,14 @@ def fig4(out_dir: Path) -> list[Path]:
     _fig4_panel(axes[0], robot, "(a) Table 1: Area 3 >= Area 1 >= Area 2 >= Area 5")
     _fig4_panel(axes[1], robot.replace(base_attach=np.float64(0.2)), "(b) short attachment: Area 1 leaves Area 3")
     for ax in axes:
-        ax.text(0.01, 0.99, "robot drawn at $\\phi$ = 0 (Area 1 placed about its joint 1)", transform=ax.transAxes, va="top", fontsize=8)
+        ax.text(
+            0.01,
+            0.99,
+            "robot drawn at $\\phi$ = 0 (Area 1 placed about its joint 1)",
+            transform=ax.transAxes,
+            va="top",
+            fontsize=8,
+        )
     return [_save(fig, Path(out_dir) / "fig4_workspaces.png")]
 
 
@@ -166,16 +179,38 @@ def fig5(out_dir: Path) -> list[Path]:
         if best is not None:
             break
     fig, ax = plt.subplots(figsize=(7.5, 7.5))
-    _circle(ax, (0, 0), r3, color="k", lw=2, label=f"Area 3 Maximum Reachable ({r3:.2f} m; straight-path union {study['union_radius']:.3f} m)")
+    _circle(
+        ax,
+        (0, 0),
+        r3,
+        color="k",
+        lw=2,
+        label=f"Area 3 Maximum Reachable ({r3:.2f} m; straight-path union {study['union_radius']:.3f} m)",
+    )
     closed = np.vstack([ends, ends[:1]])
-    ax.fill(closed[:, 0], closed[:, 1], color="tab:blue", alpha=0.25, label="Area 4 Straight-Path, $\\phi$ = (0, -60, 120) deg")
+    ax.fill(
+        closed[:, 0],
+        closed[:, 1],
+        color="tab:blue",
+        alpha=0.25,
+        label="Area 4 Straight-Path, $\\phi$ = (0, -60, 120) deg",
+    )
     _circle(ax, (0, 0), r5, color="tab:green", lw=2, label=f"Area 5 by eq. (8), {r5:.2f} m")
-    _circle(ax, (0, 0), r_piw, color="tab:red", lw=2, ls="--", label=f"singularity-free disk (det J* != 0), {r_piw:.2f} m")
+    _circle(
+        ax, (0, 0), r_piw, color="tab:red", lw=2, ls="--", label=f"singularity-free disk (det J* != 0), {r_piw:.2f} m"
+    )
     if best is not None:
         delta, C = best
         c, s = np.cos(delta), np.sin(delta)
         turned = np.vstack([ends, ends[:1]]) @ np.array([[c, s], [-s, c]])
-        ax.plot(turned[:, 0], turned[:, 1], color="tab:purple", ls=":", lw=1.5, label=f"Area 4 after a cyclic maneuver turns the base by {np.degrees(delta):.0f} deg")
+        ax.plot(
+            turned[:, 0],
+            turned[:, 1],
+            color="tab:purple",
+            ls=":",
+            lw=1.5,
+            label=f"Area 4 after a cyclic maneuver turns the base by {np.degrees(delta):.0f} deg",
+        )
         _draw_robot(ax, robot, phi + np.array([delta, 0.0, 0.0]), color="tab:purple", alpha=0.4)
         ax.plot(*C, "s", color="tab:purple", ms=8)
         ax.annotate("C", C, xytext=(6, 6), textcoords="offset points", fontsize=12)
@@ -226,7 +261,9 @@ def singularities(out_dir: Path) -> list[Path]:
     mesh = ax.contourf(np.degrees(Q1), np.degrees(Q2), det, levels=levels, cmap="RdBu_r")
     fig.colorbar(mesh, ax=ax, label="det J* / L$^2$")
     ax.plot(phi1[found & ~folded], phi2[found & ~folded], "k.", ms=1.5, label="det J* = 0, stretched branch")
-    ax.plot(phi1[found & folded], phi2[found & folded], ".", color="tab:purple", ms=1.5, label="det J* = 0, folded branch")
+    ax.plot(
+        phi1[found & folded], phi2[found & folded], ".", color="tab:purple", ms=1.5, label="det J* = 0, folded branch"
+    )
     for level in (-180, 0, 180):
         ax.axhline(level, color="tab:green", ls="--", lw=1)
     ax.plot([], [], color="tab:green", ls="--", label="kinematic: $\\phi_2$ = 0, $\\pm$180 deg")
@@ -238,7 +275,14 @@ def singularities(out_dir: Path) -> list[Path]:
     ax = axes[0, 1]
     tr = np.asarray(s.tip_robot)
     ax.plot(tr[found & ~folded, 0], tr[found & ~folded, 1], "k.", ms=1.5, label="tip at det J* = 0, stretched branch")
-    ax.plot(tr[found & folded, 0], tr[found & folded, 1], ".", color="tab:purple", ms=1.5, label="tip at det J* = 0, folded branch")
+    ax.plot(
+        tr[found & folded, 0],
+        tr[found & folded, 1],
+        ".",
+        color="tab:purple",
+        ms=1.5,
+        label="tip at det J* = 0, folded branch",
+    )
     L = float(robot.reach)
     _circle(ax, (0, 0), L, color="tab:green", ls="--", lw=1, label=f"fixed base singular: |p| = L = {L:.1f} m")
     ax.plot(0, 0, "x", color="tab:green", ms=8, label="fixed base singular: folded, tip at joint 1")
@@ -262,12 +306,22 @@ def singularities(out_dir: Path) -> list[Path]:
     ax.legend(loc="upper left", fontsize=7, markerscale=4)
 
     ax = axes[1, 1]
-    bands = [(np.nanmin(radius[folded]), np.nanmax(radius[folded]), "tab:purple"), (np.nanmin(radius[found & ~folded]), np.nanmax(radius[found & ~folded]), "0.5")]
+    bands = [
+        (np.nanmin(radius[folded]), np.nanmax(radius[folded]), "tab:purple"),
+        (np.nanmin(radius[found & ~folded]), np.nanmax(radius[found & ~folded]), "0.5"),
+    ]
     angle = np.linspace(0, 2 * np.pi, 361)
     for low, high, color in bands:
         ring_x = np.concatenate([high * np.cos(angle), low * np.cos(angle[::-1])])
         ring_y = np.concatenate([high * np.sin(angle), low * np.sin(angle[::-1])])
-        ax.fill(ring_x, ring_y, color=color, alpha=0.35, lw=0, label=f"singular tips (all $\\phi_0$): {low:.2f}-{high:.2f} m")
+        ax.fill(
+            ring_x,
+            ring_y,
+            color=color,
+            alpha=0.35,
+            lw=0,
+            label=f"singular tips (all $\\phi_0$): {low:.2f}-{high:.2f} m",
+        )
     _circle(ax, (0, 0), r5, color="tab:green", ls="--", lw=2, label=f"Guaranteed, eq. (8): {r5:.2f} m")
     _circle(ax, (0, 0), r_piw, color="tab:red", lw=2, label=f"path-independent disk: {r_piw:.2f} m")
     _circle(ax, (0, 0), r3, color="k", lw=1, label=f"Area 3: {r3:.2f} m")

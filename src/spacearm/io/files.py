@@ -20,13 +20,13 @@ import numpy as np
 
 __all__ = [
     "atomic_path",
-    "write_text",
-    "write_json",
-    "write_npz",
-    "write_csv",
+    "json_default",
     "read_csv",
     "save_figure",
-    "json_default",
+    "write_csv",
+    "write_json",
+    "write_npz",
+    "write_text",
 ]
 
 _UMASK = os.umask(0)
@@ -83,7 +83,7 @@ def write_csv(path: str | os.PathLike, columns: Mapping[str, Sequence]) -> Path:
     Floats are written with 17 significant digits so the file round-trips exactly.
     """
     names = list(columns)
-    rows = zip(*(columns[name] for name in names))
+    rows = zip(*(columns[name] for name in names), strict=False)
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(names)
@@ -99,7 +99,7 @@ def read_csv(path: str | os.PathLike) -> dict[str, list]:
         names = next(reader)
         columns: dict[str, list] = {name: [] for name in names}
         for row in reader:
-            for name, cell in zip(names, row):
+            for name, cell in zip(names, row, strict=False):
                 columns[name].append(_parse_cell(cell))
     return columns
 

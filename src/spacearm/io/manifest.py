@@ -23,14 +23,20 @@ from pathlib import Path
 from typing import Any
 
 import jax
-
 import yaml
 
 from .._version import __version__
 from .files import json_default
 
-__all__ = ["config_hash", "package_versions", "git_state", "device_info", "build_manifest", "file_sha256",
-           "input_files"]
+__all__ = [
+    "build_manifest",
+    "config_hash",
+    "device_info",
+    "file_sha256",
+    "git_state",
+    "input_files",
+    "package_versions",
+]
 
 # Folders of a checkout that hold results, not code or inputs: their changes do not make the
 # code "dirty" (a rerun of a committed result rewrites them).
@@ -71,11 +77,19 @@ def git_state(start: str | os.PathLike | None = None) -> dict[str, Any]:
         ).stdout.strip()
         status = subprocess.run(
             ["git", "status", "--porcelain", "--untracked-files=no", "--", ":(top)", *excluded],
-            cwd=where, capture_output=True, text=True, timeout=10, check=True,
+            cwd=where,
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
         ).stdout
         changed = [line[3:] for line in status.splitlines() if line.strip()]
-        return {"revision": revision, "dirty": bool(changed), "dirty_files": changed[:20],
-                "excluded": list(RESULT_FOLDERS)}
+        return {
+            "revision": revision,
+            "dirty": bool(changed),
+            "dirty_files": changed[:20],
+            "excluded": list(RESULT_FOLDERS),
+        }
     except (OSError, subprocess.SubprocessError):
         return {"revision": None, "dirty": None}
 
@@ -131,8 +145,9 @@ def input_files(command: Sequence[str] | None, config: Any = None) -> list[dict[
         if isinstance(entry, Mapping) and isinstance(entry.get("package"), str) and isinstance(entry.get("path"), str):
             located = _package_file(entry["package"], entry["path"])
             if located is not None:
-                add(located[0], "urdf", package=entry["package"], package_version=located[1],
-                    package_path=entry["path"])
+                add(
+                    located[0], "urdf", package=entry["package"], package_version=located[1], package_path=entry["path"]
+                )
         elif isinstance(entry, str):
             candidate = Path(entry) if Path(entry).is_absolute() else base / entry
             if candidate.is_file():
@@ -179,8 +194,14 @@ def device_info() -> dict[str, Any]:
     }
 
 
-def build_manifest(config: Any, *, command: Sequence[str] | None = None, timings: Mapping[str, float] | None = None,
-             extra: Mapping[str, Any] | None = None, git: Mapping[str, Any] | None = None) -> dict[str, Any]:
+def build_manifest(
+    config: Any,
+    *,
+    command: Sequence[str] | None = None,
+    timings: Mapping[str, float] | None = None,
+    extra: Mapping[str, Any] | None = None,
+    git: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
     """Everything needed to rerun a result: the resolved config and its hash, versions,
     git state, float64 flag, devices and timings.
 

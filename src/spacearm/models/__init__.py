@@ -12,11 +12,12 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._core.schema import read_yaml
-from .family import RobotFamily as RobotFamily, family_of as family_of
+from .family import RobotFamily as RobotFamily
+from .family import family_of as family_of
 from .planar import PlanarRobot, is_planar_mapping, robot_from_mapping
 from .spatial import SpatialRobot, spatial_robot_from_mapping
 
-__all__ = ["load_robot", "robot_from_file_mapping", "RobotFamily", "family_of", "is_robot_mapping"]
+__all__ = ["RobotFamily", "family_of", "is_robot_mapping", "load_robot", "robot_from_file_mapping"]
 
 
 def is_robot_mapping(config: Any) -> bool:

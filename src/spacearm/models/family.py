@@ -100,7 +100,6 @@ class RobotFamily:
         """
         raise NotImplementedError
 
-
     # The base attitude and the integrator state -----------------------------------------
 
     def split_state(self, robot, state: jax.Array) -> tuple[jax.Array, jax.Array]:

@@ -57,22 +57,22 @@ from ..models.family import family_of
 from .batching import flatten_batch, is_traced
 
 __all__ = [
-    "hat",
-    "vee",
-    "expm",
-    "log",
-    "geodesic_distance",
-    "bus_rate_map",
-    "step_nodes",
-    "step_generators",
-    "path_rotation",
-    "path_rotation_history",
-    "integrate_spatial_joint_path",
-    "spatial_joint_path_history",
     "DEFAULT_ORDER",
     "DEFAULT_STEPS",
     "MAX_STEP",
+    "bus_rate_map",
     "choose_steps",
+    "expm",
+    "geodesic_distance",
+    "hat",
+    "integrate_spatial_joint_path",
+    "log",
+    "path_rotation",
+    "path_rotation_history",
+    "spatial_joint_path_history",
+    "step_generators",
+    "step_nodes",
+    "vee",
 ]
 
 # Largest joint move per Magnus step (infinity norm, rad or m) when the step count is
@@ -176,7 +176,7 @@ def integrate_spatial_joint_path(
         the last waypoint.
     """
     q_start, joint_waypoints, base_rotation = _prepare(robot, q_start, joint_waypoints, base_rotation)
-    batch, flat_robot, batched, (wp_flat, R_flat, q_flat) = flatten_batch(
+    batch, flat_robot, batched, (wp_flat, R_flat, _q_flat) = flatten_batch(
         robot, [(joint_waypoints, 2), (base_rotation, 2), (q_start, 1)]
     )
     check_order(order)

@@ -10,9 +10,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 
-__all__ = ["is_traced", "flatten_batch", "check_arm_axis"]
-
-
+__all__ = ["check_arm_axis", "flatten_batch", "is_traced"]
 
 
 def is_traced(*xs) -> bool:

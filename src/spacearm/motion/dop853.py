@@ -12,7 +12,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 
-__all__ = ["STAGE_TIMES", "STAGE_WEIGHTS", "SOLUTION_WEIGHTS", "tableau_arrays", "rk_step", "error_norm"]
+__all__ = ["SOLUTION_WEIGHTS", "STAGE_TIMES", "STAGE_WEIGHTS", "error_norm", "rk_step", "tableau_arrays"]
 
 STAGE_TIMES = (
     0.0,
@@ -38,11 +38,61 @@ STAGE_WEIGHTS = (
     (0.2413651341592667, 0.0, -0.8845494793282861, 0.924834003261792),
     (0.037037037037037035, 0.0, 0.0, 0.17082860872947386, 0.12546768756682242),
     (0.037109375, 0.0, 0.0, 0.17025221101954405, 0.06021653898045596, -0.017578125),
-    (0.03709200011850479, 0.0, 0.0, 0.17038392571223998, 0.10726203044637328, -0.015319437748624402, 0.008273789163814023),
-    (0.6241109587160757, 0.0, 0.0, -3.3608926294469414, -0.868219346841726, 27.59209969944671, 20.154067550477894, -43.48988418106996),
-    (0.47766253643826434, 0.0, 0.0, -2.4881146199716677, -0.590290826836843, 21.230051448181193, 15.279233632882423, -33.28821096898486, -0.020331201708508627),
-    (-0.9371424300859873, 0.0, 0.0, 5.186372428844064, 1.0914373489967295, -8.149787010746927, -18.52006565999696, 22.739487099350505, 2.4936055526796523, -3.0467644718982196),
-    (2.273310147516538, 0.0, 0.0, -10.53449546673725, -2.0008720582248625, -17.9589318631188, 27.94888452941996, -2.8589982771350235, -8.87285693353063, 12.360567175794303, 0.6433927460157636),
+    (
+        0.03709200011850479,
+        0.0,
+        0.0,
+        0.17038392571223998,
+        0.10726203044637328,
+        -0.015319437748624402,
+        0.008273789163814023,
+    ),
+    (
+        0.6241109587160757,
+        0.0,
+        0.0,
+        -3.3608926294469414,
+        -0.868219346841726,
+        27.59209969944671,
+        20.154067550477894,
+        -43.48988418106996,
+    ),
+    (
+        0.47766253643826434,
+        0.0,
+        0.0,
+        -2.4881146199716677,
+        -0.590290826836843,
+        21.230051448181193,
+        15.279233632882423,
+        -33.28821096898486,
+        -0.020331201708508627,
+    ),
+    (
+        -0.9371424300859873,
+        0.0,
+        0.0,
+        5.186372428844064,
+        1.0914373489967295,
+        -8.149787010746927,
+        -18.52006565999696,
+        22.739487099350505,
+        2.4936055526796523,
+        -3.0467644718982196,
+    ),
+    (
+        2.273310147516538,
+        0.0,
+        0.0,
+        -10.53449546673725,
+        -2.0008720582248625,
+        -17.9589318631188,
+        27.94888452941996,
+        -2.8589982771350235,
+        -8.87285693353063,
+        12.360567175794303,
+        0.6433927460157636,
+    ),
 )
 
 SOLUTION_WEIGHTS = (
@@ -150,9 +200,9 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False,
         if i == 0 and first_slope is not None:
             slopes.append(first_slope)
             continue
-        increment = sum((w * k for w, k in zip(row, slopes) if w != 0.0), jnp.zeros_like(y))
+        increment = sum((w * k for w, k in zip(row, slopes, strict=False) if w != 0.0), jnp.zeros_like(y))
         slopes.append(field(y + h * increment))
-    y_new = y + h * sum(w * k for w, k in zip(b, slopes) if w != 0.0)
+    y_new = y + h * sum(w * k for w, k in zip(b, slopes, strict=False) if w != 0.0)
     return (y_new, slopes) if return_slopes else y_new
 
 
@@ -163,8 +213,8 @@ def error_norm(h, slopes, slope_new, y, y_new, rtol):
     scale = rtol * (1.0 + jnp.maximum(jnp.abs(y), jnp.abs(y_new)))
     if isinstance(slopes, (list, tuple)):
         every = list(slopes) + [slope_new]  # 13 slopes (m,)
-        err5 = sum(w * k for w, k in zip(ERROR_WEIGHTS_5, every) if w != 0.0) / scale
-        err3 = sum(w * k for w, k in zip(ERROR_WEIGHTS_3, every) if w != 0.0) / scale
+        err5 = sum(w * k for w, k in zip(ERROR_WEIGHTS_5, every, strict=False) if w != 0.0) / scale
+        err3 = sum(w * k for w, k in zip(ERROR_WEIGHTS_3, every, strict=False) if w != 0.0) / scale
     else:  # the last weights (on slope_new) are zero
         rows = slopes.shape[0]
         err5 = (jnp.asarray(ERROR_WEIGHTS_5[:rows], y.dtype) @ slopes) / scale

@@ -28,7 +28,7 @@ from ..models.family import family_of
 from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
-__all__ = ["integrate_joint_path", "joint_path_history", "joint_path_base_increments"]
+__all__ = ["integrate_joint_path", "joint_path_base_increments", "joint_path_history"]
 
 
 def _segment_integrals(robot, starts: jax.Array, steps: jax.Array, t, weights) -> jax.Array:
@@ -137,7 +137,12 @@ def integrate_joint_path(
                 f"{group.name} attitude is integrated by Magnus steps (use steps=, order=)"
             )
         return integrate_spatial_joint_path(
-            robot, phi_start, joint_waypoints, base_rotation, steps=steps, order=DEFAULT_ORDER if order is None else order
+            robot,
+            phi_start,
+            joint_waypoints,
+            base_rotation,
+            steps=steps,
+            order=DEFAULT_ORDER if order is None else order,
         )
     for name, value in (("base_rotation", base_rotation), ("steps", steps), ("order", order)):
         if value is not None:
@@ -148,9 +153,7 @@ def integrate_joint_path(
     nodes = 24 if nodes is None else nodes
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     pieces = _default_pieces(joint_waypoints, pieces)
-    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
-        robot, [(phi_start, 1), (joint_waypoints, 2)]
-    )
+    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(robot, [(phi_start, 1), (joint_waypoints, 2)])
     out = _joint_path_flat(flat_robot, phi_flat, wp_flat, batched, nodes, pieces)
     return out.reshape(batch + (robot.n_links + 1,))
 
@@ -234,13 +237,10 @@ def joint_path_history(
         `integrate_joint_path`'s result.
     """
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
-    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(
-        robot, [(phi_start, 1), (joint_waypoints, 2)]
-    )
+    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(robot, [(phi_start, 1), (joint_waypoints, 2)])
     postures, tips = _joint_history_flat(flat_robot, phi_flat, wp_flat, batched, int(samples_per_segment), nodes)
     count = postures.shape[1]
     return (
         postures.reshape(batch + (count, robot.n_links + 1)),
         tips.reshape(batch + (count, 2)),
     )
-

@@ -31,7 +31,7 @@ import jax.numpy as jnp
 from .dop853 import error_norm, rk_step
 from .path_ends import REASON_SINGULAR, REASON_STEP_BUDGET
 
-__all__ = ["start_lane", "step_lane", "run_queue", "lane_count", "PATH_BUCKET"]
+__all__ = ["PATH_BUCKET", "lane_count", "run_queue", "start_lane", "step_lane"]
 
 # Batches of paths are padded to PATH_BUCKET or the next power of two beyond.
 PATH_BUCKET = 512
@@ -71,8 +71,23 @@ def start_lane(field, y0: jax.Array, max_step, params: dict) -> dict:
     )
 
 
-def step_lane(field, lane: dict, joints, lower, upper, *, square: bool, max_length, max_step, tol, rtol, sing_rate,
-              max_steps, tableau: str = "dop853", rolled: bool = False):
+def step_lane(
+    field,
+    lane: dict,
+    joints,
+    lower,
+    upper,
+    *,
+    square: bool,
+    max_length,
+    max_step,
+    tol,
+    rtol,
+    sing_rate,
+    max_steps,
+    tableau: str = "dop853",
+    rolled: bool = False,
+):
     """One attempted step of one path.
 
     Args:
@@ -139,7 +154,7 @@ def step_lane(field, lane: dict, joints, lower, upper, *, square: bool, max_leng
         accept = jnp.bool_(True)
     take = accept & ~reached
     slope_new = jnp.where(h != 0, (f_new[-1] - f[-1]) / jnp.where(h != 0, h, 1.0), slope)
-    keep = lambda new, old: jnp.where(take, new, old)  # noqa: E731
+    keep = lambda new, old: jnp.where(take, new, old)
     count = lane["count"] + jnp.where(reached, 0, 1).astype(jnp.int32)
     new_lane = dict(
         lane,

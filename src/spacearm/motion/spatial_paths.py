@@ -17,7 +17,7 @@ from .._core.errors import ConfigError
 from .._core.groups import polar_rotation
 from .straight_paths import SpatialStraightPath, straight_tip_path
 
-__all__ = ["SpatialStraightPath", "spatial_straight_tip_path", "spatial_go_and_back", "polar_rotation"]
+__all__ = ["SpatialStraightPath", "polar_rotation", "spatial_go_and_back", "spatial_straight_tip_path"]
 
 
 def spatial_straight_tip_path(
@@ -57,8 +57,16 @@ def spatial_straight_tip_path(
     if n < 3:
         raise ConfigError(f"straight tip paths in 3-D need at least 3 joints, the arm has {n}")
     return straight_tip_path(
-        robot, q_start, direction, max_length=max_length, base_rotation=base_rotation, max_step=max_step, tol=tol,
-        rtol=rtol, sing_rate=sing_rate, max_steps=max_steps,
+        robot,
+        q_start,
+        direction,
+        max_length=max_length,
+        base_rotation=base_rotation,
+        max_step=max_step,
+        tol=tol,
+        rtol=rtol,
+        sing_rate=sing_rate,
+        max_steps=max_steps,
     )
 
 

@@ -53,19 +53,19 @@ from .lanes import PATH_BUCKET, lane_count, run_queue, start_lane, step_lane
 from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR, REASON_STEP_BUDGET
 
 __all__ = [
-    "StraightPath",
+    "PATH_BUCKET",
+    "REASON_JOINT_LIMIT",
+    "REASON_MAX_LENGTH",
+    "REASON_SINGULAR",
+    "REASON_STEP_BUDGET",
     "SpatialStraightPath",
+    "StraightPath",
+    "compile_straight_tip_path_history",
+    "generic_straight_field",
+    "go_and_back",
+    "lane_count",
     "straight_tip_path",
     "straight_tip_path_history",
-    "compile_straight_tip_path_history",
-    "go_and_back",
-    "generic_straight_field",
-    "lane_count",
-    "PATH_BUCKET",
-    "REASON_SINGULAR",
-    "REASON_MAX_LENGTH",
-    "REASON_JOINT_LIMIT",
-    "REASON_STEP_BUDGET",
 ]
 
 
@@ -235,15 +235,40 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_step
     lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
     upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
     return step_lane(
-        field, lane, (family.posture_offset, n), lower, upper, square=_square(robot), max_length=max_length,
-        max_step=max_step, tol=tol, rtol=rtol, sing_rate=sing_rate, max_steps=max_steps, tableau=tableau,
+        field,
+        lane,
+        (family.posture_offset, n),
+        lower,
+        upper,
+        square=_square(robot),
+        max_length=max_length,
+        max_step=max_step,
+        tol=tol,
+        rtol=rtol,
+        sing_rate=sing_rate,
+        max_steps=max_steps,
+        tableau=tableau,
         rolled=family.straight_field_loops,
     )
 
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "lanes", "tableau"))
-def _straight_flat(robot, joints, coords, direction, max_length, max_step, tol, rtol, sing_rate, max_steps, real,
-                   robot_batched, lanes, tableau):
+def _straight_flat(
+    robot,
+    joints,
+    coords,
+    direction,
+    max_length,
+    max_step,
+    tol,
+    rtol,
+    sing_rate,
+    max_steps,
+    real,
+    robot_batched,
+    lanes,
+    tableau,
+):
     """Integrate a padded batch of straight paths (the first ``real`` rows) on ``lanes`` lanes."""
     count = joints.shape[0]
     robot_axis = 0 if robot_batched else None
@@ -396,9 +421,20 @@ def straight_tip_path(
         flat_robot = pad_leading(flat_robot, padded)
     joints_flat, coords_flat, dir_flat, len_flat = pad_leading((joints_flat, coords_flat, dir_flat, len_flat), padded)
     out = _straight_flat(
-        flat_robot, joints_flat, coords_flat, dir_flat, len_flat, _as_array(max_step, dtype), _as_array(tol, dtype),
-        _as_array(rtol, dtype), _as_array(sing_rate, dtype), np.int32(max_steps), np.int32(count), batched,
-        lane_count(padded, lanes), tableau,
+        flat_robot,
+        joints_flat,
+        coords_flat,
+        dir_flat,
+        len_flat,
+        _as_array(max_step, dtype),
+        _as_array(tol, dtype),
+        _as_array(rtol, dtype),
+        _as_array(sing_rate, dtype),
+        np.int32(max_steps),
+        np.int32(count),
+        batched,
+        lane_count(padded, lanes),
+        tableau,
     )
     return _unpad(out, count, batch)
 
@@ -440,8 +476,9 @@ def _history_flat(robot, phi_start, direction, joint_arc, robot_batched, interva
     return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0, 0))(robot, phi_start, direction, joint_arc)
 
 
-def compile_straight_tip_path_history(robot, count: int = 1, n_samples: int = 101, *,
-                                      substeps: int = 4, tableau: str = "dop853") -> None:
+def compile_straight_tip_path_history(
+    robot, count: int = 1, n_samples: int = 101, *, substeps: int = 4, tableau: str = "dop853"
+) -> None:
     """Compile, without running, the sampler `straight_tip_path_history` uses for
     ``count`` paths of one design; a later call with those sizes finds the program.
 
@@ -486,7 +523,13 @@ def straight_tip_path_history(
         flat_robot = pad_leading(flat_robot, padded)
     phi_flat, dir_flat, arc_flat = pad_leading((phi_flat, dir_flat, arc_flat), padded)
     postures, tips = _history_flat(
-        flat_robot, phi_flat, dir_flat, arc_flat, batched, int(n_samples) - 1, int(substeps),
+        flat_robot,
+        phi_flat,
+        dir_flat,
+        arc_flat,
+        batched,
+        int(n_samples) - 1,
+        int(substeps),
         options.get("tableau", "dop853"),
     )
     return _unpad((postures, tips), count, batch)

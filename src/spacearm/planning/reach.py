@@ -17,7 +17,6 @@ space (radius K0 + ... + Kn about the system centroid) are refused with
 `ConfigError`.
 """
 
-
 from __future__ import annotations
 
 import concurrent.futures
@@ -49,8 +48,17 @@ from .reorientation import (
 from .spatial_reach import SpatialReachPlan, plan_spatial_reach
 from .spatial_reorientation import SpatialLoopSettings
 
-__all__ = ["ReachPlan", "plan_reach", "reachable_bounds", "MODE_STRAIGHT", "MODE_REORIENT", "MODE_REPOSITION",
-           "PHASE_REPOSITION", "PHASE_LOOP", "PHASE_STRAIGHT"]
+__all__ = [
+    "MODE_REORIENT",
+    "MODE_REPOSITION",
+    "MODE_STRAIGHT",
+    "PHASE_LOOP",
+    "PHASE_REPOSITION",
+    "PHASE_STRAIGHT",
+    "ReachPlan",
+    "plan_reach",
+    "reachable_bounds",
+]
 
 MODE_STRAIGHT = "straight"
 MODE_REORIENT = "reorient"

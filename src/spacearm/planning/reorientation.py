@@ -39,15 +39,22 @@ import optax
 
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
-from ..models.planar.closed_forms import momentum_inertias
 from ..models.family import family_of
+from ..models.planar.closed_forms import momentum_inertias
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.robot import SpatialRobot
 from ..motion import integrate_joint_path
 from .spatial_reorientation import plan_spatial_reorientation
 
-__all__ = ["LoopSettings", "ReorientationLoop", "plan_reorientation", "plan_reorientation_details", "rotation_curl", "check_posture",
-           "compile_loop_optimizer"]
+__all__ = [
+    "LoopSettings",
+    "ReorientationLoop",
+    "check_posture",
+    "compile_loop_optimizer",
+    "plan_reorientation",
+    "plan_reorientation_details",
+    "rotation_curl",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -175,7 +182,9 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, options
     """
     n = q0.shape[0]
     dtype = q0.dtype
-    opt = {name: value.astype(dtype) if name not in ("steps", "newton_steps") else value for name, value in options.items()}
+    opt = {
+        name: value.astype(dtype) if name not in ("steps", "newton_steps") else value for name, value in options.items()
+    }
     basis = jnp.asarray(_loop_basis(settings), dtype)
     lower = jnp.asarray(robot.joint_lower, dtype)
     upper = jnp.asarray(robot.joint_upper, dtype)
@@ -262,9 +271,7 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, options
         scale = jax.lax.fori_loop(0, options["newton_steps"], newton, jnp.asarray(1.0, dtype))
         points = points_of(params, r, scale)
         rotation = count * _loop_rotation(robot, q0, points)
-        violation = jnp.max(
-            jnp.concatenate([jax.nn.relu(points - upper).ravel(), jax.nn.relu(lower - points).ravel()])
-        )
+        violation = jnp.max(jnp.concatenate([jax.nn.relu(points - upper).ravel(), jax.nn.relu(lower - points).ravel()]))
         return dict(
             points=points,
             rotation=rotation,

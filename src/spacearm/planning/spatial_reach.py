@@ -47,7 +47,7 @@ from .spatial_reorientation import (
     plan_spatial_reorientation_details,
 )
 
-__all__ = ["SpatialReachPlan", "plan_spatial_reach", "candidate_rotations", "MODE_STRAIGHT", "MODE_REORIENT"]
+__all__ = ["MODE_REORIENT", "MODE_STRAIGHT", "SpatialReachPlan", "candidate_rotations", "plan_spatial_reach"]
 
 MODE_STRAIGHT = "straight"
 MODE_REORIENT = "reorient"
@@ -130,7 +130,10 @@ def _lanes(robot, q, R, target, fractions, tolerance):
     direction[distance == 0] = (1.0, 0.0, 0.0)  # any: the lane stops at once
     lengths = distance if fractions is None else distance * fractions
     path = spatial_straight_tip_path(
-        robot, jnp.asarray(q, dtype), jnp.asarray(direction, dtype), jnp.asarray(lengths, dtype),
+        robot,
+        jnp.asarray(q, dtype),
+        jnp.asarray(direction, dtype),
+        jnp.asarray(lengths, dtype),
         base_rotation=jnp.asarray(R, dtype),
     )
     aim = start + lengths[:, None] * direction
@@ -150,18 +153,26 @@ def _check(robot: SpatialRobot, q_start, target, base_rotation):
     outside = (q0 < lower) | (q0 > upper)
     if np.any(outside):
         j = int(np.argmax(outside))
-        raise ConfigError(f"q_start: joint {j + 1} = {q0[j]:.6g} is outside its limits [{lower[j]:.6g}, {upper[j]:.6g}]")
+        raise ConfigError(
+            f"q_start: joint {j + 1} = {q0[j]:.6g} is outside its limits [{lower[j]:.6g}, {upper[j]:.6g}]"
+        )
     target = np.asarray(target, float)
     if target.shape != (3,) or not np.all(np.isfinite(target)):
         raise ConfigError(f"target: expected three finite numbers (x, y, z) in m, got {np.asarray(target).tolist()!r}")
     R0 = np.eye(3) if base_rotation is None else np.asarray(base_rotation, float)
-    if R0.shape != (3, 3) or not np.all(np.isfinite(R0)) or np.max(np.abs(R0.T @ R0 - np.eye(3))) > 1e-9 or np.linalg.det(R0) < 0:
+    if (
+        R0.shape != (3, 3)
+        or not np.all(np.isfinite(R0))
+        or np.max(np.abs(R0.T @ R0 - np.eye(3))) > 1e-9
+        or np.linalg.det(R0) < 0
+    ):
         raise ConfigError("base_rotation: expected a (3, 3) rotation matrix")
     inner, outer = family_of(robot).tip_shell(robot)
     distance = float(np.linalg.norm(target))
     if distance > outer or distance < inner:
         where = (
-            f"beyond the Maximum Reachable radius {outer:.6g} m" if distance > outer
+            f"beyond the Maximum Reachable radius {outer:.6g} m"
+            if distance > outer
             else f"inside the unreachable hole of radius {inner:.6g} m"
         )
         raise ConfigError(
@@ -231,7 +242,8 @@ def plan_spatial_reach(
         raise ConfigError(f"loop_samples: expected at least 1, got {loop_samples!r}")
     vectors = (
         candidate_rotations(axes=-(-int(rotation_grid) // 4))[: int(rotation_grid)]
-        if rotations is None else np.asarray(rotations, float)
+        if rotations is None
+        else np.asarray(rotations, float)
     )
     if vectors.ndim != 2 or vectors.shape[1] != 3 or not len(vectors) or not np.all(np.isfinite(vectors)):
         raise ConfigError(f"rotations: expected (c, 3) finite rotation vectors, got shape {vectors.shape}")
@@ -257,10 +269,21 @@ def plan_spatial_reach(
         if not error <= tolerance:
             raise ConfigError(f"target: the plan ends {error:.3g} m from the target (tolerance {tolerance:.3g} m)")
         return SpatialReachPlan(
-            mode=mode, target=target, joints=joints, base_rotation=rotations_, tips=tips, phase=phase,
-            loop_waypoints=loop_waypoints, loop_rotation=loop_rotation, loops=int(loops),
-            bus_turn=float(_turn(rotations_[0], rotations_[-1])), end_joints=joints[-1], end_rotation=rotations_[-1],
-            end_tip=tips[-1], straight_length=length, error=error,
+            mode=mode,
+            target=target,
+            joints=joints,
+            base_rotation=rotations_,
+            tips=tips,
+            phase=phase,
+            loop_waypoints=loop_waypoints,
+            loop_rotation=loop_rotation,
+            loops=int(loops),
+            bus_turn=float(_turn(rotations_[0], rotations_[-1])),
+            end_joints=joints[-1],
+            end_rotation=rotations_[-1],
+            end_tip=tips[-1],
+            straight_length=length,
+            error=error,
         )
 
     none = q0[None]
@@ -269,8 +292,10 @@ def plan_spatial_reach(
         if reached:
             return plan(MODE_STRAIGHT, none, np.eye(3), 0, None, path, length)
     if MODE_REORIENT not in modes:
-        raise ConfigError(f"target: ({target[0]:.6g}, {target[1]:.6g}, {target[2]:.6g}) m is not reachable from this "
-                          f"posture with the modes {modes!r}")
+        raise ConfigError(
+            f"target: ({target[0]:.6g}, {target[1]:.6g}, {target[2]:.6g}) m is not reachable from this "
+            f"posture with the modes {modes!r}"
+        )
     # Compile the loop optimizer on a second core while the candidates run (XLA compiles
     # outside the GIL); the program is still compiled once: the plan waits for it.
     ahead = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="spacearm-compile")
@@ -299,8 +324,12 @@ def plan_spatial_reach(
     loop = plan_spatial_reorientation_details(robot, q0, Q, settings)
     # The loop's history: one pass sampled (a fixed shape), then pass i is pass 0 turned by
     # D^i on the left in bus axes (the attitude ODE does not depend on R).
-    R_pass, q_pass = (np.asarray(x) for x in spatial_joint_path_history(
-        robot, q0, loop.loop, base_rotation=np.eye(3), samples_per_segment=int(loop_samples), steps=1))
+    R_pass, q_pass = (
+        np.asarray(x)
+        for x in spatial_joint_path_history(
+            robot, q0, loop.loop, base_rotation=np.eye(3), samples_per_segment=int(loop_samples), steps=1
+        )
+    )
     D = R_pass[-1]
     power, R_loop, q_loop = np.eye(3), [np.eye(3)[None]], [q0[None]]
     for _ in range(loop.repetitions):
@@ -313,5 +342,7 @@ def plan_spatial_reach(
     R_after = R_loop[-1]
     path, reached, length = straight_leg(R_after)
     if not reached:
-        raise ConfigError(f"target: after the planned loop the straight path stops {float(length - path.length[-1]):.3g} m short")
+        raise ConfigError(
+            f"target: after the planned loop the straight path stops {float(length - path.length[-1]):.3g} m short"
+        )
     return plan(MODE_REORIENT, loop.waypoints, Q, loop.repetitions, (q_loop, R_loop, tip_loop), path, length)

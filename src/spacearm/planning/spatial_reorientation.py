@@ -51,8 +51,12 @@ from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, 
 from ..motion.joint_paths import integrate_joint_path
 
 __all__ = [
-    "SpatialLoopSettings", "SpatialReorientation", "plan_spatial_reorientation", "plan_spatial_reorientation_details",
-    "repeat_loop", "compile_spatial_loop_optimizer",
+    "SpatialLoopSettings",
+    "SpatialReorientation",
+    "compile_spatial_loop_optimizer",
+    "plan_spatial_reorientation",
+    "plan_spatial_reorientation_details",
+    "repeat_loop",
 ]
 
 
@@ -225,7 +229,7 @@ def compile_spatial_loop_optimizer(robot: SpatialRobot, settings: SpatialLoopSet
     shape, options = _split(settings)
     n, count = robot.n_joints, len(settings.loop_counts) * settings.seeds
     dtype = jnp.result_type(float)
-    s = lambda *dims: jax.ShapeDtypeStruct(dims, dtype)  # noqa: E731
+    s = lambda *dims: jax.ShapeDtypeStruct(dims, dtype)
     _optimize.lower(
         shapes_of(robot), s(n), s(count, 3), s(count, 2 * settings.harmonics, n), s(n), s(n), shapes_of(options), shape
     ).compile()
@@ -258,7 +262,9 @@ def _check_inputs(robot: SpatialRobot, q_start, target_rotation):
     if target.shape == (3,) and np.all(np.isfinite(target)):  # a rotation vector
         target = np.asarray(_as_rotation(target))
     if target.shape != (3, 3) or not np.all(np.isfinite(target)):
-        raise ConfigError(f"target_rotation: expected a (3, 3) rotation matrix or a (3,) rotation vector, got shape {target.shape}")
+        raise ConfigError(
+            f"target_rotation: expected a (3, 3) rotation matrix or a (3,) rotation vector, got shape {target.shape}"
+        )
     if np.max(np.abs(target.T @ target - np.eye(3))) > 1e-9 or np.linalg.det(target) < 0:
         raise ConfigError("target_rotation: not a rotation matrix (R^T R != 1 or det R < 0)")
     lower, upper = np.asarray(robot.joint_lower, float), np.asarray(robot.joint_upper, float)
@@ -293,7 +299,7 @@ def plan_spatial_reorientation_details(
     counts = np.repeat(np.asarray(settings.loop_counts), settings.seeds)
     rng = np.random.default_rng(settings.seed)
     coefficients = settings.initial_size * rng.normal(size=(len(counts), 2 * settings.harmonics, n))
-    finite = lambda x: np.where(np.isfinite(x), x, np.sign(x) * 1e3)  # noqa: E731
+    finite = lambda x: np.where(np.isfinite(x), x, np.sign(x) * 1e3)
     shape, options = _split(settings)
     _, loops = _optimize(
         robot,

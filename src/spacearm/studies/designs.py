@@ -23,17 +23,17 @@ from ..models.spatial import SpatialRobot
 from ..models.spatial import fields as spatial_fields
 
 __all__ = [
-    "Axis",
-    "FIELD_HELP",
-    "SPATIAL_FIELD_HELP",
-    "SIMPLE_FIELDS",
     "DERIVED_FIELDS",
-    "check_field",
-    "check_axes_compatible",
+    "FIELD_HELP",
+    "SIMPLE_FIELDS",
+    "SPATIAL_FIELD_HELP",
+    "Axis",
     "axis_points",
-    "build_designs",
-    "design_columns",
     "axis_unit",
+    "build_designs",
+    "check_axes_compatible",
+    "check_field",
+    "design_columns",
 ]
 
 
@@ -62,8 +62,11 @@ class SweepSpec(Protocol):
 
 SPATIAL_FIELD_HELP = spatial_fields.FIELD_HELP
 FIELD_HELP = planar_fields.FIELD_HELP
-SIMPLE_FIELDS = {"base.mass": ("base_mass", "kg"), "base.inertia": ("base_inertia", "kg_m2"),
-                 "base.attach": ("base_attach", "m")}
+SIMPLE_FIELDS = {
+    "base.mass": ("base_mass", "kg"),
+    "base.inertia": ("base_inertia", "kg_m2"),
+    "base.attach": ("base_attach", "m"),
+}
 DERIVED_FIELDS = {"arm.mass": "kg", "arm.mass_ratio": "1", "arm.length_split": "1"}
 
 
@@ -84,7 +87,7 @@ def axis_points(spec: SweepSpec) -> dict[str, np.ndarray]:
     if spec.combine == "zip":
         return {a.name: a.values.copy() for a in spec.axes}
     mesh = np.meshgrid(*[a.values for a in spec.axes], indexing="ij")
-    return {a.name: m.reshape(-1) for a, m in zip(spec.axes, mesh)}
+    return {a.name: m.reshape(-1) for a, m in zip(spec.axes, mesh, strict=False)}
 
 
 def check_axes_compatible(where: str, axes: Sequence[Axis], robot: PlanarRobot | SpatialRobot | int) -> None:
@@ -92,12 +95,13 @@ def check_axes_compatible(where: str, axes: Sequence[Axis], robot: PlanarRobot |
     order of application (the family's `conflicting_number`)."""
     fields = _fields(robot)
     for i, first in enumerate(axes):
-        for second in axes[i + 1:]:
+        for second in axes[i + 1 :]:
             shared = fields.conflicting_number(first.field, second.field, robot)
             if shared:
                 raise ConfigError(
                     f"{where}: axes.{first.name} ({first.field}) and axes.{second.name} ({second.field}) both set "
-                    f"{shared}; give each design number one axis")
+                    f"{shared}; give each design number one axis"
+                )
 
 
 def build_designs(spec: SweepSpec) -> tuple[PlanarRobot | SpatialRobot, dict[str, np.ndarray]]:
@@ -112,8 +116,9 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot | SpatialRobot, dict[str
     points = axis_points(spec)
     count = spec.n_designs
     fields = family_of(spec.robot).fields
-    robot = jax.tree_util.tree_map(lambda x: np.repeat(np.asarray(x, dtype=np.float64)[None], count, axis=0),
-                                   spec.robot)
+    robot = jax.tree_util.tree_map(
+        lambda x: np.repeat(np.asarray(x, dtype=np.float64)[None], count, axis=0), spec.robot
+    )
     for axis in sorted(spec.axes, key=lambda a: fields.field_stage(a.field)):
         robot = fields.set_field(robot, axis.field, points[axis.name], axis.relative)
     try:
@@ -121,7 +126,7 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot | SpatialRobot, dict[str
     except ConfigError:
         for i in range(count):  # error path only: find and name the first bad point
             try:
-                jax.tree_util.tree_map(lambda x: x[i], robot).replace()
+                jax.tree_util.tree_map(lambda x, i=i: x[i], robot).replace()
             except ConfigError as error:
                 at = ", ".join(f"{name}={points[name][i]:g}" for name in points)
                 raise ConfigError(f"{spec.source}: sweep point {i} ({at}) gives an invalid robot: {error}") from None

@@ -29,7 +29,7 @@ from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
 
-__all__ = ["Metric", "MetricSpec", "METRICS", "WBAR_OPTIONS", "metric_specs", "metric_columns", "design_function"]
+__all__ = ["METRICS", "WBAR_OPTIONS", "Metric", "MetricSpec", "design_function", "metric_columns", "metric_specs"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -234,45 +234,87 @@ _AVERAGES = {
     # metric name: (joint_average metric, column, description)
     "w_avg": ("manipulability", "w_avg_m3", "mean translational w* over the joint box (m^3), with its standard error"),
     "gci": ("conditioning", "gci", "global conditioning index: mean 1/kappa(J*_v) over the joint box"),
-    "base_disturbance": ("base_disturbance", "C_w_avg",
-                         "mean ||C_w||_F over the joint box (bus rad/s per joint rad/s)"),
-    "dynamic_manipulability": ("dynamic_manipulability", "w_d_avg", "mean dynamic manipulability w_d over the joint box"),
+    "base_disturbance": (
+        "base_disturbance",
+        "C_w_avg",
+        "mean ||C_w||_F over the joint box (bus rad/s per joint rad/s)",
+    ),
+    "dynamic_manipulability": (
+        "dynamic_manipulability",
+        "w_d_avg",
+        "mean dynamic manipulability w_d over the joint box",
+    ),
 }
 
 
 METRICS: dict[str, Metric] = {
-    "wbar": Metric(_wbar, lambda o: ["wbar"], check=_check_wbar, check_robot=_check_wbar_robot, description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame"),
+    "wbar": Metric(
+        _wbar,
+        lambda o: ["wbar"],
+        check=_check_wbar,
+        check_robot=_check_wbar_robot,
+        description="eq. 12: average of w*/L^2 over the elbow-down area, robot frame",
+    ),
     "S_M": Metric(_areas, lambda o: ["S_M"], description="Maximum Reachable area / (pi L^2)"),
     "S_G": Metric(_areas, lambda o: ["S_G"], description="Guaranteed Workspace area / (pi L^2) (eq. 8)"),
-    "radii": Metric(_radii, lambda o: ["K0_m", "R_attitude_m", "R_max_m", "R_guaranteed_m", "L_m"],
-                    description="K0, the Attitude-Constraint, Maximum-Reachable and Guaranteed radii, and L, in m"),
-    "workspace_areas": Metric(_workspace_areas, lambda o: ["S_fixed_vehicle", "S_attitude_constraint",
-                                                          "S_maximum_reachable", "S_guaranteed", "eq9_holds"],
-                              description="Areas 1-3 and 5 with their holes removed / (pi L^2), and eq. 9 (1 or 0)"),
-    "straight_path_area": Metric(_straight_area, lambda o: ["S_straight"], check=_check_straight,
-                                 check_robot=_check_straight_robot,
-                                 description="Straight-Path workspace area from phi_start_deg / (pi L^2)"),
-    "posture": Metric(_posture, lambda o: ["w_star_m3", "inverse_condition", "C_w_fro"], check=_check_posture,
-                      check_robot=_check_posture_robot, families=("spatial",),
-                      description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
-                                  "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)"),
+    "radii": Metric(
+        _radii,
+        lambda o: ["K0_m", "R_attitude_m", "R_max_m", "R_guaranteed_m", "L_m"],
+        description="K0, the Attitude-Constraint, Maximum-Reachable and Guaranteed radii, and L, in m",
+    ),
+    "workspace_areas": Metric(
+        _workspace_areas,
+        lambda o: ["S_fixed_vehicle", "S_attitude_constraint", "S_maximum_reachable", "S_guaranteed", "eq9_holds"],
+        description="Areas 1-3 and 5 with their holes removed / (pi L^2), and eq. 9 (1 or 0)",
+    ),
+    "straight_path_area": Metric(
+        _straight_area,
+        lambda o: ["S_straight"],
+        check=_check_straight,
+        check_robot=_check_straight_robot,
+        description="Straight-Path workspace area from phi_start_deg / (pi L^2)",
+    ),
+    "posture": Metric(
+        _posture,
+        lambda o: ["w_star_m3", "inverse_condition", "C_w_fro"],
+        check=_check_posture,
+        check_robot=_check_posture_robot,
+        families=("spatial",),
+        description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
+        "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)",
+    ),
 }
 METRICS["reach_radii"] = Metric(
-    _reach, lambda o: ["R_max_m", "R_inner_m"], check=_integer_options(_REACH_OPTIONS),
-    check_robot=_check_average_robot, families=("spatial",), designs_per_step=8,
+    _reach,
+    lambda o: ["R_max_m", "R_inner_m"],
+    check=_integer_options(_REACH_OPTIONS),
+    check_robot=_check_average_robot,
+    families=("spatial",),
+    designs_per_step=8,
     description="Maximum Reachable shell about the system centroid (outer and inner radius, m) by multi-start "
-                "search over the joint box; options starts, steps, seed")
+    "search over the joint box; options starts, steps, seed",
+)
 METRICS["path_independent_radius"] = Metric(
-    _path_independent, lambda o: ["R_path_independent_m"], check=_integer_options(_SINGULAR_OPTIONS),
-    check_robot=_check_average_robot, families=("spatial",), designs_per_step=8,
+    _path_independent,
+    lambda o: ["R_path_independent_m"],
+    check=_integer_options(_SINGULAR_OPTIONS),
+    check_robot=_check_average_robot,
+    families=("spatial",),
+    designs_per_step=8,
     description="path-independent workspace radius (Papadopoulos & Dubowsky), m: the closest dynamic-singular tip "
-                "position to the centroid (inf: none found); options samples, keep, candidates, descent_steps, "
-                "newton_steps, seed")
+    "position to the centroid (inf: none found); options samples, keep, candidates, descent_steps, "
+    "newton_steps, seed",
+)
 for _name, (_kind, _column, _text) in _AVERAGES.items():
-    METRICS[_name] = Metric(_joint_average(_kind, _column), (lambda c: lambda o: [c, f"{c}_error"])(_column),
-                            check=_check_average, check_robot=_check_average_robot, families=("spatial",),
-                            designs_per_step=8,
-                            description=_text + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})")
+    METRICS[_name] = Metric(
+        _joint_average(_kind, _column),
+        (lambda c: lambda o: [c, f"{c}_error"])(_column),
+        check=_check_average,
+        check_robot=_check_average_robot,
+        families=("spatial",),
+        designs_per_step=8,
+        description=_text + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})",
+    )
 
 
 def metric_columns(metrics: Sequence[MetricSpec]) -> list[str]:
@@ -303,7 +345,7 @@ def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], di
             options = {"rtol": SWEEP_RTOL, **group[0].options}
             kinds = tuple(_AVERAGES[m.name][0] for m in group)
             averages = joint_averages(robot, kinds, **options, designs_per_chunk=1)
-            for metric, kind in zip(group, kinds):
+            for metric, kind in zip(group, kinds, strict=False):
                 column = _AVERAGES[metric.name][1]
                 values.update({column: averages[kind].value, f"{column}_error": averages[kind].error})
         for metric in metrics:

@@ -37,15 +37,25 @@ from .._core.numeric import PEER_TIMEOUT_S
 from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
-from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
 from ..io import manifest as provenance
+from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
 from .designs import build_designs, design_columns
 from .metrics import METRICS, MetricSpec, design_function, metric_columns
 from .spec import SweepSpec
 from .table2 import REPORTS
 
-__all__ = ["run_sweep", "SweepResult", "SweepOutput", "DESIGNS_PER_STEP", "NonFiniteResult", "check_finite", "memory_estimate",
-           "check_sweep_memory", "agree_with_peers", "differing_keys"]
+__all__ = [
+    "DESIGNS_PER_STEP",
+    "NonFiniteResult",
+    "SweepOutput",
+    "SweepResult",
+    "agree_with_peers",
+    "check_finite",
+    "check_sweep_memory",
+    "differing_keys",
+    "memory_estimate",
+    "run_sweep",
+]
 
 # Designs vmapped together inside a chunk (see run_sweep): small enough for the cache.
 DESIGNS_PER_STEP = 32
@@ -64,7 +74,7 @@ def _shard_map(function, *, mesh, in_specs, out_specs):
     """``jax.shard_map`` (jax >= 0.6) or its earlier home, without replication checks."""
     if hasattr(jax, "shard_map"):
         return jax.shard_map(function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_vma=False)
-    from jax.experimental.shard_map import shard_map  # noqa: PLC0415 - jax < 0.6
+    from jax.experimental.shard_map import shard_map  # noqa: PLC0415
 
     return shard_map(function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_rep=False)
 
@@ -83,6 +93,7 @@ def _take(robot, start: int, stop: int, size: int, devices: int):
 def _shard(tree, sharding):
     """Place a host batch on the device mesh; every process supplies the shards it owns,
     so the same code runs on one device, many devices, or many hosts (jax.distributed)."""
+
     def place(x):
         x = np.asarray(x)
         return jax.make_array_from_callback(x.shape, sharding, lambda index: x[index])
@@ -115,14 +126,26 @@ def _evaluator(metrics_key: str, per_step: int, mesh):
     # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
     # needs the loop predicate reduced across devices every iteration, and that
     # deadlocked with several CPU devices in one process.
-    return jax.jit(_shard_map(lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)),
-                              mesh=mesh, in_specs=jax.sharding.PartitionSpec("designs"),
-                              out_specs=jax.sharding.PartitionSpec("designs")))
+    return jax.jit(
+        _shard_map(
+            lambda batch: jax.tree_util.tree_map(lambda v: v.reshape(-1), step(batch)),
+            mesh=mesh,
+            in_specs=jax.sharding.PartitionSpec("designs"),
+            out_specs=jax.sharding.PartitionSpec("designs"),
+        )
+    )
 
 
-def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, progress: bool = True,
-              command: Sequence[str] | None = None, stop_after_chunks: int | None = None,
-              outputs: Sequence[SweepOutput] = (), peer_timeout_s: float = PEER_TIMEOUT_S) -> SweepResult:
+def run_sweep(
+    spec: SweepSpec,
+    out_dir: str | os.PathLike | None = None,
+    *,
+    progress: bool = True,
+    command: Sequence[str] | None = None,
+    stop_after_chunks: int | None = None,
+    outputs: Sequence[SweepOutput] = (),
+    peer_timeout_s: float = PEER_TIMEOUT_S,
+) -> SweepResult:
     """Evaluate every design of a sweep and write ``table.csv``, ``grids.npz``, the report
     (``report:`` in the file, e.g. ``table.md``) and ``manifest.json`` into ``out_dir``
     (default: the sweep's ``output``).
@@ -160,13 +183,27 @@ def run_sweep(spec: SweepSpec, out_dir: str | os.PathLike | None = None, *, prog
                 refusal = str(error)  # every process must hear it, or they would wait for process 0
         if jax.process_count() > 1:
             agree_with_peers(spec, timeout_s=peer_timeout_s, refusal=refusal)
-        return _run_locked(spec, out_dir, wall_start, progress=progress, command=command,
-                           stop_after_chunks=stop_after_chunks, outputs=outputs)
+        return _run_locked(
+            spec,
+            out_dir,
+            wall_start,
+            progress=progress,
+            command=command,
+            stop_after_chunks=stop_after_chunks,
+            outputs=outputs,
+        )
 
 
-def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: bool,
-                command: Sequence[str] | None, stop_after_chunks: int | None,
-                outputs: Sequence[SweepOutput]) -> SweepResult:
+def _run_locked(
+    spec: SweepSpec,
+    out_dir: Path,
+    wall_start: float,
+    *,
+    progress: bool,
+    command: Sequence[str] | None,
+    stop_after_chunks: int | None,
+    outputs: Sequence[SweepOutput],
+) -> SweepResult:
     """`run_sweep` once this process may write ``out_dir``."""
     code_state = provenance.git_state()  # before this run changes any tracked result file
     robot, points = build_designs(spec)
@@ -175,8 +212,14 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
     chunk = max(devices, int(math.ceil(min(spec.chunk_size, total) / devices)) * devices)
     # Saved chunks are reused only by a run that would compute them bit for bit alike:
     # same resolved config, effective chunk size, precision and package versions.
-    resume_key = {"config": spec.config, "axis_order": [a.name for a in spec.axes], "chunk": chunk, "float64": bool(jax.config.jax_enable_x64),
-                  "spacearm": __version__, "jax": jax.__version__}
+    resume_key = {
+        "config": spec.config,
+        "axis_order": [a.name for a in spec.axes],
+        "chunk": chunk,
+        "float64": bool(jax.config.jax_enable_x64),
+        "spacearm": __version__,
+        "jax": jax.__version__,
+    }
     partial = out_dir / f".partial-{config_hash(resume_key)[:16]}"
 
     mesh = _mesh()
@@ -185,10 +228,13 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
     # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
     # slower per design on CPU), while chunk_size alone bounds the memory.
     per_device = chunk // devices
-    per_step = min([DESIGNS_PER_STEP] + [METRICS[m.name].designs_per_step for m in spec.metrics
-                                         if METRICS[m.name].designs_per_step])
-    evaluate = _evaluator(json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True),
-                          min(per_step, per_device), mesh)
+    per_step = min(
+        [DESIGNS_PER_STEP]
+        + [METRICS[m.name].designs_per_step for m in spec.metrics if METRICS[m.name].designs_per_step]
+    )
+    evaluate = _evaluator(
+        json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True), min(per_step, per_device), mesh
+    )
     columns = metric_columns(spec.metrics)
 
     compile_s = 0.0
@@ -215,8 +261,14 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
             pieces = {n: None for n in np.flatnonzero(saved_mask)}
     todo = [n for n in range(len(spans)) if n not in pieces]
     run_start = time.perf_counter()
-    bar = tqdm(total=total, desc=f"sweep {spec.name}", unit="design", disable=not progress, file=sys.stderr,
-               initial=sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces))
+    bar = tqdm(
+        total=total,
+        desc=f"sweep {spec.name}",
+        unit="design",
+        disable=not progress,
+        file=sys.stderr,
+        initial=sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces),
+    )
     try:
         for done, number in enumerate(todo):
             if stop_after_chunks is not None and done >= stop_after_chunks:
@@ -238,14 +290,15 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
             raise
         # Under jax.distributed a peer that died surfaces here as a collective's error.
         reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
-        raise RunError(f"process {jax.process_index()} of {jax.process_count()}: a peer process stopped or failed "
-                       f"during the sweep ({reason}); finished chunks are kept: start every process again "
-                       "to resume") from None
+        raise RunError(
+            f"process {jax.process_index()} of {jax.process_count()}: a peer process stopped or failed "
+            f"during the sweep ({reason}); finished chunks are kept: start every process again "
+            "to resume"
+        ) from None
     except KeyboardInterrupt:
         bar.close()
         kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
-        print(f"{kept:,} of {total:,} designs kept in {partial}; run the same command again to resume",
-              file=sys.stderr)
+        print(f"{kept:,} of {total:,} designs kept in {partial}; run the same command again to resume", file=sys.stderr)
         raise
     finally:
         bar.close()
@@ -277,10 +330,17 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
             files.extend(output(spec, staging, table))
         timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
         data = build_manifest(
-            spec.config, command=command, timings=timings, git=code_state,
-            extra={"robot_file": spec.robot_source, "n_designs": total, "chunk_size": chunk,
-                   "resumed_chunks": len(spans) - len(todo),
-                   "files": sorted(str(p.relative_to(staging)) for p in files)},
+            spec.config,
+            command=command,
+            timings=timings,
+            git=code_state,
+            extra={
+                "robot_file": spec.robot_source,
+                "n_designs": total,
+                "chunk_size": chunk,
+                "resumed_chunks": len(spans) - len(todo),
+                "files": sorted(str(p.relative_to(staging)) for p in files),
+            },
         )
         files.append(write_json(staging / "manifest.json", data))
         if _BEFORE_SWAP is not None:
@@ -293,8 +353,11 @@ def _run_locked(spec: SweepSpec, out_dir: Path, wall_start: float, *, progress: 
     shutil.rmtree(partial, ignore_errors=True)
     others = sorted(p.name for p in out_dir.glob(".partial-*") if p.is_dir())
     if others:
-        print(f"note: {out_dir} also holds {', '.join(others)} (chunks of another sweep run into this folder; "
-              "delete them if no run needs them)", file=sys.stderr)
+        print(
+            f"note: {out_dir} also holds {', '.join(others)} (chunks of another sweep run into this folder; "
+            "delete them if no run needs them)",
+            file=sys.stderr,
+        )
     return SweepResult(out_dir, table, data, files)
 
 
@@ -318,7 +381,8 @@ def check_finite(spec: SweepSpec, metric_values: Mapping[str, np.ndarray], point
             raise NonFiniteResult(
                 f"{spec.source}: metric column '{column}' is {float(values[first])} for design {first} ({where})"
                 f" and {bad.size - 1} more of {len(values)}; nothing was written (check the design's numbers"
-                + (", or drop --float32" if not jax.config.jax_enable_x64 else "") + ")"
+                + (", or drop --float32" if not jax.config.jax_enable_x64 else "")
+                + ")"
             )
 
 
@@ -339,9 +403,15 @@ def _flatten(value, prefix: str = "") -> dict[str, str]:
 def _fingerprint(spec: SweepSpec) -> dict:
     """What must be the same on every process of a distributed sweep: the resolved config
     and the code (versions, git revision, precision)."""
-    return {"config": spec.config,
-            "code": {"spacearm": __version__, "git_revision": provenance.git_state().get("revision"),
-                     "jax": jax.__version__, "float64": bool(jax.config.jax_enable_x64)}}
+    return {
+        "config": spec.config,
+        "code": {
+            "spacearm": __version__,
+            "git_revision": provenance.git_state().get("revision"),
+            "jax": jax.__version__,
+            "float64": bool(jax.config.jax_enable_x64),
+        },
+    }
 
 
 def differing_keys(mine: Mapping, theirs: Mapping) -> list[str]:
@@ -377,8 +447,10 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refu
         try:
             return client.blocking_key_value_get(key, wait_ms)
         except Exception:  # jaxlib's DEADLINE_EXCEEDED
-            raise RunError(f"process {rank} of {count}: {whom} did not answer within {timeout_s:g} s "
-                           "(is it running the same command? wait longer with --peer-timeout)") from None
+            raise RunError(
+                f"process {rank} of {count}: {whom} did not answer within {timeout_s:g} s "
+                "(is it running the same command? wait longer with --peer-timeout)"
+            ) from None
 
     if rank == 0:
         problems = []
@@ -399,8 +471,10 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refu
         # process sees its peers vanish and no coordination-service abort follows.
         with contextlib.suppress(Exception):
             jax.distributed.shutdown()
-        raise RunError(f"process {rank} of {count}: refusing to run: {verdict} (every process must run the same "
-                       "sweep file, --set options and spacearm version)")
+        raise RunError(
+            f"process {rank} of {count}: refusing to run: {verdict} (every process must run the same "
+            "sweep file, --set options and spacearm version)"
+        )
 
 
 def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float, str]:
@@ -413,8 +487,7 @@ def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float,
     in_flight = devices * min(DESIGNS_PER_STEP, max(1, chunk // devices))
     worst, advice = 0.0, ""
     for metric in spec.metrics:
-        numbers, option = working_numbers(metric.name, metric.options, n,
-                                          joint_average=metric.name in _JOINT_AVERAGES)
+        numbers, option = working_numbers(metric.name, metric.options, n, joint_average=metric.name in _JOINT_AVERAGES)
         if numbers > worst:
             worst, advice = numbers, f"lower metric '{metric.name}' option {option}" if option else ""
     columns = len(metric_columns(spec.metrics))
@@ -426,13 +499,18 @@ def check_sweep_memory(spec: SweepSpec) -> None:
     """Refuse a sweep whose estimated working memory (`memory_estimate`) is over half of this
     machine's memory, with the estimate and the fix; `ConfigError` (exit status 2)."""
     need, advice = memory_estimate(spec)
-    check_memory(f"{spec.source}: metrics", need, f"the sweep's metrics ({', '.join(m.name for m in spec.metrics)}) "
-                 f"on {spec.n_designs:,} designs", advice)
+    check_memory(
+        f"{spec.source}: metrics",
+        need,
+        f"the sweep's metrics ({', '.join(m.name for m in spec.metrics)}) on {spec.n_designs:,} designs",
+        advice,
+    )
 
 
 # The joint-box averages: the metrics with a standard-error column.
-_JOINT_AVERAGES = frozenset(name for name, metric in METRICS.items()
-                            if any(column.endswith("_error") for column in metric.columns({})))
+_JOINT_AVERAGES = frozenset(
+    name for name, metric in METRICS.items() if any(column.endswith("_error") for column in metric.columns({}))
+)
 
 
 # The names a sweep writes (see run_sweep, the reports and spacearm.figures.sweep): only these
@@ -465,5 +543,7 @@ def _check_output_dir(out_dir: Path) -> None:
     # process works in or one above it, nor a mount point.
     real, here = Path(os.path.realpath(target)), Path(os.path.realpath(os.getcwd()))
     if real == here or real in here.parents or (real.exists() and os.path.ismount(real)):
-        raise ConfigError(f"--out {out_dir}: results replace their folder as a whole, so they need a folder of "
-                          f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})")
+        raise ConfigError(
+            f"--out {out_dir}: results replace their folder as a whole, so they need a folder of "
+            f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})"
+        )

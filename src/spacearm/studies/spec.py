@@ -29,7 +29,14 @@ import yaml
 
 from .._core.errors import ConfigError
 from .._core.schema import (
-    check_keys, check_memory, describe_yaml_error, integer, is_number, number, quote, read_yaml,
+    check_keys,
+    check_memory,
+    describe_yaml_error,
+    integer,
+    is_number,
+    number,
+    quote,
+    read_yaml,
 )
 from ..models import load_robot, robot_from_file_mapping
 from ..models.family import family_of
@@ -39,10 +46,18 @@ from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_co
 from .metrics import METRICS, MetricSpec, metric_specs
 from .table2 import REPORT_CHECKS, REPORTS
 
-__all__ = ["SweepSpec", "Axis", "MetricSpec", "load_sweep", "apply_overrides", "axis_points"]
+__all__ = ["Axis", "MetricSpec", "SweepSpec", "apply_overrides", "axis_points", "load_sweep"]
 
 _TOP_KEYS = {
-    "name", "description", "robot", "axes", "combine", "metrics", "output", "chunk_size", "report",
+    "name",
+    "description",
+    "robot",
+    "axes",
+    "combine",
+    "metrics",
+    "output",
+    "chunk_size",
+    "report",
 }
 _AXIS_KEYS = {"field", "values", "range", "relative"}
 _RANGE_KEYS = {"start", "stop", "num", "step"}
@@ -120,13 +135,17 @@ def _axis_values(where: str, spec: Mapping, numbers: int) -> np.ndarray:
         return np.linspace(start, stop, num)
     step = rng["step"]
     if not is_number(step) or step == 0 or not math.isfinite(step):
-        raise ConfigError(f"{where}.range.step: must be a nonzero number (negative for a descending axis), got {step!r}")
+        raise ConfigError(
+            f"{where}.range.step: must be a nonzero number (negative for a descending axis), got {step!r}"
+        )
     steps = (stop - start) / step
     if not math.isfinite(steps) or steps > 2**53:
         raise ConfigError(f"{where}.range.step: {step:g} from {start:g} to {stop:g} gives too many values")
     count = int(math.floor(steps + 1e-9)) + 1
     if count < 1:
-        raise ConfigError(f"{where}.range: stepping by {step:g} from {start:g} never reaches {stop:g}; the axis is empty")
+        raise ConfigError(
+            f"{where}.range: stepping by {step:g} from {start:g} never reaches {stop:g}; the axis is empty"
+        )
     _check_size(f"{where}.range", count, f"{count} steps", numbers)
     return start + step * np.arange(count)
 
@@ -233,8 +252,9 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
 
     check_axes_compatible(where, axes, robot)
     if config.get("combine", "product") == "product":
-        _check_size(f"{where}: axes", math.prod(len(a.values) for a in axes),
-                    " x ".join(str(len(a.values)) for a in axes), size)
+        _check_size(
+            f"{where}: axes", math.prod(len(a.values) for a in axes), " x ".join(str(len(a.values)) for a in axes), size
+        )
 
     combine = config.get("combine", "product")
     if combine not in ("product", "zip"):
@@ -252,9 +272,8 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     if not isinstance(output, str):
         raise ConfigError(f"{where}: output: must be a folder path")
     report = config.get("report")
-    if report is not None:
-        if report not in REPORTS:
-            raise ConfigError(f"{where}: report: unknown report {report!r}; known: {', '.join(sorted(REPORTS))}")
+    if report is not None and report not in REPORTS:
+        raise ConfigError(f"{where}: report: unknown report {report!r}; known: {', '.join(sorted(REPORTS))}")
 
     resolved = {
         "name": name,
@@ -268,8 +287,17 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         "report": report,
     }
     spec = SweepSpec(
-        name=name, config=resolved, robot=robot, axes=tuple(axes), combine=combine, metrics=metrics,
-        chunk_size=chunk_size, output=output, report=report, source=where, robot_source=robot_source,
+        name=name,
+        config=resolved,
+        robot=robot,
+        axes=tuple(axes),
+        combine=combine,
+        metrics=metrics,
+        chunk_size=chunk_size,
+        output=output,
+        report=report,
+        source=where,
+        robot_source=robot_source,
     )
     if report is not None:
         REPORT_CHECKS[report](spec)
@@ -277,8 +305,10 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         entry = METRICS[metric.name]
         if family not in entry.families:
             others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
-            raise ConfigError(f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
-                              f"robots; the robot is {family}; its metrics: {others}")
+            raise ConfigError(
+                f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
+                f"robots; the robot is {family}; its metrics: {others}"
+            )
         entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
     build_designs(spec)  # validates every sweep point before anything is written
     return spec

@@ -30,8 +30,16 @@ from .table2_readings import (
 )
 from .table2_readings import wbar_readings as model_readings
 
-__all__ = ["REPORTS", "REPORT_CHECKS", "PAPER_TABLE2", "B0", "FIG10_RATIOS", "table2_report", "check_table2",
-           "wbar_readings"]
+__all__ = [
+    "B0",
+    "FIG10_RATIOS",
+    "PAPER_TABLE2",
+    "REPORTS",
+    "REPORT_CHECKS",
+    "check_table2",
+    "table2_report",
+    "wbar_readings",
+]
 
 B0 = 1.4  # m, Table 1's b0
 # Table 2 as printed: b0/B0 -> (w-bar x 1e-2, S_M, S_G).
@@ -68,25 +76,40 @@ def wbar_readings(base: PlanarRobot | None = None, ratios=tuple(PAPER_TABLE2)) -
     for reading in model_readings(base, tuple(ratios)):
         model = " + ".join(reading["model"]) or "faithful"
         extra = 0 if reading["average"] == "area" else 1
-        readings.append({
-            "name": f"{model} / {reading['average']}",
-            "model": model,
-            "rule": reading["average"],
-            "note": AVERAGES[reading["average"]] if not reading["model"] else
-                    "; ".join(DEPARTURES[n][1] for n in reading["model"]),
-            "departures": len(reading["model"]) + extra,
-            "values": np.asarray(reading["values"], float),
-        })
+        readings.append(
+            {
+                "name": f"{model} / {reading['average']}",
+                "model": model,
+                "rule": reading["average"],
+                "note": AVERAGES[reading["average"]]
+                if not reading["model"]
+                else "; ".join(DEPARTURES[n][1] for n in reading["model"]),
+                "departures": len(reading["model"]) + extra,
+                "values": np.asarray(reading["values"], float),
+            }
+        )
     l1, l2 = np.asarray(base.link_length)
     reach = l1 + l2
     scaled = stack_robots([base.replace(base_attach=np.float64(2.6 * r)) for r in ratios])
     readings += [
-        {"name": "faithful, B0 = l0 = 2.6 m / area", "note": "b0/B0 scaled by the base length (then S_M, S_G no longer match)",
-         "departures": 1, "values": 100 * grid_averages([FAITHFUL], scaled)["area"][0]},
-        {"name": "ground robot / area", "note": "(l1 l2 / L^2) pi/4, no base motion", "departures": 1,
-         "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * math.pi / 4)},
-        {"name": "ground robot / joint", "note": "(l1 l2 / L^2) 2/pi", "departures": 2,
-         "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * 2 / math.pi)},
+        {
+            "name": "faithful, B0 = l0 = 2.6 m / area",
+            "note": "b0/B0 scaled by the base length (then S_M, S_G no longer match)",
+            "departures": 1,
+            "values": 100 * grid_averages([FAITHFUL], scaled)["area"][0],
+        },
+        {
+            "name": "ground robot / area",
+            "note": "(l1 l2 / L^2) pi/4, no base motion",
+            "departures": 1,
+            "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * math.pi / 4),
+        },
+        {
+            "name": "ground robot / joint",
+            "note": "(l1 l2 / L^2) 2/pi",
+            "departures": 2,
+            "values": np.full(len(ratios), 100 * l1 * l2 / reach**2 * 2 / math.pi),
+        },
     ]
     return readings
 
@@ -105,20 +128,27 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
     rank = sorted(finite, key=lambda r: r["rms"])
     growth = printed[-1] / printed[0]
     best = rank[0]
-    best_single = min((r for r in finite if r["departures"] <= 1 and r["name"] != "faithful / area"), key=lambda r: r["rms"])
-    best_area = min((r for r in finite if r["name"].endswith("/ area") and r["name"] != "faithful / area"), key=lambda r: r["rms"])
+    best_single = min(
+        (r for r in finite if r["departures"] <= 1 and r["name"] != "faithful / area"), key=lambda r: r["rms"]
+    )
+    best_area = min(
+        (r for r in finite if r["name"].endswith("/ area") and r["name"] != "faithful / area"), key=lambda r: r["rms"]
+    )
     by_max = min(finite, key=lambda r: r["max"])
     faithful = next(r for r in readings if r["name"] == "faithful / area")["values"]
     fraction, median = chance_level(np.array([r["values"] for r in readings]), printed)
     shaped = [r for r in finite if np.isfinite(r["shape"])]
     # Rules that scale every row alike (area, square, area / joint volume) tie in shape: prefer fewer departures.
     by_shape = min(shaped, key=lambda r: (round(r["shape"], 9), r["departures"]))
-    by_shape_single = min((r for r in shaped if len(r.get("model", "").split(" + ")) == 1 and r.get("model") != "faithful"),
-                          key=lambda r: (round(r["shape"], 9), r["departures"]))
-    shape_fraction, shape_median = chance_level(
-        np.array([r["values"] for r in readings]), printed, statistic="shape")
+    by_shape_single = min(
+        (r for r in shaped if len(r.get("model", "").split(" + ")) == 1 and r.get("model") != "faithful"),
+        key=lambda r: (round(r["shape"], 9), r["departures"]),
+    )
+    shape_fraction, shape_median = chance_level(np.array([r["values"] for r in readings]), printed, statistic="shape")
     header = " | ".join(f"b0/B0={r:g}" for r in ratios)
-    fmt = lambda r: f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
+    fmt = lambda r: (
+        f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
+    )
     lines = [
         "## Readings of the w-bar column (x1e-2; no parameter, none tuned to the printed numbers)",
         "",
@@ -149,16 +179,22 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         f"- Closest by maximum error: {fmt(by_max)}.",
         f"- Closest with at most one departure: {fmt(best_single)}.",
         f"- Closest keeping eq. 12's area average: {fmt(best_area)}.",
-        ("- Closest in shape (each column divided by its first row, so blind to any constant factor of the"
-         f" averaging or the normalization): {by_shape['name']} (shape error {by_shape['shape']:.1%});"
-         f" with one model departure: {by_shape_single['name']} (shape error {by_shape_single['shape']:.1%},"
-         f" growth x{by_shape_single['values'][-1] / by_shape_single['values'][0]:.3f})."),
-        (f"- No reading reproduces the column: the printed values are rounded to 0.005 (at most "
-         f"{0.005 / min(printed):.2%} relative); every reading misses some row by {by_max['max']:.1%} or more."),
-        (f"- Against chance: over 1000 random increasing columns with the printed first and last values, the"
-         f" best of these readings has a median rms of {median:.1%}; {fraction:.1%} of the random columns are"
-         " fitted at least as well as the printed one. In shape: median best shape error"
-         f" {shape_median:.1%}, {shape_fraction:.1%} of the random columns fitted at least as well."),
+        (
+            "- Closest in shape (each column divided by its first row, so blind to any constant factor of the"
+            f" averaging or the normalization): {by_shape['name']} (shape error {by_shape['shape']:.1%});"
+            f" with one model departure: {by_shape_single['name']} (shape error {by_shape_single['shape']:.1%},"
+            f" growth x{by_shape_single['values'][-1] / by_shape_single['values'][0]:.3f})."
+        ),
+        (
+            f"- No reading reproduces the column: the printed values are rounded to 0.005 (at most "
+            f"{0.005 / min(printed):.2%} relative); every reading misses some row by {by_max['max']:.1%} or more."
+        ),
+        (
+            f"- Against chance: over 1000 random increasing columns with the printed first and last values, the"
+            f" best of these readings has a median rms of {median:.1%}; {fraction:.1%} of the random columns are"
+            " fitted at least as well as the printed one. In shape: median best shape error"
+            f" {shape_median:.1%}, {shape_fraction:.1%} of the random columns fitted at least as well."
+        ),
         "- The faithful definition stays the default everywhere.",
         "",
         "### rms relative error of every reading (rows: model variant; columns: averaging rule; - = diverges)",
@@ -171,8 +207,11 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         if "model" in r:
             grid.setdefault(r["model"], {})[r["rule"]] = r
     for model, cells in grid.items():
-        lines.append(f"| {model} | " + " | ".join(
-            "-" if not np.isfinite(cells[k]["rms"]) else f"{cells[k]['rms']:.1%}" for k in AVERAGES) + " |")
+        lines.append(
+            f"| {model} | "
+            + " | ".join("-" if not np.isfinite(cells[k]["rms"]) else f"{cells[k]['rms']:.1%}" for k in AVERAGES)
+            + " |"
+        )
     lines += [
         "",
         "### Every reading, closest first",
@@ -246,11 +285,16 @@ def table2_report(out_dir: Path, rows: list[dict], spec) -> list[Path]:
 
 def _table2_summary(rows: list[dict]) -> list[str]:
     """What the comparison shows, in words, from the numbers themselves."""
-    matched = [(r, PAPER_TABLE2[round(float(r["b0_over_B0"]), 6)]) for r in rows
-               if round(float(r["b0_over_B0"]), 6) in PAPER_TABLE2]
+    matched = [
+        (r, PAPER_TABLE2[round(float(r["b0_over_B0"]), 6)])
+        for r in rows
+        if round(float(r["b0_over_B0"]), 6) in PAPER_TABLE2
+    ]
     if not matched:
         return ["None of these b0/B0 values is printed in Table 2; nothing to compare."]
-    areas_agree = sum(abs(float(r[key]) - p[k]) <= 0.005 + 1e-9 for r, p in matched for k, key in ((1, "S_M"), (2, "S_G")))
+    areas_agree = sum(
+        abs(float(r[key]) - p[k]) <= 0.005 + 1e-9 for r, p in matched for k, key in ((1, "S_M"), (2, "S_G"))
+    )
     ours = [100 * float(r["wbar"]) for r, _ in matched]
     printed = [p[0] for _, p in matched]
     lines = [
@@ -260,7 +304,9 @@ def _table2_summary(rows: list[dict]) -> list[str]:
     ]
     if len(matched) > 1:
         first, last = float(matched[0][0]["b0_over_B0"]), float(matched[-1][0]["b0_over_B0"])
-        lines.append(f"Growth from b0/B0 = {first:g} to {last:g}: x{ours[-1] / ours[0]:.2f} here, x{printed[-1] / printed[0]:.2f} in the paper.")
+        lines.append(
+            f"Growth from b0/B0 = {first:g} to {last:g}: x{ours[-1] / ours[0]:.2f} here, x{printed[-1] / printed[0]:.2f} in the paper."
+        )
     return lines
 
 
@@ -271,13 +317,17 @@ def check_table2(spec) -> None:
     where = f"{spec.source}: report: table2"
     axes = spec.axes
     if len(axes) != 1 or axes[0].name != "b0_over_B0" or axes[0].field != "base.attach" or not axes[0].relative:
-        raise ConfigError(f"{where} needs exactly one axis, b0_over_B0: {{field: base.attach, relative: true, values: [...]}}")
+        raise ConfigError(
+            f"{where} needs exactly one axis, b0_over_B0: {{field: base.attach, relative: true, values: [...]}}"
+        )
     missing = {"wbar", "S_M", "S_G"} - {m.name for m in spec.metrics}
     if missing:
         raise ConfigError(f"{where} needs the metrics wbar, S_M and S_G (missing: {', '.join(sorted(missing))})")
     wbar = next(m for m in spec.metrics if m.name == "wbar")
     if wbar.options.get("measure", "area") != "area":
-        raise ConfigError(f"{where} compares the area average of eq. 12; drop wbar's measure: {wbar.options['measure']}")
+        raise ConfigError(
+            f"{where} compares the area average of eq. 12; drop wbar's measure: {wbar.options['measure']}"
+        )
     paper = umetani1990()
     for field in ("base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b"):
         if np.shape(getattr(spec.robot, field)) != np.shape(getattr(paper, field)) or not np.allclose(

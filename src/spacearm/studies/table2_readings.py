@@ -179,7 +179,9 @@ DEPARTURES: dict[str, tuple[dict, str]] = {
 }
 
 # Pairs that are the same model as one of their parts (left out of model_variants).
-_DEGENERATE = {frozenset({"momentum about base centroid", "no base orbital term"})}  # base term is 0 about its own centroid
+_DEGENERATE = {
+    frozenset({"momentum about base centroid", "no base orbital term"})
+}  # base term is 0 about its own centroid
 
 # Averaging rules of w*/L^2 over the elbow-down strip (the grid of grid_averages).
 AVERAGES: dict[str, str] = {
@@ -269,14 +271,16 @@ def _momentum_rows(coeffs: DesignCoefficients, c, s, link_rates):
         return H
     if link_rates is True:
         return h
-    return [jnp.where(link_rates, hj, Hj) for hj, Hj in zip(h, H)]
+    return [jnp.where(link_rates, hj, Hj) for hj, Hj in zip(h, H, strict=False)]
 
 
 def _columns(coeffs, c, s, link_rates, sign):
     xs, ys = _tip_columns(coeffs, c, s)
     H = _momentum_rows(coeffs, c, s, link_rates)
     ratio = [sign * H[j] / H[0] for j in range(1, len(c))]
-    return [xs[j] - xs[0] * r for j, r in zip(range(1, len(c)), ratio)], [ys[j] - ys[0] * r for j, r in zip(range(1, len(c)), ratio)]
+    return [xs[j] - xs[0] * r for j, r in zip(range(1, len(c)), ratio, strict=False)], [
+        ys[j] - ys[0] * r for j, r in zip(range(1, len(c)), ratio, strict=False)
+    ]
 
 
 def _angles(phi):
@@ -307,7 +311,9 @@ def generalized_jacobian(derivation: Derivation, robot: PlanarRobot, phi: jax.Ar
 def manipulability(derivation: Derivation, robot: PlanarRobot, phi: jax.Array) -> jax.Array:
     """w* = sqrt(det(J* J*^T)) under ``derivation``, m^2 (``(...)``)."""
     c, s = _angles(phi)
-    return _manipulability_from_columns(*_columns(derivation_coefficients(derivation, robot), c, s, derivation.link_rates, derivation.sign))
+    return _manipulability_from_columns(
+        *_columns(derivation_coefficients(derivation, robot), c, s, derivation.link_rates, derivation.sign)
+    )
 
 
 # Averages over the elbow-down strip ------------------------------------------------------
@@ -372,8 +378,14 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
     link_rates = np.repeat(np.asarray([d.link_rates for d in derivations]), designs)
     sign = np.repeat(np.asarray([float(d.sign) for d in derivations]), designs)
     lengths = robots.link_a + robots.link_b
-    args = (coeffs, link_rates, sign, repeat(np.sum(lengths, axis=-1)), repeat(lengths[:, 0] * lengths[:, 1]),
-            repeat(robots.base_attach))
+    args = (
+        coeffs,
+        link_rates,
+        sign,
+        repeat(np.sum(lengths, axis=-1)),
+        repeat(lengths[:, 0] * lengths[:, 1]),
+        repeat(robots.base_attach),
+    )
     # Fixed chunks of GRID_CHUNK pairs, the last padded (lax.map runs the pairs one by one
     # anyway): one compiled program for any number of pairs, instead of one per count.
     # Sliced in NumPy, so the chunks compile no slicing programs either.
@@ -431,7 +443,9 @@ def wbar_readings(
     readings = []
     for index, (names, derivation) in enumerate(variants):
         for rule in AVERAGES:
-            readings.append({"model": names, "average": rule, "derivation": derivation, "values": 100 * stats[rule][index]})
+            readings.append(
+                {"model": names, "average": rule, "derivation": derivation, "values": 100 * stats[rule][index]}
+            )
     return readings
 
 
@@ -454,7 +468,9 @@ def shape_error(values, printed) -> float:
     return float(np.max(np.abs((values / values[0]) / (printed / printed[0]) - 1.0)))
 
 
-def chance_level(values: np.ndarray, printed, *, trials: int = 1000, seed: int = 0, statistic: str = "rms") -> tuple[float, float]:
+def chance_level(
+    values: np.ndarray, printed, *, trials: int = 1000, seed: int = 0, statistic: str = "rms"
+) -> tuple[float, float]:
     """How well the same set of readings fits columns that are not the paper's.
 
     Draws ``trials`` random increasing columns with the printed first and last values

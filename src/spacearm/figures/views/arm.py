@@ -36,10 +36,17 @@ def write_arm_view(robot, path: str | Path, posture=None, *, attitude_rpy=None) 
     if posture.shape != (count,):
         raise ValueError(f"posture: expected {count} values, got {posture.size}")
     planar = isinstance(robot, PlanarRobot)
-    note = ("Drag to turn, scroll to zoom. Links are drawn from the kinematic model (joint origins and the tip), "
-            "the bus as the uniform box of its mass and inertia; positions are about the system centroid"
-            + (", in the arm's plane." if planar else ", inertial axes (the bus attitude sliders turn the bus frame)."))
-    data = dict(mode="arm", model=model, posture=posture, extent=scene_extent(robot),
-                rpy=[0.0, 0.0, 0.0] if attitude_rpy is None else np.asarray(attitude_rpy, float),
-                title=f"{model['name']}: {len(model['joint_kinds'])} joints on a {model['base_mass']:g} kg bus")
+    note = (
+        "Drag to turn, scroll to zoom. Links are drawn from the kinematic model (joint origins and the tip), "
+        "the bus as the uniform box of its mass and inertia; positions are about the system centroid"
+        + (", in the arm's plane." if planar else ", inertial axes (the bus attitude sliders turn the bus frame).")
+    )
+    data = dict(
+        mode="arm",
+        model=model,
+        posture=posture,
+        extent=scene_extent(robot),
+        rpy=[0.0, 0.0, 0.0] if attitude_rpy is None else np.asarray(attitude_rpy, float),
+        title=f"{model['name']}: {len(model['joint_kinds'])} joints on a {model['base_mass']:g} kg bus",
+    )
     return write_page(path, title=f"spacearm view: {model['name']}", note=note, data=data)

@@ -30,13 +30,20 @@ _STYLE = {
 
 def _hover(method: str, variables, objectives, x, f) -> str:
     rows = [f"<b>{method}</b>"]
-    rows += [f"{name} = {value:.6g}" for name, value in zip(objectives, f)]
-    rows += [f"{name} = {value:.6g}" for name, value in zip(variables, x)]
+    rows += [f"{name} = {value:.6g}" for name, value in zip(objectives, f, strict=False)]
+    rows += [f"{name} = {value:.6g}" for name, value in zip(variables, x, strict=False)]
     return "<br>".join(rows)
 
 
-def write_front_view(path: str | Path, *, objective_names, variable_names, fronts: Mapping[str, tuple],
-                     robots: Mapping[int, object] | None = None, title: str = "Pareto front") -> Path:
+def write_front_view(
+    path: str | Path,
+    *,
+    objective_names,
+    variable_names,
+    fronts: Mapping[str, tuple],
+    robots: Mapping[int, object] | None = None,
+    title: str = "Pareto front",
+) -> Path:
     """Write the front page.
 
     Args:
@@ -61,9 +68,11 @@ def write_front_view(path: str | Path, *, objective_names, variable_names, front
         order = np.argsort(objectives[:, 0])
         style = dict(_STYLE.get(method, dict(color="#2ca02c", symbol="circle", name=method)))
         trace = dict(
-            type="scatter3d" if three else "scatter", mode="markers" if three or method != "grid" else "lines+markers",
+            type="scatter3d" if three else "scatter",
+            mode="markers" if three or method != "grid" else "lines+markers",
             name=f"{style.pop('name')} ({len(designs)})",
-            x=objectives[order, 0], y=objectives[order, 1],
+            x=objectives[order, 0],
+            y=objectives[order, 1],
             marker=dict(size=5 if three else 7, color=style["color"], symbol=style["symbol"]),
             text=[_hover(method, variable_names, names, designs[i], objectives[i]) for i in order],
             hoverinfo="text",
@@ -73,13 +82,17 @@ def write_front_view(path: str | Path, *, objective_names, variable_names, front
             trace["z"] = objectives[order, 2]
         traces.append(trace)
     axis = lambda i: dict(title=dict(text=f"{names[i]} (maximized)"))
-    layout = dict(margin=dict(l=60, r=10, t=40, b=50), title=dict(text=title, font=dict(size=14)), legend=dict(x=0, y=1))
+    layout = dict(
+        margin=dict(l=60, r=10, t=40, b=50), title=dict(text=title, font=dict(size=14)), legend=dict(x=0, y=1)
+    )
     if three:
         layout["scene"] = dict(xaxis=axis(0), yaxis=axis(1), zaxis=axis(2))
     else:
         layout.update(xaxis=axis(0), yaxis=axis(1))
-    note = ("Hover a point for its design variables and objectives; click a point of the gradient front to "
-            "draw that design's robot below (joints at zero).")
+    note = (
+        "Hover a point for its design variables and objectives; click a point of the gradient front to "
+        "draw that design's robot below (joints at zero)."
+    )
     readout = "objectives: " + ", ".join(names) + "\nvariables: " + ", ".join(variable_names)
     data = dict(mode="front", traces=traces, layout=layout, robots=models, readout=readout)
     return write_page(path, title=title, note=note, data=data)
@@ -97,7 +110,15 @@ def front_view(problem, results: Mapping, summary: Mapping, out_dir: Path) -> li
         picked = np.unique(np.linspace(0, len(designs) - 1, min(len(designs), MAX_ROBOTS)).round().astype(int))
         batch = jax.tree_util.tree_map(np.asarray, jax.jit(jax.vmap(problem.robot))(designs[picked]))
         for k, row in enumerate(picked):
-            robots[int(row)] = jax.tree_util.tree_map(lambda leaf: leaf[k], batch)
+            robots[int(row)] = jax.tree_util.tree_map(lambda leaf, k=k: leaf[k], batch)
     title = f"{problem.name}: Pareto front of " + ", ".join(problem.objectives)
-    return [write_front_view(Path(out_dir) / "front.html", objective_names=problem.objectives,
-                             variable_names=problem.variable_names, fronts=fronts, robots=robots, title=title)]
+    return [
+        write_front_view(
+            Path(out_dir) / "front.html",
+            objective_names=problem.objectives,
+            variable_names=problem.variable_names,
+            fronts=fronts,
+            robots=robots,
+            title=title,
+        )
+    ]

@@ -71,13 +71,18 @@ def chain_model(robot) -> dict:
     if isinstance(robot, PlanarRobot):
         n = int(np.shape(robot.link_a)[-1])
         return dict(
-            family="planar", name=str(robot.name),
-            joint_names=[f"joint {i + 1}" for i in range(n)], joint_kinds=["revolute"] * n,
-            lower=limits(robot.joint_lower), upper=limits(robot.joint_upper),
+            family="planar",
+            name=str(robot.name),
+            joint_names=[f"joint {i + 1}" for i in range(n)],
+            joint_kinds=["revolute"] * n,
+            lower=limits(robot.joint_lower),
+            upper=limits(robot.joint_upper),
             bus_corners=corners.tolist(),
-            base_mass=float(robot.base_mass), attach=float(robot.base_attach),
+            base_mass=float(robot.base_mass),
+            attach=float(robot.base_attach),
             link_mass=np.asarray(robot.link_mass, float).tolist(),
-            a=np.asarray(robot.link_a, float).tolist(), b=np.asarray(robot.link_b, float).tolist(),
+            a=np.asarray(robot.link_a, float).tolist(),
+            b=np.asarray(robot.link_b, float).tolist(),
         )
     if not isinstance(robot, SpatialRobot):
         raise TypeError(f"chain_model: a planar or spatial robot, got {type(robot).__name__}")
@@ -86,8 +91,12 @@ def chain_model(robot) -> dict:
     axis = np.asarray(robot.joint_axis, float)
     names = robot.joint_names or tuple(f"q{i + 1}" for i in range(robot.n_joints))
     return dict(
-        family="spatial", name=robot.name, joint_names=list(names), joint_kinds=list(robot.joint_kinds),
-        lower=limits(robot.joint_lower), upper=limits(robot.joint_upper),
+        family="spatial",
+        name=robot.name,
+        joint_names=list(names),
+        joint_kinds=list(robot.joint_kinds),
+        lower=limits(robot.joint_lower),
+        upper=limits(robot.joint_upper),
         bus_corners=corners.tolist(),
         mount_rotation=rpy_matrix(np.asarray(robot.mount_rpy, float)).tolist(),
         mount_xyz=np.asarray(robot.mount_xyz, float).tolist(),
@@ -95,8 +104,10 @@ def chain_model(robot) -> dict:
         joint_translation=np.asarray(robot.joint_translation, float).tolist(),
         joint_axis=(axis / np.linalg.norm(axis, axis=-1, keepdims=True)).tolist(),
         tip_translation=np.asarray(robot.tip_translation, float).tolist(),
-        base_mass=float(robot.base_mass), base_com=np.asarray(robot.base_com, float).tolist(),
-        root_mass=float(robot.root_mass), root_com=np.asarray(robot.root_com, float).tolist(),
+        base_mass=float(robot.base_mass),
+        base_com=np.asarray(robot.base_com, float).tolist(),
+        root_mass=float(robot.root_mass),
+        root_com=np.asarray(robot.root_com, float).tolist(),
         link_mass=np.asarray(robot.link_mass, float).tolist(),
         link_com=np.asarray(robot.link_com, float).tolist(),
     )

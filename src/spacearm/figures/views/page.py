@@ -22,7 +22,7 @@ from ..._core.errors import ConfigError
 from ...io import write_text
 from .model import FK_SCRIPT
 
-__all__ = ["MissingViewExtra", "VIEW_EXTRA_MESSAGE", "plotly_bundle", "view_extra_available", "write_page"]
+__all__ = ["VIEW_EXTRA_MESSAGE", "MissingViewExtra", "plotly_bundle", "view_extra_available", "write_page"]
 
 VIEW_EXTRA_MESSAGE = (
     "interactive HTML views need Plotly, the optional 'view' extra: "
@@ -93,21 +93,23 @@ def write_page(path: str | Path, *, title: str, note: str, data: dict) -> Path:
         MissingViewExtra: plotly is not installed (nothing is written).
     """
     bundle = plotly_bundle()
-    page = "\n".join([
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{html.escape(title)}</title>",
-        f"<style>{_STYLE}</style></head><body>",
-        '<div id="plot"></div>',
-        f'<div id="panel"><h1>{html.escape(title)}</h1><p>{html.escape(note)}</p>'
-        '<div id="controls"></div><div id="readout"></div></div>',
-        # Any script error is kept on the page (data-error), where a test or a reader can see it.
-        "<script>window.addEventListener('error', function (e) { document.body.dataset.error = e.message; });</script>",
-        f"<script>{bundle}</script>",
-        f"<script>{FK_SCRIPT.read_text()}</script>",
-        f"<script>window.SPACEARM = {_json(data)};</script>",
-        f"<script>{APP_SCRIPT.read_text()}</script>",
-        "</body></html>",
-    ])
+    page = "\n".join(
+        [
+            "<!DOCTYPE html>",
+            '<html lang="en"><head><meta charset="utf-8">',
+            '<meta name="viewport" content="width=device-width, initial-scale=1">',
+            f"<title>{html.escape(title)}</title>",
+            f"<style>{_STYLE}</style></head><body>",
+            '<div id="plot"></div>',
+            f'<div id="panel"><h1>{html.escape(title)}</h1><p>{html.escape(note)}</p>'
+            '<div id="controls"></div><div id="readout"></div></div>',
+            # Any script error is kept on the page (data-error), where a test or a reader can see it.
+            "<script>window.addEventListener('error', function (e) { document.body.dataset.error = e.message; });</script>",
+            f"<script>{bundle}</script>",
+            f"<script>{FK_SCRIPT.read_text()}</script>",
+            f"<script>window.SPACEARM = {_json(data)};</script>",
+            f"<script>{APP_SCRIPT.read_text()}</script>",
+            "</body></html>",
+        ]
+    )
     return write_text(path, page)

@@ -16,11 +16,22 @@ from ...models.planar import PlanarRobot
 from .model import chain_model, scene_extent
 from .page import write_page
 
-__all__ = ["write_replay_view", "replay_from_npz"]
+__all__ = ["replay_from_npz", "write_replay_view"]
 
 
-def write_replay_view(robot, path: str | Path, *, joints=None, base_rotation=None, phi=None, tip,
-                      target=None, phase=None, seconds: float = 6.0, title: str | None = None) -> Path:
+def write_replay_view(
+    robot,
+    path: str | Path,
+    *,
+    joints=None,
+    base_rotation=None,
+    phi=None,
+    tip,
+    target=None,
+    phase=None,
+    seconds: float = 6.0,
+    title: str | None = None,
+) -> Path:
     """Write the replay of a maneuver.
 
     Args:
@@ -59,14 +70,24 @@ def write_replay_view(robot, path: str | Path, *, joints=None, base_rotation=Non
             raise ValueError(f"base_rotation: expected shape ({len(q)}, 3, 3), got {R.shape}")
     if tip.ndim != 2 or tip.shape[0] != len(q):
         raise ValueError(f"tip: expected {len(q)} rows, got shape {tip.shape}")
-    frames = dict(q=q, R=R, tip=tip, phase=None if phase is None else [_phase_name(p) for p in np.asarray(phase).ravel()])
+    frames = dict(
+        q=q, R=R, tip=tip, phase=None if phase is None else [_phase_name(p) for p in np.asarray(phase).ravel()]
+    )
     reach = float(np.max(np.linalg.norm(tip, axis=-1)))
     extent = max(scene_extent(robot), 1.1 * reach, 0.0 if target is None else 1.1 * float(np.linalg.norm(target)))
-    data = dict(mode="replay", model=model, frames=frames, extent=extent, seconds=float(seconds),
-                target=None if target is None else np.asarray(target, float),
-                title=title or f"{model['name']}: {len(q)} frames")
-    note = ("Press play or drag the frame slider. The arm is redrawn at every frame from the recorded joints and "
-            "bus attitude; the red line is the recorded tip. Positions about the system centroid, inertial axes.")
+    data = dict(
+        mode="replay",
+        model=model,
+        frames=frames,
+        extent=extent,
+        seconds=float(seconds),
+        target=None if target is None else np.asarray(target, float),
+        title=title or f"{model['name']}: {len(q)} frames",
+    )
+    note = (
+        "Press play or drag the frame slider. The arm is redrawn at every frame from the recorded joints and "
+        "bus attitude; the red line is the recorded tip. Positions about the system centroid, inertial axes."
+    )
     return write_page(path, title=f"spacearm replay: {model['name']}", note=note, data=data)
 
 
@@ -101,5 +122,13 @@ def replay_from_npz(robot, npz_path: str | Path, path: str | Path, **options) ->
     joints = arrays.get("joints")
     if joints is None or tip is None:
         raise ConfigError(f"{npz_path}: no history to replay (needs 'joints', 'base_rotation' and 'tip')")
-    return write_replay_view(robot, path, joints=joints, base_rotation=arrays.get("base_rotation"), tip=tip,
-                             target=target, phase=phase, **options)
+    return write_replay_view(
+        robot,
+        path,
+        joints=joints,
+        base_rotation=arrays.get("base_rotation"),
+        tip=tip,
+        target=target,
+        phase=phase,
+        **options,
+    )

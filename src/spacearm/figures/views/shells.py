@@ -48,16 +48,23 @@ def write_shells_view(path: str | Path, robots, radii: Mapping[str, np.ndarray],
         for column, values in radii.items():
             value = float(np.asarray(values)[k])
             name, colour = SHELL_COLUMNS[column]
-            shells.append(dict(name=f"{name}: {value:.4g} m", radius=value if np.isfinite(value) else None, color=colour))
-        designs.append(dict(model=chain_model(robot), posture=np.zeros(robot.n_joints), label=str(labels[k]),
-                            shells=shells))
-    extent = max([scene_extent(robot) for robot in robots]
-                 + [1.1 * float(np.nanmax(np.where(np.isfinite(v), v, np.nan))) for v in radii.values()
-                    if np.isfinite(v).any()])
-    note = ("Drag the design slider; each sphere is a workspace radius about the system centroid (the origin), "
-            "the arm drawn with its joints at zero.")
-    return write_page(path, title=title, note=note, data=dict(mode="shells", designs=designs, extent=extent,
-                                                             title=title))
+            shells.append(
+                dict(name=f"{name}: {value:.4g} m", radius=value if np.isfinite(value) else None, color=colour)
+            )
+        designs.append(
+            dict(model=chain_model(robot), posture=np.zeros(robot.n_joints), label=str(labels[k]), shells=shells)
+        )
+    extent = max(
+        [scene_extent(robot) for robot in robots]
+        + [1.1 * float(np.nanmax(np.where(np.isfinite(v), v, np.nan))) for v in radii.values() if np.isfinite(v).any()]
+    )
+    note = (
+        "Drag the design slider; each sphere is a workspace radius about the system centroid (the origin), "
+        "the arm drawn with its joints at zero."
+    )
+    return write_page(
+        path, title=title, note=note, data=dict(mode="shells", designs=designs, extent=extent, title=title)
+    )
 
 
 def shells_view(spec, out_dir: Path, table: Mapping[str, np.ndarray]) -> list[Path]:
@@ -69,8 +76,9 @@ def shells_view(spec, out_dir: Path, table: Mapping[str, np.ndarray]) -> list[Pa
     robot, points = build_designs(spec)
     count = spec.n_designs
     picked = np.unique(np.linspace(0, count - 1, min(count, MAX_DESIGNS)).round().astype(int))
-    robots = [jax.tree_util.tree_map(lambda leaf: np.asarray(leaf)[k], robot) for k in picked]
+    robots = [jax.tree_util.tree_map(lambda leaf, k=k: np.asarray(leaf)[k], robot) for k in picked]
     labels = [", ".join(f"{name} = {values[k]:.4g}" for name, values in points.items()) for k in picked]
     radii = {c: np.asarray(table[c], float)[picked] for c in columns}
-    return [write_shells_view(Path(out_dir) / "shells.html", robots, radii, labels,
-                              title=f"{spec.name}: workspace shells")]
+    return [
+        write_shells_view(Path(out_dir) / "shells.html", robots, radii, labels, title=f"{spec.name}: workspace shells")
+    ]

@@ -30,26 +30,26 @@ from .robot import PlanarRobot
 
 __all__ = [
     "DesignCoefficients",
-    "design_coefficients",
-    "tip_coefficients",
-    "centroid_coefficients",
-    "tip_position",
-    "centroid_positions",
-    "base_jacobian",
-    "arm_jacobian",
-    "momentum_inertias",
-    "base_rate",
     "angular_momentum",
-    "generalized_jacobian",
-    "manipulability",
-    "manipulability_from_angles",
-    "manipulability_ellipse",
+    "arm_jacobian",
+    "base_jacobian",
+    "base_rate",
+    "centroid_coefficients",
+    "centroid_positions",
+    "design_coefficients",
     "fixed_base_jacobian",
     "fixed_base_manipulability",
     "fixed_base_tip_position",
-    "manipulability_on_grid",
+    "generalized_jacobian",
     "grid_angle_tables",
+    "manipulability",
+    "manipulability_ellipse",
+    "manipulability_from_angles",
+    "manipulability_on_grid",
+    "momentum_inertias",
     "robot_frame_tip_position",
+    "tip_coefficients",
+    "tip_position",
 ]
 
 
@@ -99,9 +99,7 @@ def design_coefficients(robot: PlanarRobot) -> DesignCoefficients:
     centroids = rows - mean[..., None, :]
     tip = tip_row - mean
     coupling = jnp.einsum("...i,...ik,...il->...kl", masses, centroids, centroids)
-    inertia = jnp.concatenate(
-        [jnp.asarray(robot.base_inertia)[..., None], robot.link_inertia], axis=-1
-    )
+    inertia = jnp.concatenate([jnp.asarray(robot.base_inertia)[..., None], robot.link_inertia], axis=-1)
     return DesignCoefficients(tip=tip, centroids=centroids, inertia_coupling=coupling, inertia=inertia)
 
 
@@ -245,9 +243,7 @@ def robot_frame_tip_position(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Arra
     """
     theta = jnp.cumsum(jnp.asarray(phi_arm), axis=-1)
     lengths = robot.link_length
-    return jnp.stack(
-        [jnp.sum(lengths * jnp.cos(theta), -1), jnp.sum(lengths * jnp.sin(theta), -1)], axis=-1
-    )
+    return jnp.stack([jnp.sum(lengths * jnp.cos(theta), -1), jnp.sum(lengths * jnp.sin(theta), -1)], axis=-1)
 
 
 fixed_base_tip_position = robot_frame_tip_position
@@ -482,7 +478,7 @@ def straight_path_field(robot: PlanarRobot, direction: jax.Array, sign0):
             rate = sign0 * det
         else:
             a = sum(g * g for g in gx)
-            b = sum(p * q for p, q in zip(gx, gy))
+            b = sum(p * q for p, q in zip(gx, gy, strict=False))
             d = sum(g * g for g in gy)
             # det(J* J*^T) by Cauchy-Binet: no cancellation near singular postures.
             rate = sum((gx[i] * gy[j] - gx[j] * gy[i]) ** 2 for i in range(n) for j in range(i + 1, n))

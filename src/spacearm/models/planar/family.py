@@ -7,11 +7,13 @@ positions from the system centroid, eq. 3).
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar
+
 import jax
 import jax.numpy as jnp
 import numpy as np
-
-import functools
 
 from ..._core.groups import SO2
 from ..._core.magnus import composite_gauss, line_integral
@@ -32,7 +34,7 @@ from .closed_forms import (
 )
 from .robot import PlanarRobot
 
-__all__ = ["PlanarFamily", "PLANAR"]
+__all__ = ["PLANAR", "PlanarFamily"]
 
 
 class PlanarFamily(RobotFamily):
@@ -43,7 +45,7 @@ class PlanarFamily(RobotFamily):
     translational_rows = 2
     posture_offset = 1
     rotates_with_base = False
-    fast_paths = {
+    fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
         "tip_position": tip_position,
         "generalized_jacobian": generalized_jacobian,
         "manipulability": manipulability,
@@ -56,7 +58,13 @@ class PlanarFamily(RobotFamily):
 
     attitude = SO2
     straight_field_loops = False  # the closed-form field: stages written out run faster
-    straight_defaults = {"max_step": 0.25, "tol": None, "rtol": None, "sing_rate": -float("inf"), "max_steps": 4096}
+    straight_defaults: ClassVar[Mapping[str, Any]] = {
+        "max_step": 0.25,
+        "tol": None,
+        "rtol": None,
+        "sing_rate": -float("inf"),
+        "max_steps": 4096,
+    }
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links

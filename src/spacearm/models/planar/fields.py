@@ -47,17 +47,17 @@ from ..._core.schema import did_you_mean
 from .robot import PlanarRobot
 
 __all__ = [
-    "FIELD_HELP",
     "FACTOR_FIELDS",
-    "check_field",
-    "canonical_name",
+    "FIELD_HELP",
     "alias_names",
-    "set_field",
-    "field_stage",
-    "field_writes",
+    "canonical_name",
+    "check_field",
     "conflicting_number",
-    "field_unit",
     "field_columns",
+    "field_stage",
+    "field_unit",
+    "field_writes",
+    "set_field",
 ]
 
 FIELD_HELP = (
@@ -69,7 +69,11 @@ FIELD_HELP = (
 )
 FACTOR_FIELDS: tuple[str, ...] = ()
 _LINK = re.compile(r"^links\[(\d+|\*)\]\.(mass|inertia|a|b|length|length_share|mass_share|centroid)$")
-_SIMPLE = {"base.mass": ("base_mass", "kg"), "base.inertia": ("base_inertia", "kg_m2"), "base.attach": ("base_attach", "m")}
+_SIMPLE = {
+    "base.mass": ("base_mass", "kg"),
+    "base.inertia": ("base_inertia", "kg_m2"),
+    "base.attach": ("base_attach", "m"),
+}
 _DERIVED = {"arm.mass": "kg", "arm.mass_ratio": "1", "arm.mass_ratio_fixed_total": "1", "arm.length_split": "1"}
 _SHARES = ("length_share", "mass_share")
 _ALIAS = re.compile(r"^(?:l(\d+)_over_L|m(\d+)_over_arm|a(\d+)_over_l(\d+))$")
@@ -124,16 +128,24 @@ def check_field(where: str, field: Any, robot: PlanarRobot | int) -> str:
     if match:
         index, what = match.groups()
         if index != "*" and int(index) >= n_links:
-            raise ConfigError(f"{where}.field: link index {index} out of range; the robot has {n_links} links "
-                              f"(0..{n_links - 1})")
+            raise ConfigError(
+                f"{where}.field: link index {index} out of range; the robot has {n_links} links (0..{n_links - 1})"
+            )
         if what in _SHARES and (index == "*" or int(index) == n_links - 1):
-            raise ConfigError(f"{where}.field: {field}: the last link (links[{n_links - 1}]) takes the rest of the "
-                              f"total; set the {what} of links 0..{n_links - 2}")
+            raise ConfigError(
+                f"{where}.field: {field}: the last link (links[{n_links - 1}]) takes the rest of the "
+                f"total; set the {what} of links 0..{n_links - 2}"
+            )
         return field
-    known = sorted(_SIMPLE) + sorted(_DERIVED) + [f"links[0].{k}" for k in ("mass", "inertia", "a", "b", "length",
-                                                                          "length_share", "mass_share", "centroid")]
+    known = (
+        sorted(_SIMPLE)
+        + sorted(_DERIVED)
+        + [f"links[0].{k}" for k in ("mass", "inertia", "a", "b", "length", "length_share", "mass_share", "centroid")]
+    )
     known += list(alias_names(n_links))
-    raise ConfigError(f"{where}.field: unknown design field '{field}'{did_you_mean(field, known)}; fields: {FIELD_HELP}")
+    raise ConfigError(
+        f"{where}.field: unknown design field '{field}'{did_you_mean(field, known)}; fields: {FIELD_HELP}"
+    )
 
 
 def _xp(*arrays):
@@ -194,7 +206,9 @@ def set_field(robot: PlanarRobot, field: str, value, relative: bool = False) -> 
             new = xp.where(last, rest, new)
             factor = new / amount
             if what == "length_share":
-                return _rebuild(robot, {"link_a": a * factor, "link_b": b * factor, "link_inertia": inertia * factor**2})
+                return _rebuild(
+                    robot, {"link_a": a * factor, "link_b": b * factor, "link_inertia": inertia * factor**2}
+                )
             return _rebuild(robot, {"link_mass": new, "link_inertia": inertia * factor})
         key = {"mass": "link_mass", "inertia": "link_inertia", "a": "link_a", "b": "link_b"}[what]
         leaf = getattr(robot, key)
@@ -209,8 +223,15 @@ def set_field(robot: PlanarRobot, field: str, value, relative: bool = False) -> 
         total = robot.base_mass + arm
         base = total / (1.0 + ratio)
         base_factor, arm_factor = base / robot.base_mass, ((total - base) / arm)[..., None]
-        return _rebuild(robot, {"base_mass": base, "base_inertia": robot.base_inertia * base_factor,
-                                "link_mass": mass * arm_factor, "link_inertia": inertia * arm_factor})
+        return _rebuild(
+            robot,
+            {
+                "base_mass": base,
+                "base_inertia": robot.base_inertia * base_factor,
+                "link_mass": mass * arm_factor,
+                "link_inertia": inertia * arm_factor,
+            },
+        )
     if field == "arm.length_split":
         lengths = a + b
         reach = xp.sum(lengths, axis=-1)
@@ -247,18 +268,24 @@ def field_writes(field: str, robot: PlanarRobot | int) -> set[str]:
         return {f"{leaf}[{i}]" for leaf in ("link_a", "link_b", "link_inertia", "link_length") for i in links}
     index, what = _LINK.match(field).groups()
     chosen = links if index == "*" else [int(index)]
-    leaves = {"mass": ["link_mass", "link_mass_share"], "inertia": ["link_inertia"],
-              "a": ["link_a", "link_length", "link_centroid"], "b": ["link_b", "link_length", "link_centroid"],
-              "length": ["link_a", "link_b", "link_inertia", "link_length"],
-              "length_share": ["link_length", "link_inertia"], "mass_share": ["link_mass_share", "link_inertia"],
-              "centroid": ["link_centroid"]}[what]
+    leaves = {
+        "mass": ["link_mass", "link_mass_share"],
+        "inertia": ["link_inertia"],
+        "a": ["link_a", "link_length", "link_centroid"],
+        "b": ["link_b", "link_length", "link_centroid"],
+        "length": ["link_a", "link_b", "link_inertia", "link_length"],
+        "length_share": ["link_length", "link_inertia"],
+        "mass_share": ["link_mass_share", "link_inertia"],
+        "centroid": ["link_centroid"],
+    }[what]
     return {f"{leaf}[{i}]" for leaf in leaves for i in chosen}
 
 
 def _scaling(field: str) -> bool:
     """Whether a field changes link inertias only by a factor (length squared or mass)."""
-    return field in ("arm.length_split", "arm.mass", "arm.mass_ratio", "arm.mass_ratio_fixed_total") or \
-        field.endswith(("].length", "_share"))
+    return field in ("arm.length_split", "arm.mass", "arm.mass_ratio", "arm.mass_ratio_fixed_total") or field.endswith(
+        ("].length", "_share")
+    )
 
 
 def _label(name: str) -> str:

@@ -19,6 +19,7 @@ from ..._core.labels import Label
 
 __all__ = ["PlanarRobot", "stack_robots"]
 
+
 @dataclasses.dataclass(frozen=True)
 class PlanarRobot:
     """A free-floating planar manipulator (link 0 is the base, links 1..n the arm).
@@ -107,7 +108,7 @@ def _unflatten(name: str, children) -> PlanarRobot:
     # Bypass __init__: gradients, optimizer updates and batched placeholders are
     # PlanarRobot-shaped too, and must not be validated as physical designs.
     robot = object.__new__(PlanarRobot)
-    for key, value in zip(_LEAF_FIELDS, children):
+    for key, value in zip(_LEAF_FIELDS, children, strict=False):
         object.__setattr__(robot, key, value)
     object.__setattr__(robot, "name", str(name))
     return robot
@@ -137,8 +138,10 @@ def _looks_valid(robot: PlanarRobot) -> bool:
         return False
     positive, nonnegative = (np.concatenate([np.ravel(v) for v in group]) for group in (positive, nonnegative))
     return bool(
-        (positive > 0).all() and (positive < np.inf).all()
-        and (nonnegative >= 0).all() and (nonnegative < np.inf).all()
+        (positive > 0).all()
+        and (positive < np.inf).all()
+        and (nonnegative >= 0).all()
+        and (nonnegative < np.inf).all()
         and (link_a + np.asarray(robot.link_b) > 0).all()
         and (np.asarray(robot.joint_lower) < np.asarray(robot.joint_upper)).all()
     )

@@ -12,7 +12,7 @@ from ..._core.errors import ConfigError
 from ..._core.schema import check_keys, number, robot_file_name
 from .robot import PlanarRobot
 
-__all__ = ["robot_from_mapping", "robot_to_mapping", "umetani1990", "is_planar_mapping"]
+__all__ = ["is_planar_mapping", "robot_from_mapping", "robot_to_mapping", "umetani1990"]
 
 
 def is_planar_mapping(config: Any) -> bool:
@@ -102,7 +102,6 @@ def robot_from_mapping(config: Mapping[str, Any], *, source: str = "robot") -> P
         raise ConfigError(f"{source}: {error}") from None
 
 
-
 def robot_to_mapping(robot: PlanarRobot) -> dict[str, Any]:
     """The YAML mapping of a single design (inverse of `robot_from_mapping`)."""
     if robot.batch_shape:
@@ -143,4 +142,3 @@ def umetani1990() -> PlanarRobot:
         },
         source="umetani1990",
     )
-

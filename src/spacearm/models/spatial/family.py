@@ -15,16 +15,18 @@ Jacobian and manipulability.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar
+
 import jax
 import jax.numpy as jnp
 
-import functools
-
 from ..._core.groups import SO3
+from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import RobotFamily
 from . import fields as spatial_fields
-from ..._core.linalg import gram_root_determinant
 from .primitives import (
     arm_inertia,
     base_twist_map,
@@ -68,7 +70,7 @@ class SpatialFamily(RobotFamily):
     translational_rows = 3
     posture_offset = 0
     rotates_with_base = True
-    fast_paths = {
+    fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
         "tip_position": tip,
         "generalized_jacobian": generalized_jacobian,
         "manipulability": _manipulability,
@@ -82,7 +84,13 @@ class SpatialFamily(RobotFamily):
 
     attitude = SO3
     straight_field_loops = True  # the chain pass is a scan: roll the DOP853 stages
-    straight_defaults = {"max_step": 0.1, "tol": 1e-11, "rtol": 1e-12, "sing_rate": 1e-6, "max_steps": 4000}
+    straight_defaults: ClassVar[Mapping[str, Any]] = {
+        "max_step": 0.1,
+        "tol": 1e-11,
+        "rtol": 1e-12,
+        "sing_rate": 1e-6,
+        "max_steps": 4000,
+    }
 
     def joint_count(self, robot: SpatialRobot) -> int:
         return robot.n_joints
@@ -90,8 +98,9 @@ class SpatialFamily(RobotFamily):
     def attitude_rate_map(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         return base_twist_map(robot, joints)[..., 3:, :]
 
-    def loop_holonomy(self, robot: SpatialRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS,
-                      order=DEFAULT_ORDER) -> jax.Array:
+    def loop_holonomy(
+        self, robot: SpatialRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS, order=DEFAULT_ORDER
+    ) -> jax.Array:
         """``(..., 3, 3)`` bus rotation along joint polylines ``(..., k, n)``, bus axes (6th-order Magnus)."""
         return path_rotation(functools.partial(self.attitude_rate_map, robot), waypoints, steps, order)
 

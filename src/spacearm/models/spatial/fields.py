@@ -54,18 +54,18 @@ from ..._core.schema import did_you_mean
 from .robot import SpatialRobot
 
 __all__ = [
-    "FIELD_HELP",
     "FACTOR_FIELDS",
-    "check_field",
-    "canonical_name",
-    "set_field",
-    "field_stage",
-    "field_writes",
-    "conflicting_number",
-    "field_unit",
-    "field_columns",
+    "FIELD_HELP",
     "arm_mass",
+    "canonical_name",
+    "check_field",
+    "conflicting_number",
+    "field_columns",
+    "field_stage",
+    "field_unit",
+    "field_writes",
     "path_length",
+    "set_field",
 ]
 
 FIELD_HELP = (
@@ -79,8 +79,12 @@ FACTOR_FIELDS = ("base.inertia", "arm.mass", "arm.length")
 _INDEXED = re.compile(r"^(mount\.xyz|mount\.rpy|mount\.rpy_deg|base\.com)\[(-?\d+)\]$")
 _LINK = re.compile(r"^links\.([^.\[\]]+)\.(\w+)$")
 _PLAIN = ("base.mass", "base.inertia", "arm.mass", "arm.mass_ratio", "arm.length")
-_AXIS_NAMES = {"mount.xyz": "xyz", "mount.rpy": ("roll", "pitch", "yaw"), "mount.rpy_deg": ("roll", "pitch", "yaw"),
-               "base.com": "xyz"}
+_AXIS_NAMES = {
+    "mount.xyz": "xyz",
+    "mount.rpy": ("roll", "pitch", "yaw"),
+    "mount.rpy_deg": ("roll", "pitch", "yaw"),
+    "base.com": "xyz",
+}
 
 
 def _body_names(robot: SpatialRobot) -> tuple[str, ...]:
@@ -112,28 +116,38 @@ def check_field(where: str, field: Any, robot: SpatialRobot) -> str:
     if match:
         index = int(match.group(2))
         if not 0 <= index <= 2:
-            raise ConfigError(f"{where}.field: index {index} of {match.group(1)} out of range; use 0, 1 or 2 "
-                              f"({'x, y, z' if 'xyz' in field or 'com' in field else 'roll, pitch, yaw'})")
+            raise ConfigError(
+                f"{where}.field: index {index} of {match.group(1)} out of range; use 0, 1 or 2 "
+                f"({'x, y, z' if 'xyz' in field or 'com' in field else 'roll, pitch, yaw'})"
+            )
         return field
     match = _LINK.match(field)
     if match:
         name, what = match.groups()
         bodies = _body_names(robot)
         if what not in ("mass", "length"):
-            raise ConfigError(f"{where}.field: links.{name}.{what}: a link field is 'mass' or 'length' "
-                              f"(links.{name}.mass, links.{name}.length)")
+            raise ConfigError(
+                f"{where}.field: links.{name}.{what}: a link field is 'mass' or 'length' "
+                f"(links.{name}.mass, links.{name}.length)"
+            )
         if name not in bodies:
             merged = _merged_into(robot)
             if name in merged:
-                raise ConfigError(f"{where}.field: link '{name}' is merged into body '{merged[name]}' (fixed "
-                                  f"joint); use links.{merged[name]}.{what}")
-            raise ConfigError(f"{where}.field: unknown link '{name}'{did_you_mean(name, bodies)}; the arm's links: "
-                              f"{', '.join(bodies)}")
+                raise ConfigError(
+                    f"{where}.field: link '{name}' is merged into body '{merged[name]}' (fixed "
+                    f"joint); use links.{merged[name]}.{what}"
+                )
+            raise ConfigError(
+                f"{where}.field: unknown link '{name}'{did_you_mean(name, bodies)}; the arm's links: "
+                f"{', '.join(bodies)}"
+            )
         return field
     known = list(_PLAIN) + ["mount.xyz[0]", "mount.rpy[0]", "mount.rpy_deg[0]", "base.com[0]"]
     known += [f"links.{name}.{what}" for name in _body_names(robot) for what in ("mass", "length")]
-    raise ConfigError(f"{where}.field: unknown design field '{field}' for a spatial robot"
-                      f"{did_you_mean(field, known)}; fields: {FIELD_HELP}")
+    raise ConfigError(
+        f"{where}.field: unknown design field '{field}' for a spatial robot"
+        f"{did_you_mean(field, known)}; fields: {FIELD_HELP}"
+    )
 
 
 def _xp(*arrays):
@@ -163,8 +177,9 @@ def path_length(robot: SpatialRobot):
     """``(...)`` the arm's path length, m: the distances between consecutive joint origins,
     from the root-link origin to the tip (what ``arm.length`` scales)."""
     xp = _xp(robot.joint_translation, robot.tip_translation)
-    return (xp.sum(xp.linalg.norm(robot.joint_translation, axis=-1), axis=-1)
-            + xp.linalg.norm(robot.tip_translation, axis=-1))
+    return xp.sum(xp.linalg.norm(robot.joint_translation, axis=-1), axis=-1) + xp.linalg.norm(
+        robot.tip_translation, axis=-1
+    )
 
 
 def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) -> SpatialRobot:
@@ -186,8 +201,12 @@ def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) ->
     match = _INDEXED.match(field)
     if match:
         name, index = match.group(1), int(match.group(2))
-        key = {"mount.xyz": "mount_xyz", "mount.rpy": "mount_rpy", "mount.rpy_deg": "mount_rpy",
-               "base.com": "base_com"}[name]
+        key = {
+            "mount.xyz": "mount_xyz",
+            "mount.rpy": "mount_rpy",
+            "mount.rpy_deg": "mount_rpy",
+            "base.com": "base_com",
+        }[name]
         leaf = getattr(robot, key)
         if name == "mount.rpy_deg" and not relative:
             value = value * (np.pi / 180.0)
@@ -199,9 +218,12 @@ def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) ->
         changes["base_inertia"] = robot.base_inertia * _column(value, 2)
     elif field in ("arm.mass", "arm.mass_ratio"):
         factor = value if field == "arm.mass" or relative else value * robot.base_mass / arm_mass(robot)
-        changes.update(root_mass=robot.root_mass * factor, root_inertia=robot.root_inertia * _column(factor, 2),
-                       link_mass=robot.link_mass * _column(factor, 1),
-                       link_inertia=robot.link_inertia * _column(factor, 3))
+        changes.update(
+            root_mass=robot.root_mass * factor,
+            root_inertia=robot.root_inertia * _column(factor, 2),
+            link_mass=robot.link_mass * _column(factor, 1),
+            link_inertia=robot.link_inertia * _column(factor, 3),
+        )
     elif field == "arm.length":
         s = value
         prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
@@ -233,8 +255,9 @@ def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) ->
             scaled = inertia[..., body - 1, :, :] * _column(ratio, 2)
             changes.update(
                 link_mass=_replace_entry(xp, robot.link_mass, body - 1, new),
-                link_inertia=xp.stack([scaled if k == body - 1 else inertia[..., k, :, :]
-                                       for k in range(robot.n_joints)], axis=-3),
+                link_inertia=xp.stack(
+                    [scaled if k == body - 1 else inertia[..., k, :, :] for k in range(robot.n_joints)], axis=-3
+                ),
             )
     return _rebuild(robot, changes)
 
@@ -248,7 +271,8 @@ def _body_length(xp, robot: SpatialRobot, body: int, s) -> dict:
     if body < n:
         translation = robot.joint_translation
         changes["joint_translation"] = xp.stack(
-            [translation[..., k, :] * (_column(s, 1) if k == body else 1.0) for k in range(n)], axis=-2)
+            [translation[..., k, :] * (_column(s, 1) if k == body else 1.0) for k in range(n)], axis=-2
+        )
     else:
         changes["tip_translation"] = robot.tip_translation * _column(s, 1)
     if body == 0:
@@ -256,10 +280,10 @@ def _body_length(xp, robot: SpatialRobot, body: int, s) -> dict:
     else:
         com, inertia = robot.link_com, robot.link_inertia
         changes.update(
-            link_com=xp.stack([com[..., k, :] * (_column(s, 1) if k == body - 1 else 1.0) for k in range(n)],
-                              axis=-2),
-            link_inertia=xp.stack([inertia[..., k, :, :] * (_column(s * s, 2) if k == body - 1 else 1.0)
-                                   for k in range(n)], axis=-3),
+            link_com=xp.stack([com[..., k, :] * (_column(s, 1) if k == body - 1 else 1.0) for k in range(n)], axis=-2),
+            link_inertia=xp.stack(
+                [inertia[..., k, :, :] * (_column(s * s, 2) if k == body - 1 else 1.0) for k in range(n)], axis=-3
+            ),
         )
     return changes
 
@@ -285,8 +309,12 @@ def field_writes(field: str, robot: SpatialRobot) -> set[str]:
     n = robot.n_joints
     match = _INDEXED.match(field)
     if match:
-        key = {"mount.xyz": "mount.xyz", "mount.rpy": "mount.rpy", "mount.rpy_deg": "mount.rpy",
-               "base.com": "base.com"}[match.group(1)]
+        key = {
+            "mount.xyz": "mount.xyz",
+            "mount.rpy": "mount.rpy",
+            "mount.rpy_deg": "mount.rpy",
+            "base.com": "base.com",
+        }[match.group(1)]
         return {f"{key}[{match.group(2)}]"}
     if field in ("base.mass", "base.inertia"):
         return {field}
@@ -345,8 +373,10 @@ def field_columns(robot: SpatialRobot, fields) -> dict[str, np.ndarray]:
             name = _LINK.match(field).group(1)
             body = _body_names(robot).index(name)
             columns[f"{re.sub(r'[^A-Za-z0-9_]', '_', name)}_length_m"] = np.asarray(
-                np.linalg.norm(np.asarray(robot.joint_translation)[..., body, :], axis=-1) if body < robot.n_joints
-                else np.linalg.norm(np.asarray(robot.tip_translation), axis=-1))
+                np.linalg.norm(np.asarray(robot.joint_translation)[..., body, :], axis=-1)
+                if body < robot.n_joints
+                else np.linalg.norm(np.asarray(robot.tip_translation), axis=-1)
+            )
         else:
             name = _LINK.match(field).group(1)
             body = _body_names(robot).index(name)

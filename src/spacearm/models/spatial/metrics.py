@@ -15,9 +15,17 @@ import jax.numpy as jnp
 from ..._core.linalg import gram_root_determinant
 from .primitives import (
     arm_inertia as _arm_inertia,
+)
+from .primitives import (
     base_twist_map as _base_twist_map,
+)
+from .primitives import (
     fixed_base_jacobian as _fixed_base_jacobian,
+)
+from .primitives import (
     generalized_jacobian as _generalized_jacobian,
+)
+from .primitives import (
     mass_matrix as _mass_matrix,
 )
 from .robot import SpatialRobot
@@ -43,7 +51,8 @@ def _rotate_rows(J, base_rotation):
         return J
     R = jnp.asarray(base_rotation)
     return jnp.concatenate(
-        [jnp.einsum("...ij,...jk->...ik", R, J[..., :3, :]), jnp.einsum("...ij,...jk->...ik", R, J[..., 3:, :])], axis=-2
+        [jnp.einsum("...ij,...jk->...ik", R, J[..., :3, :]), jnp.einsum("...ij,...jk->...ik", R, J[..., 3:, :])],
+        axis=-2,
     )
 
 
@@ -63,10 +72,8 @@ def full_manipulability(robot: SpatialRobot, q: jax.Array, characteristic_length
     J = _map(_generalized_jacobian, robot, q)
     length = jnp.asarray(characteristic_length)[..., None, None]
     scaled = jnp.concatenate([J[..., :3, :] / length, J[..., 3:, :]], axis=-2)
-    if scaled.shape[-1] >= 6:
-        gram = scaled @ jnp.swapaxes(scaled, -1, -2)
-    else:
-        gram = jnp.swapaxes(scaled, -1, -2) @ scaled
+    wide = scaled.shape[-1] >= 6
+    gram = scaled @ jnp.swapaxes(scaled, -1, -2) if wide else jnp.swapaxes(scaled, -1, -2) @ scaled
     det = jnp.linalg.det(gram)
     positive = det > 0
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, det, 1.0)), 0.0)

@@ -46,6 +46,7 @@ import jax.numpy as jnp
 from .robot import SpatialRobot
 
 __all__ = [
+    "POSTURE_QUANTITIES",
     "ChainConstants",
     "arm_inertia",
     "base_twist_map",
@@ -55,7 +56,6 @@ __all__ = [
     "jacobians",
     "mass_matrix",
     "momentum_map",
-    "POSTURE_QUANTITIES",
     "posture_quantities",
     "rpy_to_matrix",
     "straight_path_maps",
@@ -122,13 +122,20 @@ def _sym_rotate(rot, inertia):
 
 
 def _sym_add(a, b):
-    return tuple(x + y for x, y in zip(a, b))
+    return tuple(x + y for x, y in zip(a, b, strict=False))
 
 
 def _point_inertia(mass, c):
     """m S(c) = m (|c|^2 1 - c c^T) as 6 entries."""
     xx, yy, zz = c[0] * c[0], c[1] * c[1], c[2] * c[2]
-    return (mass * (yy + zz), mass * (xx + zz), mass * (xx + yy), -mass * c[0] * c[1], -mass * c[0] * c[2], -mass * c[1] * c[2])
+    return (
+        mass * (yy + zz),
+        mass * (xx + zz),
+        mass * (xx + yy),
+        -mass * c[0] * c[1],
+        -mass * c[0] * c[2],
+        -mass * c[1] * c[2],
+    )
 
 
 def _sym_matvec(s, v):
@@ -362,7 +369,7 @@ def _chain_pass(robot: SpatialRobot, q, with_momentum: bool = True) -> _Pass:
     centroid = _scale(1.0 / mass, moment)
     state.momentum, state.angular = momentum, angular
     state.centroid, state.mass = centroid, mass
-    state.inertia_g = tuple(x - y for x, y in zip(about, _point_inertia(mass, centroid)))
+    state.inertia_g = tuple(x - y for x, y in zip(about, _point_inertia(mass, centroid), strict=False))
     return state
 
 
@@ -495,7 +502,9 @@ def batched(kernel, axes: int):
         else:
             blocks = -(-count // BLOCK)
             padded = jnp.concatenate([flat, jnp.zeros((blocks * BLOCK - count, n), flat.dtype)])
-            out = jax.lax.map(lambda block: _batch_first(kernel(robot, block.T), axes), padded.reshape(blocks, BLOCK, n))
+            out = jax.lax.map(
+                lambda block: _batch_first(kernel(robot, block.T), axes), padded.reshape(blocks, BLOCK, n)
+            )
             out = out.reshape((blocks * BLOCK,) + out.shape[2:])[:count]
         return out.reshape(batch + out.shape[1:])
 
@@ -518,7 +527,9 @@ The closed form of the module docstring (Umetani & Yoshida 1990, eq. 6, in 3-D):
 only a 3x3 system is solved, one pass over the chain per posture."""
 
 base_twist_map = batched(_base_twist_minor, 2)
-base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate at zero momentum, bus axes."""
+base_twist_map.__doc__ = (
+    """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate at zero momentum, bus axes."""
+)
 
 straight_path_maps = batched(_straight_maps_minor, 2)
 straight_path_maps.__doc__ = """``(..., 6, n)``: rows 0-2 J*_v (tip velocity per joint rate at zero momentum) and
@@ -606,6 +617,6 @@ def posture_quantities(robot: SpatialRobot, q: jax.Array, needs: tuple[str, ...]
     rows = {"jacobian": 6, "base_rate": 6, "arm_inertia": robot.n_joints}
     out, start = {}, 0
     for name in wanted:
-        out[name] = stacked[..., start:start + rows[name], :]
+        out[name] = stacked[..., start : start + rows[name], :]
         start += rows[name]
     return out

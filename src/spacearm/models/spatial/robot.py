@@ -191,7 +191,7 @@ def _unflatten(structure: _Structure, children) -> SpatialRobot:
     # Bypass __init__: gradients, optimizer updates and batching placeholders have the
     # robot's shape too and must not be validated as physical designs.
     robot = object.__new__(SpatialRobot)
-    for key, value in zip(_LEAF_FIELDS, children):
+    for key, value in zip(_LEAF_FIELDS, children, strict=False):
         object.__setattr__(robot, key, value)
     object.__setattr__(robot, "joint_kinds", structure.joint_kinds)
     object.__setattr__(robot, "labels", structure.labels)
@@ -294,7 +294,9 @@ def _check_fields(robot: SpatialRobot) -> None:
                 label = _joint_label(robot, i)
                 if values["link_mass"][index][i] < 0:
                     raise ConfigError(f"{label}: link_mass must not be negative, got {values['link_mass'][index][i]}")
-                check_inertia(f"{label}: link_inertia", values["link_inertia"][index][i], positive=False, triangle=False)
+                check_inertia(
+                    f"{label}: link_inertia", values["link_inertia"][index][i], positive=False, triangle=False
+                )
                 if np.linalg.norm(values["joint_axis"][index][i]) == 0:
                     raise ConfigError(f"{label}: joint_axis must not be zero")
                 _check_rotation(f"{label}: joint_rotation", values["joint_rotation"][index][i])

@@ -73,9 +73,7 @@ def locate_package_file(source: str, package: str, path: str) -> str:
     try:
         distribution = importlib.metadata.distribution(package)
     except importlib.metadata.PackageNotFoundError:
-        raise ConfigError(
-            f"{source}: arm.urdf.package: '{package}' is not installed (pip install {package})"
-        ) from None
+        raise ConfigError(f"{source}: arm.urdf.package: '{package}' is not installed (pip install {package})") from None
     wanted = path.strip("/").replace("\\", "/")
     for file in distribution.files or ():
         name = str(file).replace("\\", "/")
@@ -151,8 +149,14 @@ def spatial_robot_from_mapping(
         raise ConfigError(f"{source}: arm.inertia_as_written: must be true or false, got {quote(as_written)}")
     urdf = _urdf_path(source, arm, os.fspath(base_dir))
     try:
-        chain = read_urdf(urdf, root_link=arm["root_link"], tip=arm["tip"], lock_joints=lock,
-                          inertia_as_written=as_written, fields=f"{source}: arm.")
+        chain = read_urdf(
+            urdf,
+            root_link=arm["root_link"],
+            tip=arm["tip"],
+            lock_joints=lock,
+            inertia_as_written=as_written,
+            fields=f"{source}: arm.",
+        )
     except ConfigError as error:  # a problem inside the URDF: name the robot file's field first
         if str(error).startswith(f"{source}: "):
             raise

@@ -25,7 +25,7 @@ import numpy as np
 
 from .urdf import rpy_matrix
 
-__all__ = ["virtual_link_lengths", "tip_shell"]
+__all__ = ["tip_shell", "virtual_link_lengths"]
 
 
 def _segment_norms(u: np.ndarray, a: np.ndarray, lo: float, hi: float) -> tuple[float, float]:
@@ -44,7 +44,7 @@ def virtual_link_lengths(robot) -> np.ndarray:
     Row 0 is the bus with the root link; row k the body after joint k. The two columns
     are equal for revolute joints.
     """
-    f = lambda name: np.asarray(getattr(robot, name), float)  # noqa: E731
+    f = lambda name: np.asarray(getattr(robot, name), float)
     n = robot.n_joints
     mount = rpy_matrix(f("mount_rpy"))
     base_mass, root_mass, link_mass = float(f("base_mass")), float(f("root_mass")), f("link_mass")

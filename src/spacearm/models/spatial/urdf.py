@@ -313,8 +313,9 @@ def _joint_motion(joint: _Joint, value: float) -> tuple[np.ndarray, np.ndarray]:
     return _axis_angle(joint.axis, value), np.zeros(3)
 
 
-def _check_tree(source: str, links: Mapping[str, _Link], parent_joint: Mapping[str, _Joint],
-                root_link: str) -> dict[str, str]:
+def _check_tree(
+    source: str, links: Mapping[str, _Link], parent_joint: Mapping[str, _Joint], root_link: str
+) -> dict[str, str]:
     """Refuse joints that form a cycle (naming them) and links in a second, unconnected tree
     (naming the orphan links); return each link's top link (the URDF's one root)."""
     top: dict[str, str] = {}
@@ -324,7 +325,7 @@ def _check_tree(source: str, links: Mapping[str, _Link], parent_joint: Mapping[s
         link = start
         while link not in top and link in parent_joint:
             if link in on_trail:
-                cycle = trail[trail.index(link):]
+                cycle = trail[trail.index(link) :]
                 names = ", ".join(sorted(f"'{parent_joint[name].name}'" for name in cycle))
                 raise ConfigError(f"{source}: joints {names} form a cycle (a URDF is a tree)")
             trail.append(link)
@@ -338,7 +339,9 @@ def _check_tree(source: str, links: Mapping[str, _Link], parent_joint: Mapping[s
         main = top.get(root_link) or sizes.most_common(1)[0][0]
         roots = [main] + sorted(r for r in sizes if r != main)
         orphans = sorted(name for name, root in top.items() if root != main)
-        shown = ", ".join(f"'{name}'" for name in orphans[:8]) + (f" and {len(orphans) - 8} more" if len(orphans) > 8 else "")
+        shown = ", ".join(f"'{name}'" for name in orphans[:8]) + (
+            f" and {len(orphans) - 8} more" if len(orphans) > 8 else ""
+        )
         raise ConfigError(
             f"{source}: links {shown} are not connected to the tree of '{roots[0]}' "
             f"(a URDF has one root link; {len(roots)} found: {', '.join(repr(r) for r in roots[:8])})"
@@ -378,6 +381,7 @@ def parse_urdf(
     def field(name: str) -> str:
         """The prefix of a message about the root_link, tip or lock_joints field."""
         return f"{fields}{name}: (in {source}) " if fields else f"{source}: {name}: "
+
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
@@ -422,7 +426,9 @@ def parse_urdf(
         if joints[name].kind == "fixed":
             raise ConfigError(f"{field('lock_joints')}joint '{name}' is fixed already; only movable joints are locked")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise ConfigError(f"{field('lock_joints')}joint '{name}': the value must be a finite number, got {quote(value)}")
+            raise ConfigError(
+                f"{field('lock_joints')}joint '{name}': the value must be a finite number, got {quote(value)}"
+            )
     for role, name in (("root_link", root_link), ("tip", tip)):
         if name not in links:
             extra = did_you_mean(str(name), list(links))
@@ -441,12 +447,13 @@ def parse_urdf(
     arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
     if not arm:
         raise ConfigError(
-            f"{source}: no movable joint between root_link '{root_link}' and tip '{tip}' "
-            "(all fixed or locked)"
+            f"{source}: no movable joint between root_link '{root_link}' and tip '{tip}' (all fixed or locked)"
         )
     if len(arm) > MAX_ARM_JOINTS:
-        raise ConfigError(f"{source}: the arm from '{root_link}' to '{tip}' has {len(arm)} movable joints; "
-                          f"at most {MAX_ARM_JOINTS} are supported (lock the others in arm.lock_joints)")
+        raise ConfigError(
+            f"{source}: the arm from '{root_link}' to '{tip}' has {len(arm)} movable joints; "
+            f"at most {MAX_ARM_JOINTS} are supported (lock the others in arm.lock_joints)"
+        )
     arm_names = {j.name for j in arm}
 
     def rigid_closure(start: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
