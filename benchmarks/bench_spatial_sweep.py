@@ -50,8 +50,7 @@ import time
 def _sweep(designs: int, robot_name: str, chunk: int, rtol: float) -> dict:
     import jax
     import numpy as np
-    from jax.sharding import Mesh, NamedSharding
-    from jax.sharding import PartitionSpec as P
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
     jax.config.update("jax_enable_x64", True)
     import spacearm as sa

@@ -15,8 +15,7 @@ import pytest
 
 import spacearm as sa
 from spacearm.cli.sweep import format_table
-from spacearm.figures import spatial
-from spacearm.figures import sweep as sweep_figures
+from spacearm.figures import spatial, sweep as sweep_figures
 from spacearm.figures.sweep import COLUMN_LABELS, column_label
 from spacearm.studies import load_sweep
 from spacearm.studies.metrics import METRICS

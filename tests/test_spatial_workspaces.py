@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import singularities, workspaces
-from spacearm.analysis import spatial_workspaces as sw
+from spacearm.analysis import singularities, spatial_workspaces as sw, workspaces
 
 from .conftest import random_robot
 

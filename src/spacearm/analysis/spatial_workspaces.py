@@ -57,8 +57,10 @@ from .joint_box import (
     sobol_points,
 )
 from .singularities import path_independent_radius as planar_path_independent_radius
-from .workspaces import maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius
-from .workspaces import maximum_reachable_radius as planar_maximum_reachable_radius
+from .workspaces import (
+    maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius,
+    maximum_reachable_radius as planar_maximum_reachable_radius,
+)
 
 __all__ = [
     "GuaranteedWorkspace",

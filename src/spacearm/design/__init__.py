@@ -46,60 +46,32 @@ resulting ``equivalent_value_evaluations``, so the counts compare honestly with 
 value-only baselines.
 """
 
-from .baselines import grid_search as grid_search
-from .baselines import nsga2_search as nsga2_search
+from .baselines import grid_search as grid_search, nsga2_search as nsga2_search
 from .fronts import (
     hypervolume_2d as hypervolume_2d,
-)
-from .fronts import (
     hypervolume_history as hypervolume_history,
-)
-from .fronts import (
     nondominated as nondominated,
-)
-from .fronts import (
     nondominated_mask as nondominated_mask,
 )
-from .hybrid import HybridSettings as HybridSettings
-from .hybrid import hybrid_search as hybrid_search
-from .hypervolume import exact_hypervolume as exact_hypervolume
-from .hypervolume import hypervolume_gradient as hypervolume_gradient
+from .hybrid import HybridSettings as HybridSettings, hybrid_search as hybrid_search
+from .hypervolume import exact_hypervolume as exact_hypervolume, hypervolume_gradient as hypervolume_gradient
 from .objectives import (
     AVERAGE_OBJECTIVES as AVERAGE_OBJECTIVES,
-)
-from .objectives import (
     OBJECTIVES as OBJECTIVES,
-)
-from .objectives import (
     guaranteed_area as guaranteed_area,
-)
-from .objectives import (
     maximum_reachable_area as maximum_reachable_area,
 )
 from .problem import (
     DesignProblem as DesignProblem,
-)
-from .problem import (
     SearchSettings as SearchSettings,
-)
-from .problem import (
     Variable as Variable,
-)
-from .problem import (
     problem_from_mapping as problem_from_mapping,
-)
-from .problem import (
     variable_names_for as variable_names_for,
 )
-from .run import TARGET_FRACTION as TARGET_FRACTION
-from .run import run_problem as run_problem
+from .run import TARGET_FRACTION as TARGET_FRACTION, run_problem as run_problem
 from .search import (
     SearchResult as SearchResult,
-)
-from .search import (
     pareto_search as pareto_search,
-)
-from .search import (
     value_and_grad_cost_ratio as value_and_grad_cost_ratio,
 )
 

@@ -47,8 +47,7 @@ from ..analysis.joint_box import check_joint_box
 from ..analysis.manipulability_average import average_manipulability as planar_average_manipulability
 from ..models import load_robot
 from ..models.family import family_of
-from ..models.planar import PlanarRobot
-from ..models.planar import fields as planar_fields
+from ..models.planar import PlanarRobot, fields as planar_fields
 from .objectives import AVERAGE_OBJECTIVES, objective, objectives_for
 
 __all__ = [

@@ -18,8 +18,7 @@ from typing import Any
 import numpy as np
 
 from .._core.errors import ConfigError
-from ..io import build_manifest, write_csv, write_json
-from ..io import manifest as provenance
+from ..io import build_manifest, manifest as provenance, write_csv, write_json
 from .baselines import grid_search, nsga2_search
 from .fronts import hypervolume
 from .hybrid import HybridSettings, hybrid_search

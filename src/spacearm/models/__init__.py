@@ -12,8 +12,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._core.schema import read_yaml
-from .family import RobotFamily as RobotFamily
-from .family import family_of as family_of
+from .family import RobotFamily as RobotFamily, family_of as family_of
 from .planar import PlanarRobot, is_planar_mapping, robot_from_mapping
 from .spatial import SpatialRobot, spatial_robot_from_mapping
 

@@ -2,56 +2,30 @@
 
 from .attitude import (
     geodesic_distance as geodesic_distance,
-)
-from .attitude import (
     integrate_spatial_joint_path as integrate_spatial_joint_path,
-)
-from .attitude import (
     spatial_joint_path_history as spatial_joint_path_history,
 )
 from .joint_paths import (
     integrate_joint_path as integrate_joint_path,
-)
-from .joint_paths import (
     joint_path_base_increments as joint_path_base_increments,
-)
-from .joint_paths import (
     joint_path_history as joint_path_history,
 )
 from .path_ends import (
     REASON_JOINT_LIMIT as REASON_JOINT_LIMIT,
-)
-from .path_ends import (
     REASON_MAX_LENGTH as REASON_MAX_LENGTH,
-)
-from .path_ends import (
     REASON_SINGULAR as REASON_SINGULAR,
-)
-from .path_ends import (
     REASON_STEP_BUDGET as REASON_STEP_BUDGET,
 )
 from .spatial_paths import (
     SpatialStraightPath as SpatialStraightPath,
-)
-from .spatial_paths import (
     spatial_go_and_back as spatial_go_and_back,
-)
-from .spatial_paths import (
     spatial_straight_tip_path as spatial_straight_tip_path,
 )
 from .straight_paths import (
     StraightPath as StraightPath,
-)
-from .straight_paths import (
     compile_straight_tip_path_history as compile_straight_tip_path_history,
-)
-from .straight_paths import (
     go_and_back as go_and_back,
-)
-from .straight_paths import (
     straight_tip_path as straight_tip_path,
-)
-from .straight_paths import (
     straight_tip_path_history as straight_tip_path_history,
 )
 

@@ -8,35 +8,17 @@ Table 2 report). Figures of a sweep live in `spacearm.figures.sweep`.
 
 from .designs import (
     FIELD_HELP as FIELD_HELP,
-)
-from .designs import (
     Axis as Axis,
-)
-from .designs import (
     axis_points as axis_points,
-)
-from .designs import (
     build_designs as build_designs,
 )
-from .metrics import METRICS as METRICS
-from .metrics import Metric as Metric
-from .metrics import MetricSpec as MetricSpec
-from .metrics import design_function as design_function
-from .runner import SweepResult as SweepResult
-from .runner import run_sweep as run_sweep
-from .spec import SweepSpec as SweepSpec
-from .spec import apply_overrides as apply_overrides
-from .spec import load_sweep as load_sweep
+from .metrics import METRICS as METRICS, Metric as Metric, MetricSpec as MetricSpec, design_function as design_function
+from .runner import SweepResult as SweepResult, run_sweep as run_sweep
+from .spec import SweepSpec as SweepSpec, apply_overrides as apply_overrides, load_sweep as load_sweep
 from .table2 import (
     PAPER_TABLE2 as PAPER_TABLE2,
-)
-from .table2 import (
     REPORTS as REPORTS,
-)
-from .table2 import (
     table2_report as table2_report,
-)
-from .table2 import (
     wbar_readings as wbar_readings,
 )
 

@@ -17,10 +17,8 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from ..models.family import family_of
-from ..models.planar import PlanarRobot
-from ..models.planar import fields as planar_fields
-from ..models.spatial import SpatialRobot
-from ..models.spatial import fields as spatial_fields
+from ..models.planar import PlanarRobot, fields as planar_fields
+from ..models.spatial import SpatialRobot, fields as spatial_fields
 
 __all__ = [
     "DERIVED_FIELDS",

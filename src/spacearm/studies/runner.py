@@ -36,8 +36,7 @@ from .._core.memory import TEMPORARIES, working_numbers
 from .._core.numeric import PEER_TIMEOUT_S
 from .._core.schema import check_memory
 from .._version import __version__
-from ..io import build_manifest, config_hash, write_csv, write_json, write_npz
-from ..io import manifest as provenance
+from ..io import build_manifest, config_hash, manifest as provenance, write_csv, write_json, write_npz
 from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
 from .designs import build_designs, design_columns
 from .metrics import METRICS, MetricSpec, design_function, metric_columns

@@ -27,8 +27,8 @@ from .table2_readings import (
     grid_averages,
     relative_errors,
     shape_error,
+    wbar_readings as model_readings,
 )
-from .table2_readings import wbar_readings as model_readings
 
 __all__ = [
     "B0",

@@ -41,11 +41,11 @@ from ..models.planar import PlanarRobot, stack_robots, umetani1990
 from ..models.planar.closed_forms import (
     DesignCoefficients,
     _manipulability_from_columns,
+    _momentum_rows as _faithful_momentum_rows,
     _momentum_terms,
     _tip_columns,
     grid_angle_tables,
 )
-from ..models.planar.closed_forms import _momentum_rows as _faithful_momentum_rows
 
 __all__ = [
     "AVERAGES",

@@ -17,18 +17,11 @@ call back into Python): no slider could re-pose the arm without Python. See docs
 """
 
 from .arm import write_arm_view as write_arm_view
-from .front import front_view as front_view
-from .front import write_front_view as write_front_view
+from .front import front_view as front_view, write_front_view as write_front_view
 from .page import (
     VIEW_EXTRA_MESSAGE as VIEW_EXTRA_MESSAGE,
-)
-from .page import (
     MissingViewExtra as MissingViewExtra,
-)
-from .page import (
     view_extra_available as view_extra_available,
 )
-from .replay import replay_from_npz as replay_from_npz
-from .replay import write_replay_view as write_replay_view
-from .shells import shells_view as shells_view
-from .shells import write_shells_view as write_shells_view
+from .replay import replay_from_npz as replay_from_npz, write_replay_view as write_replay_view
+from .shells import shells_view as shells_view, write_shells_view as write_shells_view

@@ -15,17 +15,9 @@ import jax.numpy as jnp
 from ..._core.linalg import gram_root_determinant
 from .primitives import (
     arm_inertia as _arm_inertia,
-)
-from .primitives import (
     base_twist_map as _base_twist_map,
-)
-from .primitives import (
     fixed_base_jacobian as _fixed_base_jacobian,
-)
-from .primitives import (
     generalized_jacobian as _generalized_jacobian,
-)
-from .primitives import (
     mass_matrix as _mass_matrix,
 )
 from .robot import SpatialRobot
