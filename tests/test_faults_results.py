@@ -46,9 +46,15 @@ def test_a_non_finite_metric_is_an_error_naming_metric_and_design(tmp_path, monk
 
         return patched
 
+    # The runner memoizes its compiled evaluator by metrics: start and end with an empty
+    # memo, so the injected NaN reaches this run and no later test.
+    runner._evaluator.cache_clear()
     monkeypatch.setattr(runner, "design_function", with_a_nan)
     out = tmp_path / "out"
-    code = main(["sweep", str(write_sweep(tmp_path)), "--out", str(out), "--quiet"])
+    try:
+        code = main(["sweep", str(write_sweep(tmp_path)), "--out", str(out), "--quiet"])
+    finally:
+        runner._evaluator.cache_clear()
     err = capsys.readouterr().err
     assert code == 1, err
     line = err.strip().splitlines()[-1]

@@ -27,8 +27,9 @@ def test_straight_tip_path_dispatches_spatial_robots(arm):
     assert int(path.reason) == sa.motion.REASON_MAX_LENGTH
     start = np.asarray(sa.tip_position(arm, q))
     np.testing.assert_allclose(np.asarray(path.end_tip), start + [0.0, 0.0, 0.05], atol=1e-9)
-    with pytest.raises(TypeError, match="planar robots only"):
-        sa.straight_tip_path(arm, q, np.array([0.0, 0.0, 1.0]), lanes=8)
+    # The lane integrator is shared by every family: lanes are honoured, same end.
+    laned = sa.straight_tip_path(arm, q, np.array([0.0, 0.0, 1.0]), max_length=0.05, lanes=8)
+    np.testing.assert_allclose(np.asarray(laned.end_tip), np.asarray(path.end_tip), atol=1e-12)
 
 
 def test_reach_command_plans_a_spatial_target(arm, tmp_path, capsys):
