@@ -199,6 +199,12 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     return [path]
 
 
+def _drawn_points(robot, q, R) -> np.ndarray:
+    """Every point drawn for one posture: joint origins, tip and the bus cube's corners."""
+    chain, bus = arm_points(robot, q, R)
+    return np.vstack([chain, bus_corners(bus, R)])
+
+
 def draw_spatial_reach(robot, plan, path) -> Path:
     """Draw a `SpatialReachPlan` in 3-D (for ``spacearm reach``), from its history.
 
@@ -214,21 +220,22 @@ def draw_spatial_reach(robot, plan, path) -> Path:
     fig = plt.figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(projection="3d")
     _draw(ax, robot, joints[0], rotations[0], "C0", label="start")
-    points = [np.vstack(arm_points(robot, joints[0], rotations[0])), tips]
+    points = [_drawn_points(robot, joints[0], rotations[0]), tips]
     if loop_rows.size:
         ax.plot(*tips[loop_rows].T, color="C2", lw=0.8, label=f"tip along the loop ({plan.loops}x)")
         after = loop_rows[-1]
         _draw(ax, robot, joints[after], rotations[after], "C2", alpha=0.7, label="after the loop")
-        points.append(np.vstack(arm_points(robot, joints[after], rotations[after])))
+        points.append(_drawn_points(robot, joints[after], rotations[after]))
     ax.plot(*tips[straight_rows].T, "k-", lw=1.5, label="straight tip path")
     _draw(ax, robot, joints[-1], rotations[-1], "C3", label="end")
-    points.append(np.vstack(arm_points(robot, joints[-1], rotations[-1])))
+    points.append(_drawn_points(robot, joints[-1], rotations[-1]))
     ax.scatter(*np.asarray(plan.target), color="C3", marker="x", s=40, label="target")
     ax.set_title(
         f"reach ({plan.mode}): bus turned {np.degrees(plan.bus_turn):.2f} deg, tip error {plan.error:.1e} m",
         fontsize=10,
     )
     _equal(ax, np.vstack(points))
+    ax.plot([], [], color="0.4", lw=0.8, label=f"bus (a {2 * BUS_HALF:.1f} m cube about its centroid)")
     ax.legend(fontsize=8, loc="upper left")
     written = save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
     plt.close(fig)
