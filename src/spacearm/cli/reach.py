@@ -52,9 +52,9 @@ def _check_finite(arrays: Mapping[str, object]) -> None:
         values = np.asarray(value, dtype=float)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
-            where = f" at index {np.unravel_index(bad[0], values.shape)}" if values.ndim else ""
+            where = f" at index {tuple(int(i) for i in np.unravel_index(bad[0], values.shape))}" if values.ndim else ""
             raise RunError(
-                f"reach: the plan's {name} is {float(values.flat[bad[0]])}{where} "
+                f"the plan's {name} is {float(values.flat[bad[0]])}{where} "
                 f"({bad.size} non-finite of {values.size}); nothing was written"
             )
 

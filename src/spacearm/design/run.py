@@ -375,7 +375,7 @@ def _run_locked(
         )
 
     for name, result in results.items():
-        check_front_finite(problem, name, result)
+        check_finite_objectives(problem, name, result)
     # Every file goes into a staging folder beside out_dir, which then replaces out_dir in
     # one step: a reader never sees files of two runs, and a run that dies before the swap
     # leaves the old folder as it was. Files an earlier run did not write are kept.
@@ -412,19 +412,20 @@ def _run_locked(
     return summary
 
 
-def check_front_finite(problem: DesignProblem, method: str, result: SearchResult) -> None:
-    """Refuse a front with a non-finite objective value (NaN or inf): `RunError` naming the
-    method, the objective and the design, instead of a silent NaN column in the CSV."""
-    index = result.front()
-    values = np.asarray(result.objectives, dtype=float)[index]
+def check_finite_objectives(problem: DesignProblem, method: str, result: SearchResult) -> None:
+    """Refuse a search in which a design's objective came out non-finite (NaN or inf):
+    `RunError` naming the method, the objective and the design. The front leaves such
+    designs out (`spacearm.design.fronts.nondominated_mask`), so without this check they
+    would vanish silently; no shipped problem has one anywhere in its box."""
+    values = np.asarray(result.objectives, dtype=float)
     bad = np.argwhere(~np.isfinite(values))
     if bad.size:
         row, column = (int(i) for i in bad[0])
-        design = np.asarray(result.designs, dtype=float)[index[row]]
+        design = np.asarray(result.designs, dtype=float)[row]
         where = ", ".join(f"{name} = {float(v):g}" for name, v in zip(problem.variable_names, design, strict=True))
         raise RunError(
-            f"{problem.name}: objective '{problem.objectives[column]}' is {float(values[row, column])} "
-            f"on the {method} front for the design {where} ({len(bad) - 1} more non-finite values on that front); "
+            f"{problem.name}: objective '{problem.objectives[column]}' is {float(values[row, column])} for the "
+            f"design {where} ({method} search; {len(bad)} non-finite values in {values.shape[0]} evaluated designs); "
             "nothing was written (check the problem's numbers" + ("" if x64_enabled() else ", or drop --float32") + ")"
         )
 
