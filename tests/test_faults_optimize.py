@@ -193,9 +193,10 @@ REACH = ["reach", ROBOT, "--from", "0,-60,120", "--to", "2,1"]
 
 def test_reach_replaces_its_folder_whole_and_refuses_a_second_writer(tmp_path, capsys):
     out = tmp_path / "r"
-    assert main([*REACH, "--out", str(out), "--animate"]) == 0
+    out.mkdir()
+    (out / "reach.gif").write_text("an earlier run's animation")
     (out / "notes.txt").write_text("mine")
-    # A rerun without --animate: the old reach.gif goes with the old run, the user's file stays.
+    # A run without --animate: the old reach.gif goes with the old run, the user's file stays.
     assert main([*REACH, "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "reach.npz", "reach.png"]
     before = snapshot(out)
