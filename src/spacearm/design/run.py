@@ -191,8 +191,18 @@ def run_problem(
     and the wall time (compile included) each method took to reach it. With a grid, the
     target is ``TARGET_FRACTION`` of the grid's hypervolume, as before.
 
+    The files are written into a staging folder beside ``out_dir`` that replaces it as a
+    whole (`spacearm.io.folders`), under the folder's lock, taken before the search;
+    files in ``out_dir`` that the previous run's manifest does not list are kept.
+
     Returns:
         The summary dictionary also written to ``summary.json``.
+
+    Raises:
+        ConfigError: another process holds ``out_dir``'s lock (its PID is named), or
+            ``out_dir`` cannot be a results folder of its own.
+        RunError: an objective came out non-finite for an evaluated design
+            (`check_finite_objectives`); nothing is written.
     """
     if method not in METHODS:
         raise ConfigError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
