@@ -8,11 +8,18 @@ optional start bus attitude ``--attitude-rpy R,P,Y``.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import shutil
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
 
-from .._core.errors import ConfigError
+from .._core.errors import ConfigError, RunError
+from ..io.folders import check_output_folder, lock_folder, stage_folder, swap_in
+
+# The files a reach run writes; the other entries of --out are kept.
+_REACH_FILES = frozenset({"reach.png", "reach.npz", "reach.gif", "reach.html"})
 
 
 def _numbers(text: str, count: int, what: str) -> np.ndarray:
@@ -23,6 +30,33 @@ def _numbers(text: str, count: int, what: str) -> np.ndarray:
     if values.size != count or not np.all(np.isfinite(values)):
         raise ConfigError(f"{what}: expected {count} finite comma-separated numbers, got {text!r}")
     return values
+
+
+@contextlib.contextmanager
+def _result_folder(out: Path) -> Iterator[Path]:
+    """A staging folder beside ``out`` (with the entries of ``out`` that are not a reach
+    run's files) that replaces ``out`` as a whole when the block ends without an error
+    (`spacearm.io.folders`); the caller holds the folder's lock."""
+    staging = stage_folder(out, keep=lambda name: name not in _REACH_FILES)
+    try:
+        yield staging
+        swap_in(staging, out)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+def _check_finite(arrays: Mapping[str, object]) -> None:
+    """RunError naming the first quantity of the plan that came out non-finite (exit 1)."""
+    for name, value in arrays.items():
+        values = np.asarray(value, dtype=float)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            where = f" at index {tuple(int(i) for i in np.unravel_index(bad[0], values.shape))}" if values.ndim else ""
+            raise RunError(
+                f"the plan's {name} is {float(values.flat[bad[0]])}{where} "
+                f"({bad.size} non-finite of {values.size}); nothing was written"
+            )
 
 
 def register(subparsers) -> None:
@@ -84,14 +118,17 @@ def run(args: argparse.Namespace) -> int:
 
         plotly_bundle()
     robot = load_robot(args.robot)
-    if isinstance(robot, SpatialRobot):
-        return _run_spatial(args, robot)
-    if args.attitude is not None:
+    if not isinstance(robot, SpatialRobot) and args.attitude is not None:
         raise ConfigError("--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude")
-    return _run_planar(args, robot)
+    out = Path(args.out)
+    check_output_folder(out)
+    # One writer at a time (a second one is refused naming the holder's PID); the files are
+    # written into a staging folder that replaces --out as a whole.
+    with lock_folder(out, label=f"--out {out}"):
+        return _run_spatial(args, robot, out) if isinstance(robot, SpatialRobot) else _run_planar(args, robot, out)
 
 
-def _run_planar(args: argparse.Namespace, robot) -> int:
+def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
     from ..figures.planning import animate_reach, draw_reach
     from ..io import write_npz
     from ..planning import plan_reach
@@ -101,23 +138,7 @@ def _run_planar(args: argparse.Namespace, robot) -> int:
         phi = np.radians(phi)
     target = _numbers(args.target, 2, "--to")
     plan = plan_reach(robot, phi, target)
-    out = Path(args.out)
-    figure_path = draw_reach(robot, phi, plan, out / "reach.png")
-    lines = [
-        f"mode           {plan.mode}",
-        f"start tip      ({plan.tips[0, 0]:.6f}, {plan.tips[0, 1]:.6f}) m",
-        f"target         ({target[0]:.6f}, {target[1]:.6f}) m",
-        f"base rotation  {np.degrees(plan.delta_phi0):.6f} deg by {plan.loops} loop(s)",
-        f"joint travel   {plan.joint_travel:.6f} rad",
-        f"straight path  {plan.straight_length:.6f} m",
-        "end posture    " + ", ".join(f"{v:.6f}" for v in np.degrees(plan.end_posture)) + " deg",
-        f"tip error      {plan.error:.3e} m",
-        f"figure         {figure_path}",
-    ]
-    if args.animate:
-        lines.append(f"animation      {animate_reach(robot, plan, out / 'reach.gif')}")
-    write_npz(
-        out / "reach.npz",
+    arrays = dict(
         joints=plan.postures[:, 1:],
         phi=plan.postures,
         tip=plan.tips,
@@ -127,12 +148,33 @@ def _run_planar(args: argparse.Namespace, robot) -> int:
         joint_waypoints_rad=plan.joint_waypoints,
         target_m=plan.target,
     )
-    _write_replay(args, robot, out, lines)
+    _check_finite({**arrays, "tip error": plan.error, "base rotation": plan.delta_phi0})
+    with _result_folder(out) as staging:
+        draw_reach(robot, phi, plan, staging / "reach.png")
+        if args.animate:
+            animate_reach(robot, plan, staging / "reach.gif")
+        write_npz(staging / "reach.npz", **arrays)
+        _write_replay(args, robot, staging)
+    lines = [
+        f"mode           {plan.mode}",
+        f"start tip      ({plan.tips[0, 0]:.6f}, {plan.tips[0, 1]:.6f}) m",
+        f"target         ({target[0]:.6f}, {target[1]:.6f}) m",
+        f"base rotation  {np.degrees(plan.delta_phi0):.6f} deg by {plan.loops} loop(s)",
+        f"joint travel   {plan.joint_travel:.6f} rad",
+        f"straight path  {plan.straight_length:.6f} m",
+        "end posture    " + ", ".join(f"{v:.6f}" for v in np.degrees(plan.end_posture)) + " deg",
+        f"tip error      {plan.error:.3e} m",
+        f"figure         {out / 'reach.png'}",
+    ]
+    if args.animate:
+        lines.append(f"animation      {out / 'reach.gif'}")
+    if args.html:
+        lines.append(f"replay         {out / 'reach.html'}")
     print("\n".join(lines))
     return 0
 
 
-def _run_spatial(args: argparse.Namespace, robot) -> int:
+def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
     from ..figures.spatial import draw_spatial_reach
     from ..io import write_npz
     from ..models.spatial.urdf import rpy_matrix
@@ -151,8 +193,20 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
     if args.animate:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
     plan = plan_reach(robot, q, target, base_rotation=R0)
-    out = Path(args.out)
-    figure_path = draw_spatial_reach(robot, plan, out / "reach.png")
+    arrays = dict(
+        joints=plan.joints,
+        base_rotation=plan.base_rotation,
+        tip=plan.tips,
+        phase=plan.phase,
+        loop_waypoints=plan.loop_waypoints,
+        loop_rotation=plan.loop_rotation,
+        target_m=target,
+    )
+    _check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn})
+    with _result_folder(out) as staging:
+        draw_spatial_reach(robot, plan, staging / "reach.png")
+        write_npz(staging / "reach.npz", **arrays)
+        _write_replay(args, robot, staging)
     loop = f"by {plan.loops} pass(es) of a loop, then" if plan.loops else "along"
     lines = [
         f"mode           {plan.mode}",
@@ -163,26 +217,17 @@ def _run_spatial(args: argparse.Namespace, robot) -> int:
         + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m",
-        f"figure         {figure_path}",
+        f"figure         {out / 'reach.png'}",
     ]
-    write_npz(
-        out / "reach.npz",
-        joints=plan.joints,
-        base_rotation=plan.base_rotation,
-        tip=plan.tips,
-        phase=plan.phase,
-        loop_waypoints=plan.loop_waypoints,
-        loop_rotation=plan.loop_rotation,
-        target_m=target,
-    )
-    _write_replay(args, robot, out, lines)
+    if args.html:
+        lines.append(f"replay         {out / 'reach.html'}")
     print("\n".join(lines))
     return 0
 
 
-def _write_replay(args: argparse.Namespace, robot, out: Path, lines: list[str]) -> None:
+def _write_replay(args: argparse.Namespace, robot, out: Path) -> None:
     """``--html``: reach.html, the replay of the history just written to reach.npz (figures.views)."""
     if args.html:
         from ..figures.views import replay_from_npz
 
-        lines.append(f"replay         {replay_from_npz(robot, out / 'reach.npz', out / 'reach.html')}")
+        replay_from_npz(robot, out / "reach.npz", out / "reach.html")

@@ -8,7 +8,9 @@ Figures are drawn by the caller (``spacearm optimize`` passes
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -17,8 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from .._core.errors import ConfigError
+from .._core.errors import ConfigError, RunError
+from .._core.numeric import x64_enabled
 from ..io import build_manifest, manifest as provenance, write_csv, write_json
+from ..io.folders import check_output_folder, lock_folder, stage_folder, swap_in
 from .baselines import grid_search, nsga2_search
 from .fronts import hypervolume
 from .hybrid import HybridSettings, hybrid_search
@@ -36,6 +40,10 @@ NSGA2_TIME_FACTOR = 3.0
 ProblemOutput = Callable[[DesignProblem, Mapping[str, SearchResult], Mapping[str, Any], Path], "list[Path]"]
 
 TARGET_FRACTION = 0.999
+
+# A test hook: called with the staging folder once every file is written, right before the
+# swap (the fault-injection tests kill the run there).
+_BEFORE_SWAP: Callable[[Path], None] | None = None
 
 
 def _nested_grid_levels(points: Sequence[int]) -> list[tuple[int, ...]]:
@@ -183,17 +191,61 @@ def run_problem(
     and the wall time (compile included) each method took to reach it. With a grid, the
     target is ``TARGET_FRACTION`` of the grid's hypervolume, as before.
 
+    The files are written into a staging folder beside ``out_dir`` that replaces it as a
+    whole (`spacearm.io.folders`), under the folder's lock, taken before the search;
+    files in ``out_dir`` that the previous run's manifest does not list are kept.
+
     Returns:
         The summary dictionary also written to ``summary.json``.
+
+    Raises:
+        ConfigError: another process holds ``out_dir``'s lock (its PID is named), or
+            ``out_dir`` cannot be a results folder of its own.
+        RunError: an objective came out non-finite for an evaluated design
+            (`check_finite_objectives`); nothing is written.
     """
     if method not in METHODS:
         raise ConfigError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
     if cost_ratio not in ("search", "measured"):
         raise ConfigError(f"cost_ratio: must be 'search' or 'measured', got {cost_ratio!r}")
+    out_dir = Path(out_dir)
+    check_output_folder(out_dir)
+    # One writer at a time (a second one is refused naming the holder's PID), taken before
+    # the search so that a refused run costs nothing.
+    with lock_folder(out_dir, label=f"--out {out_dir}"):
+        return _run_locked(
+            problem,
+            out_dir,
+            method=method,
+            hybrid=hybrid,
+            baselines=baselines,
+            config=config,
+            log=log,
+            outputs=outputs,
+            command=command,
+            cost_ratio=cost_ratio,
+            nsga2_time_factor=nsga2_time_factor,
+        )
+
+
+def _run_locked(
+    problem: DesignProblem,
+    out_dir: Path,
+    *,
+    method: str,
+    hybrid: HybridSettings | None,
+    baselines: bool,
+    config: Mapping | None,
+    log: Callable[[str], None],
+    outputs: Sequence[ProblemOutput],
+    command: Sequence[str] | None,
+    cost_ratio: str,
+    nsga2_time_factor: float,
+) -> dict:
+    """`run_problem` under the folder's lock: the searches, then every file written into a
+    staging folder that replaces ``out_dir`` as a whole."""
     code_state = provenance.git_state()  # before anything under out_dir (perhaps tracked) changes
     started = time.perf_counter()
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     log(
         f"optimize {problem.name} ({method}): {len(problem.variables)} variables "
         f"({', '.join(problem.variable_names)}), objectives {', '.join(problem.objectives)}"
@@ -332,25 +384,68 @@ def run_problem(
             met=bool(main_hv >= nsga_final and best_known > 0 and main_hv >= 0.995 * best_known),
         )
 
-    written = [write_csv(out_dir / "pareto.csv", _front_table(problem, main))]
-    for name in ("grid", "nsga2"):
-        if name in results:
-            written.append(write_csv(out_dir / f"pareto_{name}.csv", _front_table(problem, results[name])))
-    for output in outputs:
-        written += output(problem, results, summary, out_dir)
-    summary["files"] = [p.name for p in written] + ["summary.json", "manifest.json"]
-    if config is not None:
-        summary["config"] = dict(config)
-    write_json(out_dir / "summary.json", summary)
-    timings = {"wall": time.perf_counter() - started}
-    data = build_manifest(
-        dict(config) if config is not None else {"problem": problem.name},
-        command=list(command) if command is not None else sys.argv,
-        timings=timings,
-        git=code_state,
-        extra={"files": summary["files"]},
-    )
-    write_json(out_dir / "manifest.json", data)
+    for name, result in results.items():
+        check_finite_objectives(problem, name, result)
+    # Every file goes into a staging folder beside out_dir, which then replaces out_dir in
+    # one step: a reader never sees files of two runs, and a run that dies before the swap
+    # leaves the old folder as it was. Files an earlier run did not write are kept.
+    previous = _previous_files(out_dir)
+    staging = stage_folder(out_dir, keep=lambda name: name not in previous)
+    try:
+        written = [write_csv(staging / "pareto.csv", _front_table(problem, main))]
+        for name in ("grid", "nsga2"):
+            if name in results:
+                written.append(write_csv(staging / f"pareto_{name}.csv", _front_table(problem, results[name])))
+        for output in outputs:
+            written += output(problem, results, summary, staging)
+        summary["files"] = [p.name for p in written] + ["summary.json", "manifest.json"]
+        if config is not None:
+            summary["config"] = dict(config)
+        write_json(staging / "summary.json", summary)
+        timings = {"wall": time.perf_counter() - started}
+        data = build_manifest(
+            dict(config) if config is not None else {"problem": problem.name},
+            command=list(command) if command is not None else sys.argv,
+            timings=timings,
+            git=code_state,
+            extra={"files": summary["files"]},
+        )
+        write_json(staging / "manifest.json", data)
+        if _BEFORE_SWAP is not None:
+            _BEFORE_SWAP(staging)
+        swap_in(staging, out_dir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
     log(summary_table(summary))
     log(f"  wrote {out_dir}: {', '.join(summary['files'])}")
     return summary
+
+
+def check_finite_objectives(problem: DesignProblem, method: str, result: SearchResult) -> None:
+    """Refuse a search in which a design's objective came out non-finite (NaN or inf):
+    `RunError` naming the method, the objective and the design. The front leaves such
+    designs out (`spacearm.design.fronts.nondominated_mask`), so without this check they
+    would vanish silently; no shipped problem has one anywhere in its box."""
+    values = np.asarray(result.objectives, dtype=float)
+    bad = np.argwhere(~np.isfinite(values))
+    if bad.size:
+        row, column = (int(i) for i in bad[0])
+        design = np.asarray(result.designs, dtype=float)[row]
+        where = ", ".join(f"{name} = {float(v):g}" for name, v in zip(problem.variable_names, design, strict=True))
+        raise RunError(
+            f"{problem.name}: objective '{problem.objectives[column]}' is {float(values[row, column])} for the "
+            f"design {where} ({method} search; {len(bad)} non-finite values in {values.shape[0]} evaluated designs); "
+            "nothing was written (check the problem's numbers" + ("" if x64_enabled() else ", or drop --float32") + ")"
+        )
+
+
+def _previous_files(out_dir: Path) -> set[str]:
+    """The files an earlier ``spacearm optimize`` run listed in its manifest (top-level names)."""
+    try:
+        listed = json.loads((out_dir / "manifest.json").read_text())["files"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return set()
+    if not isinstance(listed, list):
+        return set()
+    return {name for name in listed if isinstance(name, str) and "/" not in name and not name.startswith(".")}

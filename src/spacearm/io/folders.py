@@ -25,7 +25,7 @@ from pathlib import Path
 
 from .._core.errors import ConfigError
 
-__all__ = ["FolderLocked", "lock_folder", "lock_path", "stage_folder", "swap_in"]
+__all__ = ["FolderLocked", "check_output_folder", "lock_folder", "lock_path", "stage_folder", "swap_in"]
 
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
@@ -33,6 +33,28 @@ _AT_FDCWD = -100
 
 class FolderLocked(ConfigError):
     """Another process holds the output folder's lock (exit status 2 on the command line)."""
+
+
+def check_output_folder(out_dir: str | os.PathLike, *, label: str | None = None) -> None:
+    """ConfigError unless ``out_dir`` is, or can become, a writable folder of its own
+    (nothing is created). The results replace the folder as a whole, so it is never the
+    folder this process works in or one above it, nor a mount point."""
+    out_dir = Path(out_dir)
+    label = label or f"--out {out_dir}"
+    target = out_dir.absolute()
+    existing = target
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise ConfigError(f"{label}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ConfigError(f"{label}: cannot write into {existing} (permission denied)")
+    real, here = Path(os.path.realpath(target)), Path(os.path.realpath(os.getcwd()))
+    if real == here or real in here.parents or (real.exists() and os.path.ismount(real)):
+        raise ConfigError(
+            f"{label}: results replace their folder as a whole, so they need a folder of "
+            f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})"
+        )
 
 
 def lock_path(folder: str | os.PathLike) -> Path:

@@ -37,7 +37,7 @@ from .._core.numeric import PEER_TIMEOUT_S
 from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, manifest as provenance, write_csv, write_json, write_npz
-from ..io.folders import FolderLocked, lock_folder, stage_folder, swap_in
+from ..io.folders import FolderLocked, check_output_folder, lock_folder, stage_folder, swap_in
 from .designs import build_designs, design_columns
 from .metrics import METRICS, MetricSpec, design_function, metric_columns
 from .spec import SweepSpec
@@ -529,20 +529,5 @@ def _previous_files(out_dir: Path) -> set[str]:
 
 
 def _check_output_dir(out_dir: Path) -> None:
-    """ConfigError unless ``out_dir`` is, or can become, a writable folder (nothing is created)."""
-    target = out_dir.absolute()
-    existing = target
-    while not existing.exists():
-        existing = existing.parent
-    if not existing.is_dir():
-        raise ConfigError(f"--out {out_dir}: {existing} is a file, not a folder")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise ConfigError(f"--out {out_dir}: cannot write into {existing} (permission denied)")
-    # The results replace the folder as a whole (spacearm.io.folders): never the folder this
-    # process works in or one above it, nor a mount point.
-    real, here = Path(os.path.realpath(target)), Path(os.path.realpath(os.getcwd()))
-    if real == here or real in here.parents or (real.exists() and os.path.ismount(real)):
-        raise ConfigError(
-            f"--out {out_dir}: results replace their folder as a whole, so they need a folder of "
-            f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})"
-        )
+    """ConfigError unless ``out_dir`` is, or can become, a writable folder of its own (nothing is created)."""
+    check_output_folder(out_dir)
