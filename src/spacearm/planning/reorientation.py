@@ -39,6 +39,7 @@ import optax
 
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
+from .._core.groups import SO2, SO3
 from ..models.family import family_of
 from ..models.planar.closed_forms import momentum_inertias
 from ..models.planar.robot import PlanarRobot
@@ -446,7 +447,7 @@ def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0,
         ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the
         first and last rows equal phi_start[1:].
     """
-    planner = _REORIENTATION_PLANNERS.get(family_of(robot).name)
+    planner = _REORIENTATION_PLANNERS.get(family_of(robot).attitude.name)
     if planner is None:
         raise ConfigError(f"robot: no reorientation planner for the {family_of(robot).name!r} family")
     return planner(robot, phi_start, delta_phi0, **options)
@@ -456,4 +457,5 @@ def _plan_planar_reorientation(robot: PlanarRobot, phi_start, delta_phi0, **opti
     return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
 
 
-_REORIENTATION_PLANNERS = {"planar": _plan_planar_reorientation, "spatial": plan_spatial_reorientation}
+# The loop planner of each base-attitude group.
+_REORIENTATION_PLANNERS = {SO2.name: _plan_planar_reorientation, SO3.name: plan_spatial_reorientation}
