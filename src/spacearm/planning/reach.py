@@ -4,7 +4,10 @@ Umetani & Yoshida 1990, section 3.2, Fig. 5: point C cannot be reached from the
 current posture by a straight tip path, "but can be reached after reorienting the
 base by a suitable cyclic maneuver" (planned in `spacearm.planning.reorientation`).
 
-Reaching (`plan_reach`). Rotating the base by Delta rotates the whole system
+`plan_reach` is the one reach planner of every family: its control flow runs over the
+base-attitude group (`spacearm._core.groups`), with the numerics of each step supplied
+per group (`spacearm.planning._reach_steps.ReachSteps`: the SO(2) steps below, the
+SO(3) steps in `spacearm.planning.spatial_reach`). The SO(2) steps: rotating the base by Delta rotates the whole system
 rigidly about the system centroid (joints unchanged), so the Straight-Path workspace
 from (phi0 + Delta, q0) is the one from (phi0, q0) rotated by Delta. The target T is
 reachable after the maneuver iff R(-Delta) T lies in the current Straight-Path
