@@ -18,11 +18,7 @@ from .reorientation import (
     plan_reorientation_details as plan_reorientation_details,
     rotation_curl as rotation_curl,
 )
-from .spatial_reach import (
-    SpatialReachPlan as SpatialReachPlan,
-    candidate_rotations as candidate_rotations,
-    plan_spatial_reach as plan_spatial_reach,
-)
+from .spatial_reach import SpatialReachPlan as SpatialReachPlan
 from .spatial_reorientation import (
     SpatialLoopSettings as SpatialLoopSettings,
     SpatialReorientation as SpatialReorientation,
@@ -43,11 +39,9 @@ __all__ = [
     "SpatialLoopSettings",
     "SpatialReachPlan",
     "SpatialReorientation",
-    "candidate_rotations",
     "plan_reach",
     "plan_reorientation",
     "plan_reorientation_details",
-    "plan_spatial_reach",
     "plan_spatial_reorientation",
     "plan_spatial_reorientation_details",
     "reachable_bounds",

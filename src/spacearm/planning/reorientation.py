@@ -39,11 +39,13 @@ import optax
 
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
+from .._core.groups import SO2, SO3
 from ..models.family import family_of
 from ..models.planar.closed_forms import momentum_inertias
 from ..models.planar.robot import PlanarRobot
 from ..models.spatial.robot import SpatialRobot
 from ..motion import integrate_joint_path
+from ._loop_steps import LoopSteps, plan_loop
 from .spatial_reorientation import plan_spatial_reorientation
 
 __all__ = [
@@ -369,34 +371,54 @@ def plan_reorientation_details(
             ``max_excursion``).
     """
 
+    return plan_loop(_PLANAR_LOOP_STEPS, robot, phi_start, delta_phi0, settings, tolerance=tolerance)
+
+
+def _planar_check(robot: PlanarRobot, phi_start, delta_phi0, settings, tolerance=None) -> dict:
     phi = check_posture(robot, phi_start)
     delta = float(delta_phi0)
     if not math.isfinite(delta):
         raise ConfigError(f"delta_phi0: must be finite, got {delta_phi0!r}")
     if tolerance is None:
         tolerance = 1e-9 if jax.config.jax_enable_x64 else 1e-4
-    q0 = phi[1:]
-    if delta == 0.0:
-        still = np.stack([q0, q0])
-        return ReorientationLoop(still, still, 0, 0.0, 0.0, 0.0, 0.0)
+    return {"robot": robot, "q0": phi[1:], "delta": delta, "settings": settings, "tolerance": tolerance}
+
+
+def _planar_still(job: dict) -> ReorientationLoop | None:
+    if job["delta"] != 0.0:
+        return None
+    still = np.stack([job["q0"], job["q0"]])
+    return ReorientationLoop(still, still, 0, 0.0, 0.0, 0.0, 0.0)
+
+
+def _planar_candidates(job: dict) -> dict:
+    """The optimized loops; ``error`` is inf where a loop leaves the limits or the excursion bound."""
     dtype = jnp.result_type(float)
+    settings, delta = job["settings"], job["delta"]
     shape, options = _split(settings)
-    result = _optimize_loops(robot, jnp.asarray(q0, dtype), jnp.asarray(delta, dtype), options, shape)
+    result = _optimize_loops(job["robot"], jnp.asarray(job["q0"], dtype), jnp.asarray(delta, dtype), options, shape)
     result = jax.tree_util.tree_map(np.asarray, result)
-    error = np.abs(result["rotation"] - delta)
-    feasible = (
-        (error <= tolerance)
-        & (result["limit_violation"] <= 0.0)
+    result["raw_error"] = np.abs(result["rotation"] - delta)
+    inside = (
+        (result["limit_violation"] <= 0.0)
         & (result["excursion"] <= settings.max_excursion)
         & np.isfinite(result["travel"])
     )
-    if not np.any(feasible):
-        raise ConfigError(
-            f"delta_phi0: no loop turns the base by {math.degrees(delta):.6g} deg within the joint limits, "
-            f"max_excursion = {settings.max_excursion:.3g} rad and at most {max(settings.loop_counts)} repetitions "
-            f"(best rotation error {np.min(error):.3g} rad); allow more repetitions or a larger excursion"
-        )
-    best = int(np.argmin(np.where(feasible, result["travel"], np.inf)))
+    result["error"] = np.where(inside, result["raw_error"], np.inf)
+    return result
+
+
+def _planar_failure(job: dict, result: dict) -> str:
+    settings, delta = job["settings"], job["delta"]
+    return (
+        f"delta_phi0: no loop turns the base by {math.degrees(delta):.6g} deg within the joint limits, "
+        f"max_excursion = {settings.max_excursion:.3g} rad and at most {max(settings.loop_counts)} repetitions "
+        f"(best rotation error {np.min(result['raw_error']):.3g} rad); allow more repetitions or a larger excursion"
+    )
+
+
+def _planar_record(job: dict, result: dict, best: int) -> ReorientationLoop:
+    q0, delta, tolerance = job["q0"], job["delta"], job["tolerance"]
     loop = result["points"][best]
     loops = int(result["loops"][best])
     waypoints = np.concatenate([loop[:1]] + [loop[1:]] * loops, axis=0)
@@ -405,7 +427,7 @@ def plan_reorientation_details(
     # not depend on phi0, so N passes turn the base N times as far (one compiled shape for
     # every N; tests integrate the whole waypoint array independently).
     loop_start = np.r_[0.0, q0]
-    rotation = loops * float(integrate_joint_path(robot, jnp.asarray(loop_start), jnp.asarray(loop))[0])
+    rotation = loops * float(integrate_joint_path(job["robot"], jnp.asarray(loop_start), jnp.asarray(loop))[0])
     if not abs(rotation - delta) <= tolerance:
         raise ConfigError(
             f"delta_phi0: the planned loop turns the base by {rotation!r} rad instead of {delta!r} rad "
@@ -420,6 +442,15 @@ def plan_reorientation_details(
         travel=float(result["travel"][best]),
         excursion=float(result["excursion"][best]),
     )
+
+
+_PLANAR_LOOP_STEPS = LoopSteps(
+    check=_planar_check,
+    still=_planar_still,
+    candidates=_planar_candidates,
+    failure=_planar_failure,
+    record=_planar_record,
+)
 
 
 def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0, **options) -> np.ndarray:
@@ -446,7 +477,7 @@ def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0,
         ``(k, n)`` joint waypoints, rad, joined by straight joint-space segments; the
         first and last rows equal phi_start[1:].
     """
-    planner = _REORIENTATION_PLANNERS.get(family_of(robot).name)
+    planner = _REORIENTATION_PLANNERS.get(family_of(robot).attitude.name)
     if planner is None:
         raise ConfigError(f"robot: no reorientation planner for the {family_of(robot).name!r} family")
     return planner(robot, phi_start, delta_phi0, **options)
@@ -456,4 +487,5 @@ def _plan_planar_reorientation(robot: PlanarRobot, phi_start, delta_phi0, **opti
     return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
 
 
-_REORIENTATION_PLANNERS = {"planar": _plan_planar_reorientation, "spatial": plan_spatial_reorientation}
+# The loop planner of each base-attitude group.
+_REORIENTATION_PLANNERS = {SO2.name: _plan_planar_reorientation, SO3.name: plan_spatial_reorientation}

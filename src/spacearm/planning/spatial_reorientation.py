@@ -49,6 +49,7 @@ from .._core.errors import ConfigError
 from ..models.spatial.robot import SpatialRobot
 from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, geodesic_distance, log, path_rotation
 from ..motion.joint_paths import integrate_joint_path
+from ._loop_steps import LoopSteps, plan_loop
 
 __all__ = [
     "SpatialLoopSettings",
@@ -290,10 +291,29 @@ def plan_spatial_reorientation_details(
         ConfigError: bad inputs, or no candidate loop reached the tolerance within the
             joint limits (the message gives the best error).
     """
+    return plan_loop(_SPATIAL_LOOP_STEPS, robot, q_start, target_rotation, settings)
+
+
+def _spatial_check(robot: SpatialRobot, q_start, target_rotation, settings) -> dict:
     settings = settings or SpatialLoopSettings()
     if not isinstance(settings, SpatialLoopSettings):
         raise ConfigError(f"settings: expected SpatialLoopSettings for a spatial robot, got {type(settings).__name__}")
     q0, target, lower, upper = _check_inputs(robot, q_start, target_rotation)
+    return {
+        "robot": robot,
+        "q0": q0,
+        "target": target,
+        "lower": lower,
+        "upper": upper,
+        "settings": settings,
+        "tolerance": settings.tolerance,
+    }
+
+
+def _spatial_candidates(job: dict) -> dict:
+    """The optimized loops, checked through the public integrator at 4 times the Magnus steps."""
+    robot, q0, target, settings = job["robot"], job["q0"], job["target"], job["settings"]
+    lower, upper = job["lower"], job["upper"]
     n = robot.n_joints
     dtype = jnp.result_type(float)
     counts = np.repeat(np.asarray(settings.loop_counts), settings.seeds)
@@ -322,25 +342,38 @@ def plan_spatial_reorientation_details(
     errors = np.asarray(_rotation_errors(target, reached))
     inside = np.all((loops >= lower) & (loops <= upper), axis=(1, 2))
     travel = counts * np.sum(np.linalg.norm(np.diff(loops, axis=1), axis=2), axis=1)
-    table = np.stack([counts, np.where(inside, errors, np.inf), travel], axis=1)
-    valid = np.flatnonzero(table[:, 1] <= settings.tolerance)
-    if valid.size == 0:
-        best = float(np.min(table[:, 1]))
-        raise ConfigError(
-            f"plan_reorientation: no loop reached the target rotation to {settings.tolerance:g} rad inside the "
-            f"joint limits (best {best:.3g} rad); try more loop_counts or harmonics"
-        )
-    pick = valid[np.argmin(table[valid, 2])]
-    loop = loops[pick]
-    repetitions = int(counts[pick])
+    error = np.where(inside, errors, np.inf)
+    return {"loops": loops, "counts": counts, "error": error, "travel": travel}
+
+
+def _spatial_failure(job: dict, candidates: dict) -> str:
+    return (
+        f"plan_reorientation: no loop reached the target rotation to {job['settings'].tolerance:g} rad inside the "
+        f"joint limits (best {float(np.min(candidates['error'])):.3g} rad); try more loop_counts or harmonics"
+    )
+
+
+def _spatial_record(job: dict, candidates: dict, best: int) -> SpatialReorientation:
+    loop = candidates["loops"][best]
+    repetitions = int(candidates["counts"][best])
+    table = np.stack([candidates["counts"], candidates["error"], candidates["travel"]], axis=1)
     return SpatialReorientation(
         waypoints=repeat_loop(loop, repetitions),
         loop=loop,
         repetitions=repetitions,
-        rotation_error=float(table[pick, 1]),
-        joint_travel=float(table[pick, 2]),
+        rotation_error=float(table[best, 1]),
+        joint_travel=float(table[best, 2]),
         candidates=table,
     )
+
+
+_SPATIAL_LOOP_STEPS = LoopSteps(
+    check=_spatial_check,
+    still=lambda job: None,
+    candidates=_spatial_candidates,
+    failure=_spatial_failure,
+    record=_spatial_record,
+)
 
 
 def plan_spatial_reorientation(robot: SpatialRobot, q_start, target_rotation, **options) -> np.ndarray:
