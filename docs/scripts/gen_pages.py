@@ -237,12 +237,10 @@ def public_names_table() -> str:
     documented = {name for name, _, _ in API_MODULES}
     lazy = getattr(spacearm, "_LAZY", {})
     rows = []
-    for name in sorted(dir(spacearm), key=str.lower):
+    for name in sorted(spacearm.__all__, key=str.lower):
         if name.startswith("_"):
             continue
         value = getattr(spacearm, name)
-        if isinstance(value, type(spacearm)):  # a submodule, not an exported name
-            continue
         module = getattr(value, "__module__", None) or f"spacearm.{lazy.get(name, '?')}"
         how = "lazy" if name in lazy else "eager"
         target = f"[`{name}`][{module}.{name}]" if module in documented else f"`{name}`"
@@ -260,7 +258,10 @@ def write_api_pages() -> None:
                 page.write("::: spacearm\n    options:\n      members: false\n\n")
                 page.write(
                     "## Public names\n\n"
-                    "`import spacearm as sa` gives these names. Those marked *lazy* are "
+                    "`import spacearm as sa` gives these names (`spacearm.__all__`): the loaders and "
+                    "the functions that serve every robot family, and a few planar closed forms "
+                    "that say so (another family raises TypeError); other family-specific names "
+                    "live in `spacearm.models.planar` and `spacearm.models.spatial`. Those marked *lazy* are "
                     "imported from their module on first use (`_LAZY` in "
                     "`spacearm/__init__.py`), which keeps `import spacearm` light; "
                     "each is documented on the page of the module that defines it.\n\n"
