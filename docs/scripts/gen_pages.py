@@ -23,6 +23,7 @@ exist or a public module that is not listed).
 from __future__ import annotations
 
 import argparse
+import inspect
 import logging
 import os
 import pkgutil
@@ -230,6 +231,17 @@ def check_module_list() -> None:
         log.warning("docs/scripts/gen_pages.py: public module %s is not in API_MODULES", name)
 
 
+def _serves(value) -> str:
+    """Which robots a public function takes: every family, planar arms only, or none."""
+    try:
+        parameters = list(inspect.signature(value).parameters)
+    except (TypeError, ValueError):
+        parameters = []
+    if isinstance(value, type) or not parameters or parameters[0] not in ("robot", "robots"):
+        return "-"
+    return "planar arms only" if "Planar arms only" in (value.__doc__ or "") else "every family"
+
+
 def public_names_table() -> str:
     """Markdown table: every public name of ``spacearm`` and the module defining it."""
     import spacearm
@@ -245,8 +257,9 @@ def public_names_table() -> str:
         how = "lazy" if name in lazy else "eager"
         target = f"[`{name}`][{module}.{name}]" if module in documented else f"`{name}`"
         where = f"[`{module}`]({module}.md)" if module in documented else f"`{module}`"
-        rows.append(f"| {target} | {where} | {how} |")
-    return "\n".join(["| name | defined in | import |", "|---|---|---|", *rows])
+        serves = _serves(value)
+        rows.append(f"| {target} | {serves} | {where} | {how} |")
+    return "\n".join(["| name | serves | defined in | import |", "|---|---|---|---|", *rows])
 
 
 def write_api_pages() -> None:
