@@ -23,6 +23,7 @@ exist or a public module that is not listed).
 from __future__ import annotations
 
 import argparse
+import inspect
 import logging
 import os
 import pkgutil
@@ -230,6 +231,17 @@ def check_module_list() -> None:
         log.warning("docs/scripts/gen_pages.py: public module %s is not in API_MODULES", name)
 
 
+def _serves(value) -> str:
+    """Which robots a public function takes: every family, planar arms only, or none."""
+    try:
+        parameters = list(inspect.signature(value).parameters)
+    except (TypeError, ValueError):
+        parameters = []
+    if isinstance(value, type) or not parameters or parameters[0] not in ("robot", "robots"):
+        return "-"
+    return "planar arms only" if "Planar arms only" in (value.__doc__ or "") else "every family"
+
+
 def public_names_table() -> str:
     """Markdown table: every public name of ``spacearm`` and the module defining it."""
     import spacearm
@@ -237,18 +249,17 @@ def public_names_table() -> str:
     documented = {name for name, _, _ in API_MODULES}
     lazy = getattr(spacearm, "_LAZY", {})
     rows = []
-    for name in sorted(dir(spacearm), key=str.lower):
+    for name in sorted(spacearm.__all__, key=str.lower):
         if name.startswith("_"):
             continue
         value = getattr(spacearm, name)
-        if isinstance(value, type(spacearm)):  # a submodule, not an exported name
-            continue
         module = getattr(value, "__module__", None) or f"spacearm.{lazy.get(name, '?')}"
         how = "lazy" if name in lazy else "eager"
         target = f"[`{name}`][{module}.{name}]" if module in documented else f"`{name}`"
         where = f"[`{module}`]({module}.md)" if module in documented else f"`{module}`"
-        rows.append(f"| {target} | {where} | {how} |")
-    return "\n".join(["| name | defined in | import |", "|---|---|---|", *rows])
+        serves = _serves(value)
+        rows.append(f"| {target} | {serves} | {where} | {how} |")
+    return "\n".join(["| name | serves | defined in | import |", "|---|---|---|---|", *rows])
 
 
 def write_api_pages() -> None:
@@ -260,7 +271,10 @@ def write_api_pages() -> None:
                 page.write("::: spacearm\n    options:\n      members: false\n\n")
                 page.write(
                     "## Public names\n\n"
-                    "`import spacearm as sa` gives these names. Those marked *lazy* are "
+                    "`import spacearm as sa` gives these names (`spacearm.__all__`): the loaders and "
+                    "the functions that serve every robot family, and a few planar closed forms "
+                    "that say so (another family raises TypeError); other family-specific names "
+                    "live in `spacearm.models.planar` and `spacearm.models.spatial`. Those marked *lazy* are "
                     "imported from their module on first use (`_LAZY` in "
                     "`spacearm/__init__.py`), which keeps `import spacearm` light; "
                     "each is documented on the page of the module that defines it.\n\n"

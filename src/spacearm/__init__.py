@@ -5,9 +5,15 @@ Manipulator", Trans. SICE 26(2), 1990. Importing the package changes no global J
 setting; call `enable_x64` once for float64, and `enable_compilation_cache` to keep
 compiled programs on disk across processes (the command line does both).
 
-The names below are the public API. The kernels of the
-lower layers are imported at once; the higher layers (analysis, motion, planning,
-design, io) on first use, so ``import spacearm`` stays light.
+The names below (``__all__``) are the public API: the loaders and the functions that
+serve every robot family (they dispatch by `family_of`). A few planar closed forms of
+the paper stay here under their familiar names; each says "planar arms only" and raises
+TypeError for another family. Other family-specific names live in their subpackages:
+`spacearm.models.planar` and `spacearm.models.spatial` (for example
+`spacearm.models.spatial.mass_matrix`), and the planar workspaces of section 3 in
+`spacearm.analysis`. The kernels of the lower layers are imported at once; the higher
+layers (analysis, motion, planning, design, io) on first use, so ``import spacearm``
+stays light.
 """
 
 import importlib
@@ -40,18 +46,7 @@ from .models.planar.closed_forms import (
     robot_frame_tip_position as robot_frame_tip_position,
     tip_coefficients as tip_coefficients,
 )
-from .models.spatial import (
-    SpatialRobot as SpatialRobot,
-    arm_inertia as arm_inertia,
-    base_twist_map as base_twist_map,
-    dynamic_manipulability as dynamic_manipulability,
-    fixed_base_ellipsoid as fixed_base_ellipsoid,
-    full_manipulability as full_manipulability,
-    mass_matrix as mass_matrix,
-    rotational_ellipsoid as rotational_ellipsoid,
-    rotational_manipulability as rotational_manipulability,
-    stack_spatial_robots as stack_spatial_robots,
-)
+from .models.spatial import SpatialRobot as SpatialRobot
 
 # Public names from the higher layers, imported on first use. Each entry: public name ->
 # module under spacearm.
@@ -59,14 +54,9 @@ _LAZY = {
     "average_manipulability": "analysis",
     "normalized_areas": "analysis",
     "straight_path_workspace": "analysis",
-    "fixed_vehicle_radius": "analysis",
-    "attitude_constraint": "analysis",
     "maximum_reachable_radius": "analysis",
-    "guaranteed_radius": "analysis",
     "path_independent_radius": "analysis",
-    "dynamic_singularities": "analysis",
     "maximum_reachable_radii": "analysis",
-    "workspace_relations": "analysis",
     "integrate_joint_path": "motion",
     "joint_path_history": "motion",
     "straight_tip_path": "motion",
@@ -81,19 +71,46 @@ _LAZY = {
     "open_results": "io",
 }
 
+__all__ = [
+    "ConfigError",
+    "PlanarRobot",
+    "SpatialRobot",
+    "__version__",
+    "angular_momentum",
+    "arm_jacobian",
+    "base_jacobian",
+    "base_rate",
+    "base_rate_matrix",
+    "centroid_positions",
+    "design_coefficients",
+    "enable_compilation_cache",
+    "enable_x64",
+    "family_of",
+    "fixed_base_jacobian",
+    "fixed_base_manipulability",
+    "generalized_jacobian",
+    "load_robot",
+    "manipulability",
+    "manipulability_ellipse",
+    "manipulability_ellipsoid",
+    "manipulability_on_grid",
+    "momentum_inertias",
+    "robot_frame_tip_position",
+    "stack_robots",
+    "tip_coefficients",
+    "tip_position",
+    "umetani1990",
+    *_LAZY,
+]
+
 if TYPE_CHECKING:  # the same names, visible to type checkers and the API reference
     from .analysis import (
-        attitude_constraint as attitude_constraint,
         average_manipulability as average_manipulability,
-        dynamic_singularities as dynamic_singularities,
-        fixed_vehicle_radius as fixed_vehicle_radius,
-        guaranteed_radius as guaranteed_radius,
         maximum_reachable_radii as maximum_reachable_radii,
         maximum_reachable_radius as maximum_reachable_radius,
         normalized_areas as normalized_areas,
         path_independent_radius as path_independent_radius,
         straight_path_workspace as straight_path_workspace,
-        workspace_relations as workspace_relations,
     )
     from .design import hypervolume_2d as hypervolume_2d, load_problem as load_problem, pareto_search as pareto_search
     from .io import open_results as open_results
@@ -117,4 +134,4 @@ def __getattr__(name):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(__all__)

@@ -17,6 +17,7 @@ import jax.numpy as jnp
 
 from .._core.errors import ConfigError
 from ..kinematics import generalized_jacobian, square_determinant, tip_position
+from ..models.family import require_family
 from ..models.planar.closed_forms import robot_frame_tip_position
 from ..models.planar.robot import PlanarRobot
 
@@ -101,6 +102,8 @@ def dynamic_singularities(
 ) -> SingularSet:
     """The zero set of det J* (eq. 6) for a two-link arm: the free base's real singularities.
 
+    Planar arms only (another family raises TypeError).
+
     For every phi_1 on an even grid of ``n_phi1`` values in [-pi, pi), the roots in phi_2
     are bracketed by sign changes on ``n_phi2`` cells (the first ``max_roots`` per row
     are kept; rows of the shape ``(M, max_roots)``) and refined by bisection to
@@ -112,6 +115,7 @@ def dynamic_singularities(
         ConfigError: for n != 2 (for n > 2, J* loses rank on a set of codimension 2 in
             joint space, which a one-dimensional scan cannot trace).
     """
+    require_family(robot, "planar", "dynamic_singularities")
     if robot.n_links != 2:
         raise ConfigError(f"links: dynamic_singularities traces det J* for n = 2 links, got n = {robot.n_links}")
     if robot.batch_shape:

@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..kinematics import manipulability, tip_position
+from ..models.family import require_family
 from ..models.planar.robot import PlanarRobot
 from ..motion import straight_tip_path
 from .joint_box import joint_box
@@ -42,6 +43,8 @@ def evenly_spaced_directions(n_directions: int, dtype=None) -> jax.Array:
 def straight_path_ends(robot: PlanarRobot, phi_start: jax.Array, n_directions: int = 360, **path_options):
     """Straight tip paths from ``phi_start`` in ``n_directions`` evenly spaced directions (Fig. 3).
 
+    Planar arms only (another family raises TypeError).
+
     A thin batched wrapper on ``motion.straight_tip_path``: every path runs until J*
     loses rank (or a joint limit, or ``max_length``); one compiled call for all
     initial postures and directions.
@@ -55,6 +58,7 @@ def straight_path_ends(robot: PlanarRobot, phi_start: jax.Array, n_directions: i
     Returns:
         ``motion.StraightPath`` with batch shape ``(..., n_directions)``.
     """
+    require_family(robot, "planar", "straight_path_ends")
     # No jit wrapper here: straight_tip_path is the compiled entry point, and a wrapper
     # would trace (and compile) the whole integrator again for every shape it sees. The
     # directions are built in NumPy, so no small program compiles for them either.
@@ -67,6 +71,8 @@ def straight_path_ends(robot: PlanarRobot, phi_start: jax.Array, n_directions: i
 def straight_path_workspace(robot: PlanarRobot, phi_start: jax.Array, n_directions: int = 360, **path_options):
     """Boundary of the Straight-Path Workspace (Area 4, Fig. 3b) from an initial posture.
 
+    Planar arms only (another family raises TypeError).
+
     Args:
         robot: the design.
         phi_start: ``(..., n+1)`` initial posture(s), rad.
@@ -77,6 +83,7 @@ def straight_path_workspace(robot: PlanarRobot, phi_start: jax.Array, n_directio
         where the straight tip path from ``tip_position(robot, phi_start)`` in each
         direction meets a singularity of J* (or a joint limit).
     """
+    require_family(robot, "planar", "straight_path_workspace")
     return straight_path_ends(robot, phi_start, n_directions, **path_options).end_tip
 
 

@@ -52,6 +52,7 @@ import itertools
 import jax
 import jax.numpy as jnp
 
+from ..models.family import require_family
 from ..models.planar.closed_forms import tip_coefficients, tip_position
 from ..models.planar.robot import PlanarRobot
 from .joint_box import joint_box
@@ -78,7 +79,11 @@ __all__ = [
 
 
 def fixed_vehicle_radius(robot: PlanarRobot) -> jax.Array:
-    """``(...)`` Area 1 outer radius L = l_1 + .. + l_n about joint 1, m (sec. 3.1 (1))."""
+    """``(...)`` Area 1 outer radius L = l_1 + .. + l_n about joint 1, m (sec. 3.1 (1)).
+
+    Planar arms only (another family raises TypeError).
+    """
+    require_family(robot, "planar", "fixed_vehicle_radius")
     return robot.reach
 
 
@@ -99,7 +104,11 @@ def fixed_vehicle_center(robot: PlanarRobot) -> jax.Array:
 
 
 def attitude_constraint(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
-    """Area 2 with phi0 = 0: centre ``(..., 2)`` (K0, 0) and radius ``(...)`` K1+..+Kn, m (eq. 7)."""
+    """Area 2 with phi0 = 0: centre ``(..., 2)`` (K0, 0) and radius ``(...)`` K1+..+Kn, m (eq. 7).
+
+    Planar arms only (another family raises TypeError).
+    """
+    require_family(robot, "planar", "attitude_constraint")
     K = tip_coefficients(robot)
     center = jnp.stack([K[..., 0], jnp.zeros_like(K[..., 0])], axis=-1)
     return center, jnp.sum(K[..., 1:], axis=-1)
@@ -128,10 +137,13 @@ def maximum_reachable_inner_radius(robot: PlanarRobot) -> jax.Array:
 def guaranteed_radius(robot: PlanarRobot) -> jax.Array:
     """``(...)`` Area 5 radius |K0 - (K1 + .. + Kn)| about the system centroid, m (eq. 8).
 
+    Planar arms only (another family raises TypeError).
+
     The paper's derivation: the closest approach to the centroid of the tip on the
     stretched-arm singularity (phi_2 = .. = phi_n = 0). See `path_independent_radius`
     for the radius that accounts for where det J* really vanishes.
     """
+    require_family(robot, "planar", "guaranteed_radius")
     K = tip_coefficients(robot)
     return jnp.abs(K[..., 0] - jnp.sum(K[..., 1:], axis=-1))
 
@@ -164,6 +176,8 @@ def attachment_condition(robot: PlanarRobot) -> jax.Array:
 def normalized_areas(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
     """Maximum Reachable and Guaranteed areas normalized by pi L^2 (Table 2).
 
+    Planar arms only (another family raises TypeError).
+
     S_M = (K0 + K1 + ... + Kn)^2 / L^2 (section 3.1, 3-a) and
     S_G = (K0 - (K1 + ... + Kn))^2 / L^2 (eq. 8): the disks of radius
     `maximum_reachable_radius` and `guaranteed_radius`, holes not removed.
@@ -174,6 +188,7 @@ def normalized_areas(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
     Returns:
         ``(S_M, S_G)``, each ``(...)``, dimensionless.
     """
+    require_family(robot, "planar", "normalized_areas")
     reach = robot.reach
     return (maximum_reachable_radius(robot) / reach) ** 2, (guaranteed_radius(robot) / reach) ** 2
 
@@ -205,11 +220,14 @@ def _disk_inside(center_in, radius_in, center_out, radius_out, tol):
 def workspace_relations(robot: PlanarRobot, tol: float = 1e-9) -> dict[str, jax.Array]:
     """The containments of sec. 3.2, for the workspaces drawn as disks as in Fig. 4.
 
+    Planar arms only (another family raises TypeError).
+
     Returns:
         ``(...)`` bools: ``"3>=2"``, ``"2>=5"``, ``"3>=1"``, ``"1>=2"``, ``"eq9"`` (the
         condition), and ``"2>=5_with_hole"`` (Area 2 taken as the annulus it is, with the
         hole of `attitude_constraint_inner_radius`).
     """
+    require_family(robot, "planar", "workspace_relations")
     zero = jnp.zeros_like(fixed_vehicle_center(robot))
     c1, r1 = fixed_vehicle_center(robot), fixed_vehicle_radius(robot)
     c2, r2 = attitude_constraint(robot)
@@ -261,6 +279,8 @@ def _reach_extremes(robot: PlanarRobot, points_per_axis: int, zoom_levels: int):
 def maximum_reachable_radii(robot: PlanarRobot, points_per_axis: int | None = None, zoom_levels: int = 4):
     """Area 3 under joint limits: the annulus radii about the system centroid, searched numerically.
 
+    Planar arms only (another family raises TypeError).
+
     The base attitude is free (cyclic motions inside the joint box turn it by any
     angle), so Area 3 is the rotation-swept set of the tip over the joint box: an
     annulus between the smallest and largest |tip| over the box. Found by a grid over
@@ -276,6 +296,7 @@ def maximum_reachable_radii(robot: PlanarRobot, points_per_axis: int | None = No
         ``(inner, outer, joints_inner, joints_outer)``: radii (m) and the ``(n,)`` joint
         angles (rad) where they occur.
     """
+    require_family(robot, "planar", "maximum_reachable_radii")
     if robot.batch_shape:
         raise ValueError("maximum_reachable_radii takes a single design; vmap it for batches")
     n = robot.n_links

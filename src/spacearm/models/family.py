@@ -30,7 +30,7 @@ import jax.numpy as jnp
 
 from .._core.groups import Group
 
-__all__ = ["RobotFamily", "family_of"]
+__all__ = ["RobotFamily", "family_of", "require_family"]
 
 
 class RobotFamily:
@@ -141,3 +141,18 @@ def family_of(robot) -> RobotFamily:
     if not isinstance(family, RobotFamily):
         raise TypeError(f"expected a spacearm robot (PlanarRobot or SpatialRobot), got {type(robot).__name__}")
     return family
+
+
+def require_family(robot, family: str, what: str) -> None:
+    """Refuse a robot of another family in a function that serves one family only.
+
+    Raises:
+        TypeError: naming the function, the family it serves and the robot it got
+            (at trace time under ``jit``: no run-time cost).
+    """
+    got = family_of(robot).name
+    if got != family:
+        raise TypeError(
+            f"{what}: {family} arms only, got a {type(robot).__name__} ({got} family); "
+            "spacearm.tip_position, generalized_jacobian, manipulability and base_rate serve every family"
+        )

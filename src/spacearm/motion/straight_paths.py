@@ -46,7 +46,7 @@ from ..kinematics import (
     straight_path_rates,
     tip_position,
 )
-from ..models.family import family_of
+from ..models.family import family_of, require_family
 from .batching import check_arm_axis, flatten_batch, is_traced
 from .dop853 import rk_step
 from .lanes import PATH_BUCKET, lane_count, run_queue, start_lane, step_lane
@@ -545,6 +545,9 @@ def go_and_back(
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """A small go-and-back tip motion: out along ``direction`` by ``distance``, then back (Fig. 9).
 
+    Planar arms only (another family raises TypeError; a spatial arm's is
+    `spacearm.motion.spatial_go_and_back`).
+
     Args:
         phi_start: ``(..., n+1)`` initial posture, rad.
         direction: ``(..., 2)`` inertial direction of the outward leg.
@@ -555,6 +558,7 @@ def go_and_back(
         back, the turning point shared) and ``travelled (..., 2 n_samples - 1)``, the tip's
         cumulative path length, m. Each leg stops early at a singularity of J*.
     """
+    require_family(robot, "planar", "go_and_back")
     direction = jnp.asarray(direction, jnp.result_type(float))
     out_postures, out_tips = straight_tip_path_history(
         robot, phi_start, direction, n_samples, max_length=distance, **options

@@ -26,6 +26,7 @@ from collections.abc import Sequence
 import jax
 import jax.numpy as jnp
 
+from ..family import require_family
 from .robot import PlanarRobot
 
 __all__ = [
@@ -90,9 +91,12 @@ def _chain_offsets(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
 def design_coefficients(robot: PlanarRobot) -> DesignCoefficients:
     """K, R, W and the inertias of a design (or a batch of designs).
 
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+
     Shifting the origin to the system centroid subtracts the mass-weighted mean of
     the body offsets (eq. 3 integrated, zero initial linear momentum).
     """
+    require_family(robot, "planar", "design_coefficients")
     rows, tip_row = _chain_offsets(robot)
     masses = jnp.concatenate([jnp.asarray(robot.base_mass)[..., None], robot.link_mass], axis=-1)
     mean = jnp.einsum("...i,...ik->...k", masses, rows) / jnp.sum(masses, axis=-1)[..., None]
@@ -105,13 +109,21 @@ def design_coefficients(robot: PlanarRobot) -> DesignCoefficients:
 
 @jax.jit
 def tip_coefficients(robot: PlanarRobot) -> jax.Array:
-    """``(..., n+1)`` K_0..K_n of eq. (1), m; for n = 2 these are the paper's K0, K1, K2."""
+    """``(..., n+1)`` K_0..K_n of eq. (1), m; for n = 2 these are the paper's K0, K1, K2.
+
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+    """
+    require_family(robot, "planar", "tip_coefficients")
     return design_coefficients(robot).tip
 
 
 @jax.jit
 def centroid_coefficients(robot: PlanarRobot) -> jax.Array:
-    """``(..., n+1, n+1)`` R_ik: centroid of body i = sum_k R_ik u(theta_k), m."""
+    """``(..., n+1, n+1)`` R_ik: centroid of body i = sum_k R_ik u(theta_k), m.
+
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+    """
+    require_family(robot, "planar", "centroid_coefficients")
     return design_coefficients(robot).centroids
 
 
@@ -235,12 +247,15 @@ def tip_position(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
 def robot_frame_tip_position(robot: PlanarRobot, phi_arm: jax.Array) -> jax.Array:
     """Tip in the robot frame Sigma_R (origin at joint 1, axes along the base), m.
 
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+
     Args:
         phi_arm: ``(..., n)`` joint angles, rad.
 
     Returns:
         ``(..., 2)``; this is also the fixed-base (ground robot) tip.
     """
+    require_family(robot, "planar", "robot_frame_tip_position")
     theta = jnp.cumsum(jnp.asarray(phi_arm), axis=-1)
     lengths = robot.link_length
     return jnp.stack([jnp.sum(lengths * jnp.cos(theta), -1), jnp.sum(lengths * jnp.sin(theta), -1)], axis=-1)
@@ -251,7 +266,11 @@ fixed_base_tip_position = robot_frame_tip_position
 
 @jax.jit
 def centroid_positions(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """``(..., n+1, 2)`` centroids r_0..r_n in the inertial frame (origin at the system centroid), m."""
+    """``(..., n+1, 2)`` centroids r_0..r_n in the inertial frame (origin at the system centroid), m.
+
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+    """
+    require_family(robot, "planar", "centroid_positions")
     theta = jnp.cumsum(jnp.asarray(phi), axis=-1)
     u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)  # (..., n+1, 2)
     return jnp.einsum("...ik,...kd->...id", design_coefficients(robot).centroids, u)
@@ -259,7 +278,11 @@ def centroid_positions(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
 
 @jax.jit
 def base_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """J_S of eq. (2): ``(..., 2)`` tip velocity per unit base rate, m/rad."""
+    """J_S of eq. (2): ``(..., 2)`` tip velocity per unit base rate, m/rad.
+
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+    """
+    require_family(robot, "planar", "base_jacobian")
     c, s = _unit_vectors(phi)
     xs, ys = _tip_columns(design_coefficients(robot), c, s)
     return jnp.stack(jnp.broadcast_arrays(xs[0], ys[0]), axis=-1)
@@ -267,7 +290,11 @@ def base_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
 
 @jax.jit
 def arm_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
-    """J_M of eq. (2): ``(..., 2, n)`` tip velocity per unit joint rate (base held), m/rad."""
+    """J_M of eq. (2): ``(..., 2, n)`` tip velocity per unit joint rate (base held), m/rad.
+
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+    """
+    require_family(robot, "planar", "arm_jacobian")
     c, s = _unit_vectors(phi)
     xs, ys = _tip_columns(design_coefficients(robot), c, s)
     return _stack_matrix(xs[1:], ys[1:])
@@ -277,9 +304,12 @@ def arm_jacobian(robot: PlanarRobot, phi: jax.Array) -> jax.Array:
 def momentum_inertias(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, jax.Array]:
     """I_S ``(...)`` and I_M ``(..., n)`` of eq. (5), kg m^2.
 
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+
     Angular momentum about the system centroid is I_S dphi0 + I_M . dphi_M when the
     linear momentum is zero. Depends on the joint angles only, not on phi0.
     """
+    require_family(robot, "planar", "momentum_inertias")
     c, s = _unit_vectors(phi, with_base=False)
     H = _momentum_rows(design_coefficients(robot), c, s)
     H = jnp.broadcast_arrays(*H)
@@ -300,7 +330,11 @@ def base_rate(robot: PlanarRobot, phi: jax.Array, joint_rates: jax.Array) -> jax
 
 @jax.jit
 def angular_momentum(robot: PlanarRobot, phi: jax.Array, phi_rates: jax.Array) -> jax.Array:
-    """``(...)`` angular momentum about the system centroid, I_S dphi0 + I_M . dphi_M (eq. 4, 5)."""
+    """``(...)`` angular momentum about the system centroid, I_S dphi0 + I_M . dphi_M (eq. 4, 5).
+
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+    """
+    require_family(robot, "planar", "angular_momentum")
     i_s, i_m = momentum_inertias(robot, phi)
     return i_s * phi_rates[..., 0] + jnp.sum(i_m * phi_rates[..., 1:], axis=-1)
 
@@ -386,6 +420,8 @@ def grid_angle_tables(joint_axes: Sequence[jax.Array]) -> tuple[list, list]:
 def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) -> jax.Array:
     """w* on the outer-product grid of 1-D joint-angle axes, robot frame.
 
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+
     Args:
         joint_axes: n arrays of joint angles phi_1..phi_n, rad, of sizes (A_1, ..., A_n).
 
@@ -393,6 +429,7 @@ def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) 
         ``(A_1, ..., A_n)`` w*, m^2. The absolute link angles come from the 1-D sine
         and cosine tables by angle addition: cos(a+b) = cos a cos b - sin a sin b.
     """
+    require_family(robot, "planar", "manipulability_on_grid")
     w = manipulability_from_angles(design_coefficients(robot), *grid_angle_tables(joint_axes))
     return jnp.broadcast_to(w, tuple(jnp.shape(a)[0] for a in joint_axes))
 
@@ -401,6 +438,8 @@ def manipulability_on_grid(robot: PlanarRobot, joint_axes: Sequence[jax.Array]) 
 def manipulability_ellipse(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Principal axes of the manipulability ellipse {J* q : |q| <= 1} (section 4.1).
 
+    Planar arms only (a `PlanarRobot`; another family raises TypeError).
+
     Args:
         phi: ``(..., n+1)`` posture, rad.
 
@@ -408,6 +447,7 @@ def manipulability_ellipse(robot: PlanarRobot, phi: jax.Array) -> tuple[jax.Arra
         ``(major, minor, angle)``: the singular values of J* (m/rad, major >= minor)
         and the inertial angle of the major axis, rad. major * minor = w*.
     """
+    require_family(robot, "planar", "manipulability_ellipse")
     J = generalized_jacobian(robot, phi)
     a = jnp.sum(J[..., 0, :] ** 2, axis=-1)
     b = jnp.sum(J[..., 0, :] * J[..., 1, :], axis=-1)

@@ -210,7 +210,11 @@ def _show(value: np.ndarray) -> str:
 
 
 def stack_robots(robots: list[PlanarRobot]) -> PlanarRobot:
-    """Stack single designs (same n) into one batched design with a leading axis."""
+    """Stack single designs (same n) into one batched design with a leading axis.
+
+    Serves every family: spatial designs of one topology stack the same way (the
+    result is the robots' own class).
+    """
     if not robots:
         raise ValueError("stack_robots needs at least one robot")
     return jax.tree_util.tree_map(lambda *xs: np.stack([np.asarray(x) for x in xs]), *robots)

@@ -2,7 +2,8 @@
 the arm inertia at zero momentum H*, dynamic manipulability, the bus twist map C(q),
 and the rotational and fixed-base ellipsoids.
 
-All take ``q (..., n)`` with any leading batch shape and are jitted at the entry point.
+Spatial arms only: each refuses a robot of another family with a TypeError. All take
+``q (..., n)`` with any leading batch shape and are jitted at the entry point.
 Results are in bus axes unless a ``base_rotation (..., 3, 3)`` is given (then inertial
 axes; scalar measures do not depend on it).
 """
@@ -13,6 +14,7 @@ import jax
 import jax.numpy as jnp
 
 from ..._core.linalg import gram_root_determinant
+from ..family import require_family
 from .primitives import (
     arm_inertia as _arm_inertia,
     base_twist_map as _base_twist_map,
@@ -51,6 +53,7 @@ def _rotate_rows(J, base_rotation):
 @jax.jit
 def rotational_manipulability(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(...)`` w*_w = sqrt det(J*_w J*_w^T), (rad/s per rad/s)^3: how freely the tip turns."""
+    require_family(robot, "spatial", "rotational_manipulability")
     return gram_root_determinant(_map(_generalized_jacobian, robot, q)[..., 3:, :])
 
 
@@ -61,6 +64,7 @@ def full_manipulability(robot: SpatialRobot, q: jax.Array, characteristic_length
     The characteristic length L (m) puts translation and rotation on one scale; for
     n >= 6 this is sqrt det(J_L J_L^T), for n < 6 sqrt det(J_L^T J_L).
     """
+    require_family(robot, "spatial", "full_manipulability")
     J = _map(_generalized_jacobian, robot, q)
     length = jnp.asarray(characteristic_length)[..., None, None]
     scaled = jnp.concatenate([J[..., :3, :] / length, J[..., 3:, :]], axis=-2)
@@ -74,18 +78,21 @@ def full_manipulability(robot: SpatialRobot, q: jax.Array, characteristic_length
 @jax.jit
 def mass_matrix(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(..., n, n)`` H_m: the arm's joint-space inertia with the bus held fixed."""
+    require_family(robot, "spatial", "mass_matrix")
     return _map(_mass_matrix, robot, q)
 
 
 @jax.jit
 def arm_inertia(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(..., n, n)`` H* = H_m - H_bm^T H_b^-1 H_bm: the arm inertia at zero momentum."""
+    require_family(robot, "spatial", "arm_inertia")
     return _map(_arm_inertia, robot, q)
 
 
 @jax.jit
 def dynamic_manipulability(robot: SpatialRobot, q: jax.Array) -> jax.Array:
     """``(...)`` w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) (Yoshikawa 1985 applied to J*)."""
+    require_family(robot, "spatial", "dynamic_manipulability")
     J = _map(_generalized_jacobian, robot, q)[..., :3, :]
     H = arm_inertia(robot, q)
     # J (H^T H)^-1 J^T = (J H^-1)(J H^-1)^T, with H symmetric positive definite.
@@ -100,6 +107,7 @@ def base_twist_map(robot: SpatialRobot, q: jax.Array, base_rotation: jax.Array |
     Bus axes, or inertial axes with ``base_rotation``. C_w (rows 3:6) is the
     disturbance map of Dubowsky & Torres (1991); its kernel is the reaction null space.
     """
+    require_family(robot, "spatial", "base_twist_map")
     return _rotate_rows(_map(_base_twist_map, robot, q), base_rotation)
 
 
@@ -111,6 +119,7 @@ def _axes(J):
 @jax.jit
 def rotational_ellipsoid(robot: SpatialRobot, q: jax.Array, base_rotation: jax.Array | None = None):
     """Semi-axes ``(..., 3)`` (largest first) and directions ``(..., 3, 3)`` of {J*_w qdot : |qdot| <= 1}."""
+    require_family(robot, "spatial", "rotational_ellipsoid")
     J = _rotate_rows(_map(_generalized_jacobian, robot, q), base_rotation)
     return _axes(J[..., 3:, :])
 
@@ -118,5 +127,6 @@ def rotational_ellipsoid(robot: SpatialRobot, q: jax.Array, base_rotation: jax.A
 @jax.jit
 def fixed_base_ellipsoid(robot: SpatialRobot, q: jax.Array):
     """Semi-axes ``(..., 3)`` and directions ``(..., 3, 3)`` (bus axes) of the fixed-base {J_v qdot : |qdot| <= 1}."""
+    require_family(robot, "spatial", "fixed_base_ellipsoid")
     J = _map(_fixed_base_jacobian, robot, q)
     return _axes(J[..., :3, :])
