@@ -71,7 +71,7 @@ class HybridSettings:
     """
 
     population: int = 48
-    generations: int = 500
+    generations: int = 100
     max_evaluations: int | None = None
     max_seconds: float | None = None
     patience: int = 10

@@ -28,7 +28,7 @@ from ..models.planar.closed_forms import (
 )
 from ..motion import go_and_back, joint_path_history, straight_tip_path, straight_tip_path_history
 from . import figure
-from .robot import base_square, robot_outline
+from .robot import base_square, draw_planar_robot, robot_outline
 
 DEG = np.pi / 180.0
 FIG2_LOOP_DEG = np.array([[-60.0, 120.0], [30.0, 120.0], [30.0, 30.0], [-60.0, 30.0], [-60.0, 120.0]])
@@ -50,15 +50,6 @@ def _outline(robot, phi):
     base, chain = robot_outline(robot, phi)
     box = base_square(base, np.asarray(phi, float)[0], max(0.5 * float(robot.base_attach), 0.3))
     return box, np.vstack([base, chain])
-
-
-def _draw_robot(ax, robot, phi, color, label=None, alpha=1.0, lw=2.0, robot_frame=False):
-    box, chain = _outline(robot, phi)
-    if robot_frame:  # origin at joint 1 (axes already along the base when phi0 = 0)
-        box, chain = box - chain[1], chain - chain[1]
-    ax.fill(box[:, 0], box[:, 1], color=color, alpha=0.10 * alpha)
-    ax.plot(box[:, 0], box[:, 1], color=color, lw=1.0, alpha=alpha)
-    ax.plot(chain[:, 0], chain[:, 1], "-o", color=color, lw=lw, ms=3, alpha=alpha, label=label)
 
 
 def _ellipse(ax, robot, phi, color, scale=0.5):
@@ -124,15 +115,15 @@ def fig2(out_dir: Path) -> list[Path]:
     ax_joint.legend(loc="center")
 
     phi_start = np.r_[0.0, loop[0]]
-    _draw_robot(ax_inertial, robot, phi_start, "black", "start (both)", lw=2.4)
+    draw_planar_robot(ax_inertial, robot, phi_start, "black", "start (both)", lw=2.4)
     for name, label in (("forward", "after loop 1-2-3-4-1"), ("reverse", "after reversed loop")):
         result = study[name]
         tips = result["tips"]
         ax_inertial.plot(tips[:, 0], tips[:, 1], ":", color=colors[name], lw=1.2)
         for posture in result["postures"][64:-1:64]:
-            _draw_robot(ax_inertial, robot, posture, colors[name], alpha=0.25, lw=1.2)
+            draw_planar_robot(ax_inertial, robot, posture, colors[name], alpha=0.25, lw=1.2)
         rotation = result["phi_end"][0] / DEG
-        _draw_robot(
+        draw_planar_robot(
             ax_inertial, robot, result["phi_end"], colors[name], f"{label}: $\\Delta\\phi_0$ = {rotation:+.3f} deg"
         )
         moved = np.linalg.norm(tips[-1] - tips[0])
@@ -174,10 +165,10 @@ def fig3a(out_dir: Path) -> list[Path]:
     end = np.asarray(path.end_posture)
     fig, (ax, ax_w) = plt.subplots(1, 2, figsize=(12.5, 5.2), gridspec_kw={"width_ratios": [1.35, 1]})
     for posture in postures[8:-1:8]:
-        _draw_robot(ax, robot, posture, "tab:gray", alpha=0.35, lw=1.2)
-    _draw_robot(ax, robot, FIG3_START, "black", "start (0, -60, 120) deg")
+        draw_planar_robot(ax, robot, posture, "tab:gray", alpha=0.35, lw=1.2)
+    draw_planar_robot(ax, robot, FIG3_START, "black", "start (0, -60, 120) deg")
     kind = "kinematic" if bool(path.kinematic) else "dynamic"
-    _draw_robot(
+    draw_planar_robot(
         ax,
         robot,
         end,
@@ -257,7 +248,7 @@ def fig9(out_dir: Path) -> list[Path]:
     for k in range(2):
         phi = study["postures"][k]
         major, minor = _ellipse(ax, robot, phi, colors[k])
-        _draw_robot(
+        draw_planar_robot(
             ax,
             robot,
             phi,

@@ -21,7 +21,7 @@ from ..io import atomic_path, save_figure
 from ..models.planar import umetani1990
 from ..planning import PHASE_LOOP, PHASE_REPOSITION, PHASE_STRAIGHT, plan_reach, reachable_bounds
 from . import figure
-from .robot import base_square, robot_outline
+from .robot import base_square, draw_planar_robot, robot_outline
 
 DEG = np.pi / 180.0
 # Fig. 3/5 initial posture and a point C for the Table 1 robot (our choice of point: the
@@ -33,15 +33,6 @@ FIG5_POINT_C = np.array([-2.5, -3.0])
 def _base_box(robot, base, phi0):
     """Corners of a square base drawn about its centroid, side b0 (at least 0.6 m)."""
     return base_square(base, phi0, max(0.5 * float(robot.base_attach), 0.3))
-
-
-def _draw_robot(ax, robot, phi, color, label, alpha=1.0):
-    base, chain = robot_outline(robot, phi)
-    box = _base_box(robot, base, phi[0])
-    ax.fill(box[:, 0], box[:, 1], color=color, alpha=0.12 * alpha)
-    ax.plot(box[:, 0], box[:, 1], color=color, lw=1.0, alpha=alpha)
-    points = np.vstack([base, chain])
-    ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, alpha=alpha, label=label)
 
 
 def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -> Path:
@@ -88,10 +79,10 @@ def draw_reach(robot, phi_start, plan, path: Path, *, n_directions: int = 180) -
         if rows.size > 1:
             ax.plot(plan.tips[rows, 0], plan.tips[rows, 1], color=color, lw=1.2, label=label)
 
-    _draw_robot(ax, robot, phi_start, "0.3", "robot at the start")
+    draw_planar_robot(ax, robot, phi_start, "0.3", "robot at the start")
     if phi_after is not None:
-        _draw_robot(ax, robot, phi_after, "tab:blue", "after the loop", alpha=0.8)
-    _draw_robot(ax, robot, plan.end_posture, "tab:green", "at the end")
+        draw_planar_robot(ax, robot, phi_after, "tab:blue", "after the loop", alpha=0.8)
+    draw_planar_robot(ax, robot, plan.end_posture, "tab:green", "at the end")
     ax.plot(*plan.target, marker="*", color="tab:red", ms=15, ls="none", label="target (point C)")
     ax.plot(0.0, 0.0, "k+", ms=10)
     ax.annotate("system centroid", (0.0, 0.0), xytext=(4, 4), textcoords="offset points", fontsize=8)

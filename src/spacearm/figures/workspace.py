@@ -14,7 +14,7 @@ from ..models.planar import umetani1990
 from ..models.planar.closed_forms import tip_coefficients
 from ..motion import straight_tip_path_history
 from . import figure
-from .robot import base_square, robot_outline
+from .robot import draw_planar_robot
 
 FIG3_POSTURE_DEG = (0.0, -60.0, 120.0)
 
@@ -31,14 +31,6 @@ def _save(fig, path: Path) -> Path:
 def _circle(ax, center, radius, **style):
     angle = np.linspace(0.0, 2.0 * np.pi, 361)
     ax.plot(center[0] + radius * np.cos(angle), center[1] + radius * np.sin(angle), **style)
-
-
-def _draw_robot(ax, robot, phi, color="0.2", alpha=1.0, label=None):
-    base, chain = robot_outline(robot, phi)
-    box = base_square(base, phi[0], max(float(robot.base_attach), 0.3))
-    ax.plot(box[:, 0], box[:, 1], color=color, lw=1.0, alpha=alpha)
-    ax.plot(chain[:, 0], chain[:, 1], "-o", color=color, lw=2.0, ms=3, alpha=alpha, label=label)
-    ax.plot(*base, "+", color=color, alpha=alpha)
 
 
 def _fig3_posture():
@@ -60,7 +52,7 @@ def fig3(out_dir: Path) -> list[Path]:
     fig, axes = plt.subplots(1, 2, figsize=(12, 6))
     ax = axes[0]
     for k in np.linspace(0, len(postures) - 1, 5).astype(int):
-        _draw_robot(ax, robot, postures[k], color=plt.cm.viridis(k / (len(postures) - 1)))
+        draw_planar_robot(ax, robot, postures[k], color=plt.cm.viridis(k / (len(postures) - 1)))
     ax.plot(tips[:, 0], tips[:, 1], "r-", lw=1.5, label="tip path (straight along $X_A$)")
     end = postures[-1]
     ax.plot(*tips[-1], "rx", ms=9, label=f"end: $\\phi$ = ({', '.join(f'{v:.1f}' for v in np.degrees(end))}) deg")
@@ -80,7 +72,7 @@ def fig3(out_dir: Path) -> list[Path]:
         ax, (0, 0), float(ws.maximum_reachable_radius(robot)), color="k", ls="--", lw=1, label="Area 3, $K_0+K_1+K_2$"
     )
     _circle(ax, (0, 0), float(ws.guaranteed_radius(robot)), color="tab:green", ls="--", lw=1, label="eq. (8) radius")
-    _draw_robot(ax, robot, phi, color="0.3")
+    draw_planar_robot(ax, robot, phi, color="0.3")
     ax.plot(*start, "ko", ms=5, label="start tip")
     ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ax.set_title("(b) Straight-Path Workspace from $\\phi$ = (0, -60, 120) deg")
@@ -106,7 +98,7 @@ def _fig4_panel(ax, robot, title):
         _circle(ax, c2, hole2, color="tab:blue", lw=1, ls=":", label=f"Area 2 hole, |$K_1-K_2$| = {hole2:.3f} m")
     _circle(ax, (0, 0), r3, color="k", lw=2, label=f"Area 3 Maximum Reachable, {r3:.2f} m")
     _circle(ax, (0, 0), r5, color="tab:green", lw=2, label=f"Area 5 Guaranteed (eq. 8), {r5:.2f} m")
-    _draw_robot(ax, robot, np.zeros(robot.n_links + 1), color="0.4")
+    draw_planar_robot(ax, robot, np.zeros(robot.n_links + 1), color="0.4")
     ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
     ok = bool(ws.attachment_condition(robot))
     bound = float(robot.total_mass / robot.base_mass * (robot.reach - K[1:].sum()))
@@ -211,10 +203,10 @@ def fig5(out_dir: Path) -> list[Path]:
             lw=1.5,
             label=f"Area 4 after a cyclic maneuver turns the base by {np.degrees(delta):.0f} deg",
         )
-        _draw_robot(ax, robot, phi + np.array([delta, 0.0, 0.0]), color="tab:purple", alpha=0.4)
+        draw_planar_robot(ax, robot, phi + np.array([delta, 0.0, 0.0]), color="tab:purple", alpha=0.4)
         ax.plot(*C, "s", color="tab:purple", ms=8)
         ax.annotate("C", C, xytext=(6, 6), textcoords="offset points", fontsize=12)
-    _draw_robot(ax, robot, phi, color="0.3")
+    draw_planar_robot(ax, robot, phi, color="0.3")
     for name, point, color in (("A", A, "tab:red"), ("B", B, "tab:blue")):
         ax.plot(*point, "o", color=color, ms=8)
         ax.annotate(name, point, xytext=(6, 6), textcoords="offset points", fontsize=12)
