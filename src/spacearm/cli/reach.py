@@ -17,19 +17,10 @@ import numpy as np
 
 from .._core.errors import ConfigError, RunError
 from ..io.folders import check_output_folder, lock_folder, stage_folder, swap_in
+from ._args import comma_numbers
 
 # The files a reach run writes; the other entries of --out are kept.
 _REACH_FILES = frozenset({"reach.png", "reach.npz", "reach.gif", "reach.html"})
-
-
-def _numbers(text: str, count: int, what: str) -> np.ndarray:
-    try:
-        values = np.array([float(v) for v in text.split(",")])
-    except ValueError:
-        raise ConfigError(f"{what}: expected {count} comma-separated numbers, got {text!r}") from None
-    if values.size != count or not np.all(np.isfinite(values)):
-        raise ConfigError(f"{what}: expected {count} finite comma-separated numbers, got {text!r}")
-    return values
 
 
 @contextlib.contextmanager
@@ -133,10 +124,10 @@ def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
     from ..io import write_npz
     from ..planning import plan_reach
 
-    phi = _numbers(args.start, robot.n_links + 1, "--from")
+    phi = comma_numbers(args.start, robot.n_links + 1, "--from")
     if not args.radians:
         phi = np.radians(phi)
-    target = _numbers(args.target, 2, "--to")
+    target = comma_numbers(args.target, 2, "--to")
     plan = plan_reach(robot, phi, target)
     arrays = dict(
         joints=plan.postures[:, 1:],
@@ -181,15 +172,15 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
     from ..planning import plan_reach
 
     n = robot.n_joints
-    q = _numbers(args.start, n, "--from")
+    q = comma_numbers(args.start, n, "--from")
     prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
     if not args.radians:
         q = np.where(prismatic, q, np.radians(q))
     R0 = np.eye(3)
     if args.attitude is not None:
-        rpy = _numbers(args.attitude, 3, "--attitude-rpy")
+        rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
         R0 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
-    target = _numbers(args.target, 3, "--to")
+    target = comma_numbers(args.target, 3, "--to")
     if args.animate:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
     plan = plan_reach(robot, q, target, base_rotation=R0)

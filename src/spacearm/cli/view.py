@@ -14,16 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .._core.errors import ConfigError
-
-
-def _numbers(text: str, count: int, what: str) -> np.ndarray:
-    try:
-        values = np.array([float(v) for v in text.split(",")])
-    except ValueError:
-        raise ConfigError(f"{what}: expected {count} comma-separated numbers, got {text!r}") from None
-    if values.size != count or not np.all(np.isfinite(values)):
-        raise ConfigError(f"{what}: expected {count} finite comma-separated numbers, got {text!r}")
-    return values
+from ._args import comma_numbers
 
 
 def register(subparsers) -> None:
@@ -75,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     count = robot.n_links + 1 if planar else robot.n_joints
     posture = None
     if args.posture is not None:
-        posture = _numbers(args.posture, count, "--posture")
+        posture = comma_numbers(args.posture, count, "--posture")
         if not args.radians:
             prismatic = np.zeros(count, bool) if planar else np.array([k == "prismatic" for k in robot.joint_kinds])
             posture = np.where(prismatic, posture, np.radians(posture))
@@ -85,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(
                 "--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude"
             )
-        attitude = _numbers(args.attitude, 3, "--attitude-rpy")
+        attitude = comma_numbers(args.attitude, 3, "--attitude-rpy")
         if not args.radians:
             attitude = np.radians(attitude)
     path = write_arm_view(robot, Path(args.out) / f"{robot.name}.html", posture, attitude_rpy=attitude)
