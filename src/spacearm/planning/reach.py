@@ -187,15 +187,23 @@ def _loop_history(robot: PlanarRobot, phi_from: np.ndarray, loop: ReorientationL
     return all_postures, all_tips
 
 
+@jax.jit
+def _squared_radius_and_gradient(robot: PlanarRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """|tip|^2 about the centroid at phi = (0, q), and its gradient in q (one program per shape)."""
+
+    def squared_radius(q):
+        p = tip_position(robot, jnp.concatenate([jnp.zeros((1,), q.dtype), q]))
+        return jnp.sum(p * p)
+
+    return jax.value_and_grad(squared_radius)(q)
+
+
 def _reposition_joints(robot: PlanarRobot, q0: np.ndarray, radius: float) -> np.ndarray:
     """Joint angles nearest q0 (minimum-norm Newton steps) whose tip is ``radius`` from the centroid."""
 
-    def squared_radius(q):
-        phi = jnp.concatenate([jnp.zeros((1,), q.dtype), q])
-        p = tip_position(robot, phi)
-        return jnp.sum(p * p)
+    def value_and_grad(q):
+        return _squared_radius_and_gradient(robot, q)
 
-    value_and_grad = jax.jit(jax.value_and_grad(squared_radius))
     lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
     q = np.array(q0, float)
     eps = float(jnp.finfo(jnp.result_type(float)).eps)
