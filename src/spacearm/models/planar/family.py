@@ -15,10 +15,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import spacearm.models.planar.fields as planar_fields  # the module, not the package (no cycle)
+
 from ..._core.groups import SO2
 from ..._core.magnus import composite_gauss, line_integral
 from ..family import RobotFamily
-from . import fields as planar_fields
 from .closed_forms import (
     arm_jacobian,
     base_jacobian,

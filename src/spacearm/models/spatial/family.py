@@ -22,11 +22,12 @@ from typing import Any, ClassVar
 import jax
 import jax.numpy as jnp
 
+import spacearm.models.spatial.fields as spatial_fields  # the module, not the package (no cycle)
+
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import RobotFamily
-from . import fields as spatial_fields
 from .primitives import (
     arm_inertia,
     base_twist_map,
