@@ -1,0 +1,13 @@
+"""The tree family: several arms, or one branched URDF, on a free-floating bus (k tips).
+
+- `robot`: the `TreeRobot` pytree (static parents and tip bodies), its validation, and
+  `tree_from_chains` (serial arms on their mounts as one tree).
+"""
+
+from .robot import (
+    TreeLabels as TreeLabels,
+    TreeRobot as TreeRobot,
+    stack_tree_robots as stack_tree_robots,
+    support_mask as support_mask,
+    tree_from_chains as tree_from_chains,
+)
