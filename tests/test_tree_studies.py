@@ -1,0 +1,203 @@
+"""Studies over several arms: the design fields of a tree, per-tip and whole-system
+averages and objectives, and sweeps and design problems on a two-arm robot.
+
+References: the spatial fields (an established single-arm implementation) on the same
+URDF chain, a tree built from a URDF chain scaled by hand, direct means of
+``sa.manipulability`` over the same QMC points, and finite differences.
+"""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from spacearm._core.errors import ConfigError
+from spacearm.models.spatial import fields as spatial_fields
+from spacearm.models.spatial.robot import robot_from_chain
+from spacearm.models.spatial.schema import locate_package_file
+from spacearm.models.spatial.urdf import parse_urdf
+from spacearm.models.tree import fields as tree_fields
+from spacearm.models.tree.robot import tree_from_chains
+
+MOUNT_XYZ = [[0.3, 0.5526, 0.08], [0.3, -0.5526, 0.08]]
+MOUNT_RPY = [[-1.5708, 0.0, 0.0], [1.5708, 0.0, 0.0]]
+BUS = {"base_mass": 400.0, "base_com": [0.01, -0.02, 0.03], "base_inertia": np.diag([60.0, 62.0, 64.0])}
+
+
+@pytest.fixture(scope="module")
+def ur5_chain():
+    path = locate_package_file("test", "example-robot-data", "robots/ur_description/urdf/ur5_robot.urdf")
+    with open(path) as file:
+        return parse_urdf(file.read(), source=path, root_link="base_link", tip="tool0")
+
+
+def _dual(chains):
+    return tree_from_chains(list(chains), arm_names=["left", "right"], mount_xyz=MOUNT_XYZ, mount_rpy=MOUNT_RPY, **BUS)
+
+
+@pytest.fixture(scope="module")
+def dual(ur5_chain):
+    return _dual([ur5_chain, ur5_chain])
+
+
+def _leaves(robot):
+    return {key.name: np.asarray(value) for key, value in jax.tree_util.tree_leaves_with_path(robot) for key in key}
+
+
+def _changed(before, after):
+    """The leaves that differ between two designs."""
+    a, b = _leaves(before), _leaves(after)
+    return {name for name in a if not np.array_equal(a[name], b[name])}
+
+
+# Fields -------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "leaf", "index"),
+    [
+        ("arms.right.mount.xyz[0]", 0.45, "mount_xyz", (1, 0)),
+        ("arms.right.mount.xyz[2]", -0.1, "mount_xyz", (1, 2)),
+        ("arms.left.mount.rpy[1]", 0.3, "mount_rpy", (0, 1)),
+        ("base.mass", 250.0, "base_mass", ()),
+        ("base.com[1]", 0.07, "base_com", (1,)),
+        ("links.right/forearm_link.mass", 3.0, "link_mass", (8,)),
+        ("links.left/upper_arm_link.mass", 9.0, "link_mass", (1,)),
+    ],
+)
+def test_absolute_fields_round_trip(dual, field, value, leaf, index):
+    """set_field writes exactly that number (and what follows from it), field_columns reads it back."""
+    robot = tree_fields.set_field(dual, field, value)
+    assert np.asarray(getattr(robot, leaf))[index] == pytest.approx(value, abs=0, rel=1e-15)
+    column = next(iter(tree_fields.field_columns(robot, [field]).values()))
+    assert float(column) == pytest.approx(value, rel=1e-15)
+    expected = {leaf} | ({"link_inertia"} if leaf == "link_mass" else set())
+    assert _changed(dual, robot) == expected
+    changed = np.argwhere(np.asarray(getattr(robot, leaf)) != np.asarray(getattr(dual, leaf)))
+    assert [tuple(i) for i in changed] in ([index], [])  # only that entry
+    robot.replace()  # a valid design
+
+
+def test_rpy_deg_and_relative(dual):
+    degrees = tree_fields.set_field(dual, "arms.right.mount.rpy_deg[2]", 30.0)
+    assert degrees.mount_rpy[1, 2] == pytest.approx(np.pi / 6, rel=1e-15)
+    doubled = tree_fields.set_field(dual, "arms.left.mount.xyz[1]", 2.0, relative=True)
+    assert doubled.mount_xyz[0, 1] == pytest.approx(2 * MOUNT_XYZ[0][1], rel=1e-15)
+    assert np.array_equal(doubled.mount_xyz[1], dual.mount_xyz[1])
+
+
+def test_batched_numpy_and_traced_fields_agree(dual):
+    """A numpy batch (sweeps) and a traced single design (problems) give the same numbers."""
+    values = np.array([0.8, 1.0, 1.3])
+    batch = jax.tree_util.tree_map(lambda x: np.repeat(np.asarray(x)[None], 3, axis=0), dual)
+    batched = tree_fields.set_field(batch, "arms.right.length", values)
+    traced = jax.jit(lambda s: tree_fields.set_field(dual, "arms.right.length", s))(1.3)
+    for name, leaf in _leaves(traced).items():
+        np.testing.assert_array_equal(leaf, _leaves(batched)[name][2], err_msg=name)
+
+
+def _scaled_chain(chain, s: float, mass: float = 1.0):
+    """The URDF chain scaled by hand: lengths times s, masses times ``mass``, inertias times mass s^2."""
+    prismatic = np.array([kind == "prismatic" for kind in chain.joint_kinds])
+    return dataclasses.replace(
+        chain,
+        joint_translation=chain.joint_translation * s,
+        body_com=chain.body_com * s,
+        body_mass=chain.body_mass * mass,
+        body_inertia=chain.body_inertia * mass * s * s,
+        tip_translation=chain.tip_translation * s,
+        joint_lower=np.where(prismatic, chain.joint_lower * s, chain.joint_lower),
+        joint_upper=np.where(prismatic, chain.joint_upper * s, chain.joint_upper),
+    )
+
+
+def test_arm_length_and_mass_equal_a_tree_of_a_scaled_urdf(dual, ur5_chain):
+    """arms.right.length = 1.3 and arms.right.mass = 0.7 give the tree of a URDF scaled by hand
+    (the left arm and both mounts untouched)."""
+    robot = tree_fields.set_field(dual, "arms.right.length", 1.3)
+    robot = tree_fields.set_field(robot, "arms.right.mass", 0.7)
+    reference = _dual([ur5_chain, _scaled_chain(ur5_chain, 1.3, 0.7)])
+    for name, leaf in _leaves(reference).items():
+        np.testing.assert_allclose(_leaves(robot)[name], leaf, rtol=1e-14, atol=0, err_msg=name)
+    columns = tree_fields.field_columns(robot, ["arms.right.mass", "arms.right.length"])
+    arm_mass = float(np.sum(ur5_chain.body_mass))
+    assert columns["right_mass_kg"] == pytest.approx(0.7 * arm_mass, rel=1e-14)
+    assert float(tree_fields.arm_mass(robot)) == pytest.approx(1.7 * arm_mass, rel=1e-14)
+
+
+@pytest.mark.parametrize(
+    ("tree_field", "spatial_field", "value"),
+    [
+        ("arms.only.mount.xyz[1]", "mount.xyz[1]", 0.2),
+        ("arms.only.mount.rpy_deg[0]", "mount.rpy_deg[0]", 12.0),
+        ("arms.only.mass", "arm.mass", 1.4),
+        ("arms.only.length", "arm.length", 0.8),
+        ("base.inertia", "base.inertia", 1.5),
+        ("links.upper_arm_link.mass", "links.upper_arm_link.mass", 10.0),
+        ("links.upper_arm_link.length", "links.upper_arm_link.length", 1.25),
+        ("links.wrist_3_link.length", "links.wrist_3_link.length", 2.0),
+        ("links.shoulder_link.length", "links.shoulder_link.length", 0.9),
+    ],
+)
+def test_one_arm_tree_fields_equal_the_spatial_fields(ur5_chain, tree_field, spatial_field, value):
+    """On a tree of one arm every field sets what the spatial field sets on the same arm."""
+    bus = {**BUS, "mount_xyz": MOUNT_XYZ[0], "mount_rpy": MOUNT_RPY[0]}
+    spatial = spatial_fields.set_field(robot_from_chain(ur5_chain, **bus), spatial_field, value)
+    tree = tree_from_chains(
+        [ur5_chain], arm_names=["only"], **{k: [v] if k.startswith("mount") else v for k, v in bus.items()}
+    )
+    tree = tree_fields.set_field(tree, tree_field, value)
+    for name, leaf in _leaves(spatial).items():
+        np.testing.assert_array_equal(np.reshape(_leaves(tree)[name], np.shape(leaf)), leaf, err_msg=name)
+
+
+@pytest.mark.parametrize(
+    ("field", "message"),
+    [
+        ("arms.rigth.mass", "unknown arm 'rigth' (did you mean 'right'?)"),
+        ("arms.right.mount.xyz[3]", "index 3 out of range"),
+        ("links.upper_arm_link.mass", "several arms have a link 'upper_arm_link'"),
+        ("links.left/forearm.length", "did you mean 'left/forearm_link'?"),
+        ("links.right/tool0.mass", "merged into body 'right/wrist_3_link'"),
+        ("links.left/forearm_link.size", "a link field is 'mass' or 'length'"),
+        ("mount.xyz[0]", "arms.<arm>.mount.xyz"),
+        ("arms.left.colour", "an arm field is"),
+    ],
+)
+def test_bad_fields_name_the_field(dual, field, message):
+    with pytest.raises(ConfigError) as error:
+        tree_fields.check_field("sweep.yaml: axes.x", field, dual)
+    assert message in str(error.value)
+    assert str(error.value).startswith("sweep.yaml: axes.x.field")
+
+
+def test_conflicts_stages_and_units(dual):
+    conflict = tree_fields.conflicting_number
+    assert conflict("arms.right.mass", "links.right/forearm_link.mass", dual) == "links.right/forearm_link.mass"
+    assert conflict("arms.left.mass", "links.right/forearm_link.mass", dual) is None
+    assert conflict("arms.right.mount.rpy[1]", "arms.right.mount.rpy_deg[1]", dual)
+    assert conflict("arms.right.length", "links.right/forearm_link.length", dual) is None
+    assert conflict("arms.right.length", "arms.right.mass", dual) is None
+    stage = tree_fields.field_stage
+    assert stage("arms.right.mount.xyz[0]") < stage("arms.right.length") < stage("arms.right.mass")
+    unit = tree_fields.field_unit
+    assert [unit(f) for f in ("arms.a.mount.xyz[0]", "arms.a.mount.rpy[0]", "arms.a.mount.rpy_deg[0]")] == [
+        "m",
+        "rad",
+        "deg",
+    ]
+    assert unit("arms.a.mass") == unit("arms.a.length") == unit("links.x.length") == "1"
+    assert unit("links.x.mass") == unit("base.mass") == "kg"
+    assert "arms.a.mass" in tree_fields.FACTOR_FIELDS and "links.x.mass" not in tree_fields.FACTOR_FIELDS
+
+
+def test_fields_are_differentiable(dual):
+    """d(arm mass)/d(arms.right.mass) is the right arm's mass; a mount field moves one number."""
+    mass = lambda s: tree_fields.arm_mass(tree_fields.set_field(dual, "arms.right.mass", s))
+    assert float(jax.grad(mass)(1.0)) == pytest.approx(
+        float(np.sum(np.asarray(dual.root_mass)[1]) + np.sum(np.asarray(dual.link_mass)[6:])), rel=1e-14
+    )
+    mount = jax.grad(lambda x: jnp.sum(tree_fields.set_field(dual, "arms.right.mount.xyz[2]", x).mount_xyz))(0.2)
+    assert float(mount) == 1.0
