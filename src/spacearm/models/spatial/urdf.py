@@ -512,33 +512,28 @@ def unlocked_message(source: str, joints: list[_Joint], between: str, keys: str,
 Pose = tuple[str, np.ndarray, np.ndarray]
 
 
-def rigid_closure(
-    document: UrdfDocument, start: str, cut: set[str], locks: Mapping[str, float]
-) -> tuple[list[Pose], list[_Joint]]:
-    """The links rigidly attached to ``start`` with their poses in start's frame, and the
-    movable joints met that are neither cut (a kept joint) nor locked (not crossed).
+def rigid_closure(document: UrdfDocument, start: str, cut: set[str], locks: Mapping[str, float]) -> list[Pose]:
+    """The links rigidly attached to ``start``, with their poses in start's frame.
 
-    Fixed joints are crossed, locked joints at their lock value; joints in ``cut`` end
-    the body.
+    Fixed joints are crossed, locked joints at their lock value; joints in ``cut`` (the
+    kept joints) end the body. Every other movable joint must be locked by the caller.
     """
     out = [(start, np.eye(3), np.zeros(3))]
     stack = [(start, np.eye(3), np.zeros(3))]
-    unlocked: list[_Joint] = []
     while stack:
         name, rotation, translation = stack.pop()
         for joint in document.children[name]:
             if joint.name in cut:
                 continue
-            if joint.kind in MOVABLE and joint.name not in locks:
-                unlocked.append(joint)
-                continue
+            if joint.kind in MOVABLE and joint.name not in locks:  # the callers lock them all first
+                raise ConfigError(f"{document.source}: joint '{joint.name}' is neither kept nor locked")
             motion_r, motion_t = _joint_motion(joint, float(locks.get(joint.name, 0.0)))
             r = rotation @ joint.rotation
             t = translation + rotation @ joint.translation
             r, t = r @ motion_r, t + r @ motion_t
             out.append((joint.child, r, t))
             stack.append((joint.child, r, t))
-    return out, unlocked
+    return out
 
 
 def merge_links(document: UrdfDocument, body: list[Pose]) -> tuple[float, np.ndarray, np.ndarray]:
@@ -612,18 +607,17 @@ def parse_urdf(
             f"at most {MAX_ARM_JOINTS} are supported (lock the others in {keys}lock_joints)"
         )
     arm_names = {j.name for j in arm}
-    if lock_others:
-        for joint in document.subtree_joints(root_link):
-            if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints:
-                lock_joints[joint.name] = held_value(joint)
+    others = [
+        joint
+        for joint in document.subtree_joints(root_link)
+        if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints
+    ]
+    if others and not lock_others:
+        raise ConfigError(unlocked_message(source, others, f"from '{root_link}' to '{tip}'", keys))
+    lock_joints.update({joint.name: held_value(joint) for joint in others})
 
     starts = [root_link] + [j.child for j in arm]
-    closures = [rigid_closure(document, start, arm_names, lock_joints) for start in starts]
-    unlocked = [joint for _, missed in closures for joint in missed]
-    if unlocked:
-        between = f"from '{root_link}' to '{tip}'"
-        raise ConfigError(unlocked_message(source, unlocked, between, keys))
-    bodies = [body for body, _ in closures]
+    bodies = [rigid_closure(document, start, arm_names, lock_joints) for start in starts]
     for body in bodies:
         for name, _, _ in body:
             check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")

@@ -169,20 +169,18 @@ def parse_urdf_tree(
             f"{source}: the paths from '{base_link}' to the tips have {len(order)} movable joints; "
             f"at most {MAX_TREE_JOINTS} are supported (lock some in {keys}lock_joints)"
         )
-    if lock_others:
-        for joint in document.subtree_joints(base_link):
-            if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints:
-                lock_joints[joint.name] = held_value(joint)
+    others = [
+        joint
+        for joint in document.subtree_joints(base_link)
+        if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints
+    ]
+    if others and not lock_others:
+        between = f"from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
+        raise ConfigError(unlocked_message(source, others, between, keys))
+    lock_joints.update({joint.name: held_value(joint) for joint in others})
 
     starts = [base_link] + [joint.child for joint in order]
-    closures = [rigid_closure(document, start, kept, lock_joints) for start in starts]
-    unlocked = [joint for _, missed in closures for joint in missed]
-    if unlocked:
-        names = {joint.name for joint in unlocked}
-        unlocked = [joint for joint in document.joints.values() if joint.name in names]  # file order
-        between = f"from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
-        raise ConfigError(unlocked_message(source, unlocked, between, keys))
-    bodies = [body for body, _ in closures]
+    bodies = [rigid_closure(document, start, kept, lock_joints) for start in starts]
     for body in bodies:
         for name, _, _ in body:
             check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
