@@ -566,3 +566,57 @@ def test_spart_style_point_masses_need_the_opt_in():
     assert tree.body_mass[0] == 120.0 and tree.body_links[0] == ("Spacecraft", "Panel")
     np.testing.assert_allclose(tree.body_com[0], [0, -2.25 * 20 / 120, 0])
     assert tree.urdf_types == ("continuous", "continuous")
+
+
+# Both forms -------------------------------------------------------------------------------
+
+
+def _baxter_arm(side, **changes):
+    arm = {
+        "name": side,
+        "urdf": {"package": ERD, "path": BAXTER},
+        "root_link": f"{side}_arm_mount",
+        "tip": f"{side}_gripper",
+        "inertia_as_written": True,
+        "lock_others": True,
+        "mount": {"xyz": [0.0, 0.3 if side == "left" else -0.3, 0.0]},
+    }
+    arm.update(changes)
+    return {k: v for k, v in arm.items() if v is not None}
+
+
+def test_arms_take_lock_others(tmp_path):
+    erd(BAXTER)
+    robot = sa.load_robot(_arms_file(tmp_path, [_baxter_arm("left"), _baxter_arm("right")]))
+    assert robot.n_joints == 14 and robot.tip_names == ("left/left_gripper", "right/right_gripper")
+    assert {"l_gripper_l_finger", "l_gripper_r_finger"} <= set(robot.labels.body_links[6])
+    with pytest.raises(sa.ConfigError) as error:
+        sa.load_robot(_arms_file(tmp_path, [_baxter_arm("left"), _baxter_arm("right", lock_others=None)]))
+    message = str(error.value)
+    assert message.startswith(f"{tmp_path / 'robot.yaml'}: arms[1].urdf: ")
+    assert "2 joints are off the path from 'right_arm_mount' to 'right_gripper' and not locked" in message
+    assert "'r_gripper_l_finger_joint' (prismatic), 'r_gripper_r_finger_joint' (prismatic)" in message
+    assert "arms[1].lock_others: true" in message
+
+
+def test_arms_from_different_urdfs_with_the_same_joint_names(tmp_path):
+    erd(UR5)
+    ur10 = _ur5_arm("big", urdf={"package": ERD, "path": "robots/ur_description/urdf/ur10_robot.urdf"})
+    robot = sa.load_robot(_arms_file(tmp_path, [_ur5_arm("small"), ur10]))
+    assert robot.joint_names == tuple(f"{arm}/{j}" for arm in ("small", "big") for j in UR5_JOINTS)
+    assert robot.tip_names == ("small/tool0", "big/tool0")
+    ur10_mass = xml_subtree_mass(erd("robots/ur_description/urdf/ur10_robot.urdf"), "base_link")
+    assert total_mass(robot) == pytest.approx(100.0 + 20.9939 + ur10_mass, rel=1e-13)
+
+
+@pytest.mark.parametrize("name", ["dual-ur5-servicer", "baxter-system", "tiago-dual-system", "three-arm-servicer"])
+def test_shipped_tree_files_validate(name, capsys):
+    erd(UR5)
+    assert main(["validate", os.path.join(CONFIGS, f"{name}.yaml")]) == 0
+    assert f"valid robot ({name}, " in capsys.readouterr().out
+
+
+def test_single_arm_files_are_unchanged():
+    """An ``arm:`` file is still a spatial robot with its shapes (no tip axis)."""
+    robot = sa.load_robot(os.path.join(CONFIGS, "ur5-smallsat.yaml"))
+    assert type(robot).__name__ == "SpatialRobot" and robot.tip_translation.shape == (3,)

@@ -493,18 +493,23 @@ def held_value(joint: _Joint) -> float:
     return float(min(max(0.0, joint.lower), joint.upper))
 
 
-def unlocked_message(source: str, joints: list[_Joint], between: str, keys: str, lock_others: bool = True) -> str:
-    """One message naming every movable joint off the kept paths that is not locked."""
+def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -> str:
+    """One message naming every movable joint that is not locked off the kept paths.
+
+    Args:
+        where: the paths, ``"off the path from 'a' to 'b'"``.
+        keys: the robot-file section whose ``lock_joints`` and ``lock_others`` the advice names.
+    """
     shown = ", ".join(f"'{j.name}' ({j.kind})" for j in joints)
     example = ", ".join(f"{j.name}: {held_value(j):g}" for j in joints[:2])
-    others = f", or set {keys}lock_others: true to hold each at 0 (or its nearest limit)" if lock_others else ""
+    others = f", or set {keys}lock_others: true to hold each at 0 (or its nearest limit)"
     if len(joints) == 1:
         return (
-            f"{source}: joint {shown} is off the path {between} and not locked; add it to "
+            f"{source}: joint {shown} is {where} and not locked; add it to "
             f"{keys}lock_joints (e.g. {{{example}}}) to hold it fixed{others}"
         )
     return (
-        f"{source}: {len(joints)} joints are off the paths {between} and not locked: {shown}; add them to "
+        f"{source}: {len(joints)} joints are {where} and not locked: {shown}; add them to "
         f"{keys}lock_joints (e.g. {{{example}, ...}}) to hold them fixed{others}"
     )
 
@@ -613,7 +618,8 @@ def parse_urdf(
         if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints
     ]
     if others and not lock_others:
-        raise ConfigError(unlocked_message(source, others, f"from '{root_link}' to '{tip}'", keys))
+        where = f"off the path from '{root_link}' to '{tip}'"
+        raise ConfigError(unlocked_message(source, others, where, keys))
     lock_joints.update({joint.name: held_value(joint) for joint in others})
 
     starts = [root_link] + [j.child for j in arm]

@@ -175,8 +175,8 @@ def parse_urdf_tree(
         if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints
     ]
     if others and not lock_others:
-        between = f"from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
-        raise ConfigError(unlocked_message(source, others, between, keys))
+        where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
+        raise ConfigError(unlocked_message(source, others, where, keys))
     lock_joints.update({joint.name: held_value(joint) for joint in others})
 
     starts = [base_link] + [joint.child for joint in order]
