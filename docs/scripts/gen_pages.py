@@ -80,6 +80,16 @@ API_MODULES: list[tuple[str, str, str]] = [
         "named spatial design numbers (mount, bus, arm scale factors, link masses)",
     ),
     (
+        "spacearm.models.tree.schema",
+        "Models",
+        "the tree robot file: several arms on one bus (`arms:`) or one whole-system URDF (`system:`)",
+    ),
+    (
+        "spacearm.models.tree.urdf",
+        "Models",
+        "the whole-system URDF reader: the bus link, the paths to the tips, lock_others",
+    ),
+    (
         "spacearm.kinematics",
         "Kinematics",
         "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives",

@@ -50,6 +50,8 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     config = read_yaml(path, what="YAML file")
     if is_robot_mapping(config):
         robot = robot_from_file_mapping(config, source=path, base_dir=os.path.dirname(os.path.abspath(path)))
+        if hasattr(robot, "tip_bodies"):  # several arms on one bus
+            return "robot", f"{robot.name}, {robot.n_joints} joints, tips {', '.join(robot.tip_names)}"
         return "robot", f"{robot.name}, {robot.n_links} links, L = {float(robot.reach):g} m"
     if isinstance(config, Mapping) and ("variables" in config or "objectives" in config):
         problem = load_design_problem(path)
@@ -60,7 +62,7 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
         check_sweep_memory(spec)  # as run_sweep does before it allocates anything
         return "sweep", spec.summary()
     raise ConfigError(
-        f"{path}: neither a robot file (needs 'base' and 'links'), a sweep file (needs 'robot' and 'axes') "
+        f"{path}: neither a robot file (needs 'base' and 'links', 'arm', 'arms' or 'system'), a sweep file (needs 'robot' and 'axes') "
         "nor a design problem (needs 'variables' and 'objectives')"
     )
 

@@ -9,6 +9,7 @@ arm:
   root_link: base_link
   tip: tool0
   lock_joints: {}            # joint: value (rad or m), for joints held fixed
+  lock_others: false         # true: hold every movable joint off the path at 0 (or its nearest limit)
   inertia_as_written: false  # true: take link inertias that break the triangle inequality
 ```
 
@@ -33,12 +34,22 @@ from ..._core.schema import check_keys, is_number, number, quote, read_yaml, rob
 from .robot import SpatialRobot, robot_from_chain
 from .urdf import check_inertia, read_urdf
 
-__all__ = ["is_spatial_config", "load_spatial_robot", "locate_package_file", "spatial_robot_from_mapping"]
+__all__ = [
+    "is_spatial_config",
+    "load_spatial_robot",
+    "locate_package_file",
+    "read_base",
+    "read_flag",
+    "read_lock_joints",
+    "read_mount",
+    "spatial_robot_from_mapping",
+    "urdf_path",
+]
 
 _TOP_KEYS = {"name", "description", "base", "mount", "arm"}
 _BASE_KEYS = {"mass", "com", "inertia"}
 _MOUNT_KEYS = {"xyz", "rpy", "rpy_deg"}
-_ARM_KEYS = {"urdf", "root_link", "tip", "lock_joints", "inertia_as_written"}
+_ARM_KEYS = {"urdf", "root_link", "tip", "lock_joints", "lock_others", "inertia_as_written"}
 _PACKAGE_KEYS = {"package", "path"}
 
 
@@ -64,8 +75,11 @@ def _array(where: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
     return np.array([number(f"{where}[{i}]", v) for i, v in enumerate(value)], dtype=float)
 
 
-def locate_package_file(source: str, package: str, path: str) -> str:
+def locate_package_file(source: str, package: str, path: str, key: str = "arm.urdf") -> str:
     """The absolute path of ``path`` inside the installed distribution ``package``.
+
+    Args:
+        key: the robot-file field that named the file (for messages).
 
     Raises:
         ConfigError: when the distribution is not installed or has no such file.
@@ -73,28 +87,75 @@ def locate_package_file(source: str, package: str, path: str) -> str:
     try:
         distribution = importlib.metadata.distribution(package)
     except importlib.metadata.PackageNotFoundError:
-        raise ConfigError(f"{source}: arm.urdf.package: '{package}' is not installed (pip install {package})") from None
+        raise ConfigError(f"{source}: {key}.package: '{package}' is not installed (pip install {package})") from None
     wanted = path.strip("/").replace("\\", "/")
     for file in distribution.files or ():
         name = str(file).replace("\\", "/")
         if name == wanted or name.endswith("/" + wanted):
             return os.fspath(distribution.locate_file(file))
-    raise ConfigError(f"{source}: arm.urdf.path: package '{package}' has no file '{path}'")
+    raise ConfigError(f"{source}: {key}.path: package '{package}' has no file '{path}'")
 
 
-def _urdf_path(source: str, arm: Mapping, base_dir: str) -> str:
+def urdf_path(source: str, arm: Mapping, base_dir: str, section: str = "arm") -> str:
+    """The URDF file an ``arm``-like section names: a path relative to ``base_dir``, or
+    ``{package, path}`` (see `locate_package_file`). ``section`` names it in messages."""
     if "urdf" not in arm:
-        raise ConfigError(f"{source}: arm.urdf: missing required key")
+        raise ConfigError(f"{source}: {section}.urdf: missing required key")
     value = arm["urdf"]
     if isinstance(value, str):
         return value if os.path.isabs(value) else os.path.join(base_dir, value)
     if isinstance(value, Mapping):
-        check_keys(f"{source}: arm.urdf: ", value, _PACKAGE_KEYS)
+        check_keys(f"{source}: {section}.urdf: ", value, _PACKAGE_KEYS)
         for key in ("package", "path"):
             if not isinstance(value.get(key), str):
-                raise ConfigError(f"{source}: arm.urdf.{key}: missing or not a string")
-        return locate_package_file(source, value["package"], value["path"])
-    raise ConfigError(f"{source}: arm.urdf: must be a path or {{package: ..., path: ...}}, got {quote(value)}")
+                raise ConfigError(f"{source}: {section}.urdf.{key}: missing or not a string")
+        return locate_package_file(source, value["package"], value["path"], f"{section}.urdf")
+    raise ConfigError(f"{source}: {section}.urdf: must be a path or {{package: ..., path: ...}}, got {quote(value)}")
+
+
+def read_base(source: str, config: Mapping) -> tuple[float, np.ndarray, np.ndarray]:
+    """The ``base:`` section (the bus): mass (positive), com (default 0) and inertia (checked)."""
+    base = _mapping(f"{source}: base", config["base"], _BASE_KEYS)
+    check_keys(f"{source}: base: ", base, _BASE_KEYS)
+    for key in ("mass", "inertia"):
+        if key not in base:
+            raise ConfigError(f"{source}: base.{key}: missing required key")
+    base_mass = number(f"{source}: base.mass", base["mass"])
+    if base_mass <= 0:
+        raise ConfigError(f"{source}: base.mass: must be positive, got {base_mass!r}")
+    base_com = _array(f"{source}: base.com", base.get("com", [0.0, 0.0, 0.0]), (3,))
+    base_inertia = _array(f"{source}: base.inertia", base["inertia"], (3, 3))
+    check_inertia(f"{source}: base.inertia", base_inertia, positive=True, triangle=True)
+    return base_mass, base_com, base_inertia
+
+
+def read_mount(where: str, value: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A ``mount:`` section ``{xyz, rpy | rpy_deg}`` (``where``: ``"robot.yaml: mount"``): xyz and rpy in rad."""
+    mount = _mapping(where, value, _MOUNT_KEYS)
+    check_keys(f"{where}: ", mount, _MOUNT_KEYS)
+    if "rpy" in mount and "rpy_deg" in mount:
+        raise ConfigError(f"{where}: give either 'rpy' (rad) or 'rpy_deg', not both")
+    mount_xyz = _array(f"{where}.xyz", mount.get("xyz", [0.0, 0.0, 0.0]), (3,))
+    if "rpy_deg" in mount:
+        mount_rpy = np.deg2rad(_array(f"{where}.rpy_deg", mount["rpy_deg"], (3,)))
+    else:
+        mount_rpy = _array(f"{where}.rpy", mount.get("rpy", [0.0, 0.0, 0.0]), (3,))
+    return mount_xyz, mount_rpy
+
+
+def read_flag(where: str, value: Any) -> bool:
+    """A true/false switch, else `ConfigError` naming ``where``."""
+    if not isinstance(value, bool):
+        raise ConfigError(f"{where}: must be true or false, got {quote(value)}")
+    return value
+
+
+def read_lock_joints(where: str, value: Any) -> dict[str, float]:
+    """A ``lock_joints`` mapping joint: value (numbers; the URDF reader checks names and limits)."""
+    lock = value or {}
+    if not isinstance(lock, Mapping):
+        raise ConfigError(f"{where}: must be a mapping joint: value")
+    return {str(k): number(f"{where}.{quote(str(k), 60)}", v) for k, v in lock.items()}
 
 
 def spatial_robot_from_mapping(
@@ -111,27 +172,8 @@ def spatial_robot_from_mapping(
         ConfigError: naming the file and the field.
     """
     name = robot_file_name(source, config, _TOP_KEYS)
-    base = _mapping(f"{source}: base", config["base"], _BASE_KEYS)
-    check_keys(f"{source}: base: ", base, _BASE_KEYS)
-    for key in ("mass", "inertia"):
-        if key not in base:
-            raise ConfigError(f"{source}: base.{key}: missing required key")
-    base_mass = number(f"{source}: base.mass", base["mass"])
-    if base_mass <= 0:
-        raise ConfigError(f"{source}: base.mass: must be positive, got {base_mass!r}")
-    base_com = _array(f"{source}: base.com", base.get("com", [0.0, 0.0, 0.0]), (3,))
-    base_inertia = _array(f"{source}: base.inertia", base["inertia"], (3, 3))
-    check_inertia(f"{source}: base.inertia", base_inertia, positive=True, triangle=True)
-
-    mount = _mapping(f"{source}: mount", config.get("mount", {}), _MOUNT_KEYS)
-    check_keys(f"{source}: mount: ", mount, _MOUNT_KEYS)
-    if "rpy" in mount and "rpy_deg" in mount:
-        raise ConfigError(f"{source}: mount: give either 'rpy' (rad) or 'rpy_deg', not both")
-    mount_xyz = _array(f"{source}: mount.xyz", mount.get("xyz", [0.0, 0.0, 0.0]), (3,))
-    if "rpy_deg" in mount:
-        mount_rpy = np.deg2rad(_array(f"{source}: mount.rpy_deg", mount["rpy_deg"], (3,)))
-    else:
-        mount_rpy = _array(f"{source}: mount.rpy", mount.get("rpy", [0.0, 0.0, 0.0]), (3,))
+    base_mass, base_com, base_inertia = read_base(source, config)
+    mount_xyz, mount_rpy = read_mount(f"{source}: mount", config.get("mount", {}))
 
     if "arm" not in config:
         raise ConfigError(f"{source}: arm: missing required key")
@@ -140,14 +182,10 @@ def spatial_robot_from_mapping(
     for key in ("root_link", "tip"):
         if not isinstance(arm.get(key), str):
             raise ConfigError(f"{source}: arm.{key}: missing or not a link name")
-    lock = arm.get("lock_joints") or {}
-    if not isinstance(lock, Mapping):
-        raise ConfigError(f"{source}: arm.lock_joints: must be a mapping joint: value")
-    lock = {str(k): number(f"{source}: arm.lock_joints.{quote(str(k), 60)}", v) for k, v in lock.items()}
-    as_written = arm.get("inertia_as_written", False)
-    if not isinstance(as_written, bool):
-        raise ConfigError(f"{source}: arm.inertia_as_written: must be true or false, got {quote(as_written)}")
-    urdf = _urdf_path(source, arm, os.fspath(base_dir))
+    lock = read_lock_joints(f"{source}: arm.lock_joints", arm.get("lock_joints"))
+    as_written = read_flag(f"{source}: arm.inertia_as_written", arm.get("inertia_as_written", False))
+    lock_others = read_flag(f"{source}: arm.lock_others", arm.get("lock_others", False))
+    urdf = urdf_path(source, arm, os.fspath(base_dir))
     try:
         chain = read_urdf(
             urdf,
@@ -156,6 +194,7 @@ def spatial_robot_from_mapping(
             lock_joints=lock,
             inertia_as_written=as_written,
             fields=f"{source}: arm.",
+            lock_others=lock_others,
         )
     except ConfigError as error:  # a problem inside the URDF: name the robot file's field first
         if str(error).startswith(f"{source}: "):

@@ -11,9 +11,15 @@ else below ``root_link`` is merged rigidly into the body it hangs from: fixed jo
 and movable joints named in ``lock_joints`` (held at the given value), on the path or
 in side branches (a camera, fingers). Merging composes the transforms and sums the
 spatial inertias. Links above ``root_link`` (a ``world`` link, a mobile base) are
-dropped. The ``tip`` is a link; its origin is the tip point and its axes the tip frame.
+dropped, unchecked. The ``tip`` is a link; its origin is the tip point and its axes the
+tip frame. A lock value must lie within the joint's limits; ``lock_others`` holds every
+movable joint off the path at 0 (or its nearest limit), and without it one message
+names every movable joint off the path that is not locked.
 
-Inertias as written: a link without ``<inertial>`` has zero mass and zero inertia. A
+The pieces (`parse_document`, `rigid_closure`, `merge_links`, `check_link`,
+`check_lock_joints`) also serve the tree reader, `spacearm.models.tree.urdf`.
+
+Inertias as written (checked for the links kept, not the dropped ones): a link without ``<inertial>`` has zero mass and zero inertia. A
 link with mass 0 is taken as written, inertia included, as Pinocchio does (vendor
 files often give the base link mass 0, sometimes with a non-zero inertia). A link with
 a positive mass needs a positive-definite inertia that satisfies the triangle
@@ -43,10 +49,19 @@ from ..._core.schema import MAX_MAGNITUDE, did_you_mean, quote
 
 __all__ = [
     "ArmChain",
+    "UrdfDocument",
     "check_inertia",
+    "check_link",
+    "check_lock_joints",
+    "held_value",
+    "merge_links",
+    "parse_document",
     "parse_urdf",
     "read_urdf",
+    "read_urdf_text",
+    "rigid_closure",
     "rpy_matrix",
+    "unlocked_message",
 ]
 
 MOVABLE = ("revolute", "continuous", "prismatic")
@@ -173,6 +188,7 @@ class _Link:
     mass: float
     com: np.ndarray  # in the link frame
     inertia: np.ndarray  # about the com, link axes
+    tensor: np.ndarray  # the <inertia> as written (inertial frame), for the checks
 
 
 @dataclasses.dataclass
@@ -216,19 +232,18 @@ def _origin(where: str, element) -> tuple[np.ndarray, np.ndarray]:
     return rpy_matrix(rpy), xyz
 
 
-def _read_link(source: str, element, inertia_as_written: bool) -> _Link:
+def _read_link(source: str, element) -> _Link:
+    """Read a link's ``<inertial>`` (numbers only; `check_link` checks the physics of kept links)."""
     name = element.get("name")
     where = f"{source}: link '{name}': "
     inertial = element.find("inertial")
     if inertial is None:
-        return _Link(name, 0.0, np.zeros(3), np.zeros((3, 3)))
+        return _Link(name, 0.0, np.zeros(3), np.zeros((3, 3)), np.zeros((3, 3)))
     rotation, com = _origin(f"{where}inertial ", inertial)
     mass_element = inertial.find("mass")
     mass = 0.0
     if mass_element is not None:
         mass = float(_floats(f"{where}inertial mass value", mass_element.get("value"), 1)[0])
-    if mass < 0:
-        raise ConfigError(f"{where}inertial mass: must not be negative, got {mass!r}")
     tensor = np.zeros((3, 3))
     inertia_element = inertial.find("inertia")
     if inertia_element is not None:
@@ -243,20 +258,34 @@ def _read_link(source: str, element, inertia_as_written: bool) -> _Link:
                 [values["ixz"], values["iyz"], values["izz"]],
             ]
         )
+    return _Link(name, mass, com, rotation @ tensor @ rotation.T, tensor)
+
+
+def check_link(source: str, link: _Link, inertia_as_written: bool, switch: str = "arm.inertia_as_written") -> None:
+    """Refuse a kept link's negative mass or unphysical inertia (see the module docstring).
+
+    Only links that end up in the robot are checked: links above the root (a ``world``
+    link, an antenna on a mobile base) are dropped unchecked.
+
+    Args:
+        switch: the robot-file key that takes inertias as written, named in the message.
+    """
+    where = f"{source}: link '{link.name}': "
+    if link.mass < 0:
+        raise ConfigError(f"{where}inertial mass: must not be negative, got {link.mass!r}")
     # Zero mass: taken as written (inertia included), as Pinocchio does.
     try:
         check_inertia(
             f"{where}inertial inertia",
-            tensor,
-            positive=mass > 0 and not inertia_as_written,
+            link.tensor,
+            positive=link.mass > 0 and not inertia_as_written,
             triangle=not inertia_as_written,
         )
     except ConfigError as error:
         if inertia_as_written or "semidefinite" in str(error):
             raise
         # A vendor file's zero or unphysical inertia: name the switch that takes it as written.
-        raise ConfigError(f"{error} (arm.inertia_as_written: true takes it as written)") from None
-    return _Link(name, mass, com, rotation @ tensor @ rotation.T)
+        raise ConfigError(f"{error} ({switch}: true takes it as written)") from None
 
 
 def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
@@ -314,7 +343,7 @@ def _joint_motion(joint: _Joint, value: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_tree(
-    source: str, links: Mapping[str, _Link], parent_joint: Mapping[str, _Joint], root_link: str
+    source: str, links: Mapping[str, _Link], parent_joint: Mapping[str, _Joint], root_link: str | None
 ) -> dict[str, str]:
     """Refuse joints that form a cycle (naming them) and links in a second, unconnected tree
     (naming the orphan links); return each link's top link (the URDF's one root)."""
@@ -349,39 +378,56 @@ def _check_tree(
     return top
 
 
-def parse_urdf(
-    text: str,
-    *,
-    source: str = "urdf",
-    root_link: str,
-    tip: str,
-    lock_joints: Mapping[str, float] | None = None,
-    inertia_as_written: bool = False,
-    fields: str | None = None,
-) -> ArmChain:
-    """Read the arm from URDF text. See the module docstring for the rules.
+@dataclasses.dataclass(frozen=True)
+class UrdfDocument:
+    """A parsed URDF: links (numbers as written, unchecked), joints and the tree's index.
+
+    Attributes:
+        source: the URDF path (for messages).
+        links: link name -> link, in file order.
+        joints: joint name -> joint, in file order (only ``<robot>``'s direct children).
+        children: link name -> the joints that hang from it, in file order.
+        parent_joint: link name -> the joint it hangs from (the top link has none).
+    """
+
+    source: str
+    links: dict[str, _Link]
+    joints: dict[str, _Joint]
+    children: dict[str, list[_Joint]]
+    parent_joint: dict[str, _Joint]
+
+    def path(self, top: str, link: str) -> list[_Joint] | None:
+        """The joints from ``top`` down to ``link`` (top first), or None when ``link`` is not below ``top``."""
+        path: list[_Joint] = []
+        while link != top:
+            if link not in self.parent_joint:
+                return None
+            joint = self.parent_joint[link]
+            path.append(joint)
+            link = joint.parent
+        return path[::-1]
+
+    def subtree_joints(self, top: str) -> list[_Joint]:
+        """Every joint below link ``top``, in file order."""
+        below: set[str] = set()
+        stack = [top]
+        while stack:
+            for joint in self.children[stack.pop()]:
+                below.add(joint.name)
+                stack.append(joint.child)
+        return [joint for name, joint in self.joints.items() if name in below]
+
+
+def parse_document(text: str, *, source: str = "urdf", root_link: str | None = None) -> UrdfDocument:
+    """Parse URDF text into links and joints, refusing malformed XML, unknown types, undefined
+    links, cycles and unconnected trees. Link inertias are read, not checked (`check_link`).
 
     Args:
-        text: the URDF XML.
-        source: a label for messages (the file path).
-        root_link: the link the arm starts from (fixed to the bus at the mount).
-        tip: the link whose origin is the tip point.
-        lock_joints: movable joints held fixed, name -> value (rad or m).
-        inertia_as_written: skip the triangle inequality and accept zero principal moments.
-        fields: where ``root_link``, ``tip`` and ``lock_joints`` were given (``"robot.yaml: arm."``):
-            problems with them name that file and field, and the URDF after it.
-
-    Raises:
-        ConfigError: naming the file and the link, joint or attribute.
+        root_link: the link the caller starts from (it names the main tree in a message
+            about unconnected links).
     """
-    lock_joints = dict(lock_joints or {})
     if len(text) > MAX_URDF_BYTES:
         raise ConfigError(f"{source}: the URDF is {len(text):,} characters; at most {MAX_URDF_BYTES:,} are read")
-
-    def field(name: str) -> str:
-        """The prefix of a message about the root_link, tip or lock_joints field."""
-        return f"{fields}{name}: (in {source}) " if fields else f"{source}: {name}: "
-
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
@@ -398,7 +444,7 @@ def parse_urdf(
             raise ConfigError(f"{source}: a <link> has no name")
         if name in links:
             raise ConfigError(f"{source}: link '{name}' is defined twice")
-        links[name] = _read_link(source, element, inertia_as_written)
+        links[name] = _read_link(source, element)
     joints: dict[str, _Joint] = {}
     children: dict[str, list[_Joint]] = {name: [] for name in links}
     parent_joint: dict[str, _Joint] = {}
@@ -417,33 +463,144 @@ def parse_urdf(
         joints[name] = joint
         parent_joint[joint.child] = joint
         children[joint.parent].append(joint)
-
     _check_tree(source, links, parent_joint, root_link)
+    return UrdfDocument(source, links, joints, children, parent_joint)
+
+
+def check_lock_joints(document: UrdfDocument, lock_joints: Mapping[str, float], where: str) -> None:
+    """Refuse unknown, fixed or non-numeric entries of ``lock_joints``, and values outside a
+    joint's limits (naming the joint, the value and the limits). ``where`` prefixes messages."""
+    joints = document.joints
     for name, value in lock_joints.items():
         if name not in joints:
             extra = did_you_mean(str(name), list(joints))
-            raise ConfigError(f"{field('lock_joints')}unknown joint {quote(name)}{extra}")
-        if joints[name].kind == "fixed":
-            raise ConfigError(f"{field('lock_joints')}joint '{name}' is fixed already; only movable joints are locked")
+            raise ConfigError(f"{where}unknown joint {quote(name)}{extra}")
+        joint = joints[name]
+        if joint.kind == "fixed":
+            raise ConfigError(f"{where}joint '{name}' is fixed already; only movable joints are locked")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ConfigError(f"{where}joint '{name}': the value must be a finite number, got {quote(value)}")
+        if not joint.lower <= value <= joint.upper:
+            unit = "m" if joint.kind == "prismatic" else "rad"
             raise ConfigError(
-                f"{field('lock_joints')}joint '{name}': the value must be a finite number, got {quote(value)}"
+                f"{where}joint '{name}': the value {value:g} is outside its limits "
+                f"[{joint.lower:g}, {joint.upper:g}] {unit}"
             )
+
+
+def held_value(joint: _Joint) -> float:
+    """Where ``lock_others`` holds a joint: 0, or the nearest limit when 0 is outside them."""
+    return float(min(max(0.0, joint.lower), joint.upper))
+
+
+def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -> str:
+    """One message naming every movable joint that is not locked off the kept paths.
+
+    Args:
+        where: the paths, ``"off the path from 'a' to 'b'"``.
+        keys: the robot-file section whose ``lock_joints`` and ``lock_others`` the advice names.
+    """
+    shown = ", ".join(f"'{j.name}' ({j.kind})" for j in joints)
+    example = ", ".join(f"{j.name}: {held_value(j):g}" for j in joints[:2])
+    others = f", or set {keys}lock_others: true to hold each at 0 (or its nearest limit)"
+    if len(joints) == 1:
+        return (
+            f"{source}: joint {shown} is {where} and not locked; add it to "
+            f"{keys}lock_joints (e.g. {{{example}}}) to hold it fixed{others}"
+        )
+    return (
+        f"{source}: {len(joints)} joints are {where} and not locked: {shown}; add them to "
+        f"{keys}lock_joints (e.g. {{{example}, ...}}) to hold them fixed{others}"
+    )
+
+
+Pose = tuple[str, np.ndarray, np.ndarray]
+
+
+def rigid_closure(document: UrdfDocument, start: str, cut: set[str], locks: Mapping[str, float]) -> list[Pose]:
+    """The links rigidly attached to ``start``, with their poses in start's frame.
+
+    Fixed joints are crossed, locked joints at their lock value; joints in ``cut`` (the
+    kept joints) end the body. Every other movable joint must be locked by the caller.
+    """
+    out = [(start, np.eye(3), np.zeros(3))]
+    stack = [(start, np.eye(3), np.zeros(3))]
+    while stack:
+        name, rotation, translation = stack.pop()
+        for joint in document.children[name]:
+            if joint.name in cut:
+                continue
+            if joint.kind in MOVABLE and joint.name not in locks:  # the callers lock them all first
+                raise ConfigError(f"{document.source}: joint '{joint.name}' is neither kept nor locked")
+            motion_r, motion_t = _joint_motion(joint, float(locks.get(joint.name, 0.0)))
+            r = rotation @ joint.rotation
+            t = translation + rotation @ joint.translation
+            r, t = r @ motion_r, t + r @ motion_t
+            out.append((joint.child, r, t))
+            stack.append((joint.child, r, t))
+    return out
+
+
+def merge_links(document: UrdfDocument, body: list[Pose]) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass, centroid (body frame) and inertia about the centroid (body axes) of rigidly joined links."""
+    mass, moment, about_origin = 0.0, np.zeros(3), np.zeros((3, 3))
+    for name, r, t in body:
+        link = document.links[name]
+        com = t + r @ link.com
+        mass += link.mass
+        moment += link.mass * com
+        about_origin += r @ link.inertia @ r.T + link.mass * _second_moment(com)
+    com = moment / mass if mass > 0 else np.zeros(3)
+    inertia = about_origin - mass * _second_moment(com)
+    return mass, com, 0.5 * (inertia + inertia.T)
+
+
+def parse_urdf(
+    text: str,
+    *,
+    source: str = "urdf",
+    root_link: str,
+    tip: str,
+    lock_joints: Mapping[str, float] | None = None,
+    inertia_as_written: bool = False,
+    fields: str | None = None,
+    lock_others: bool = False,
+    keys: str = "arm.",
+) -> ArmChain:
+    """Read the arm from URDF text. See the module docstring for the rules.
+
+    Args:
+        text: the URDF XML.
+        source: a label for messages (the file path).
+        root_link: the link the arm starts from (fixed to the bus at the mount).
+        tip: the link whose origin is the tip point.
+        lock_joints: movable joints held fixed, name -> value (rad or m), within the joint's limits.
+        inertia_as_written: skip the triangle inequality and accept zero principal moments.
+        fields: where ``root_link``, ``tip`` and ``lock_joints`` were given (``"robot.yaml: arm."``):
+            problems with them name that file and field, and the URDF after it.
+        lock_others: hold every movable joint off the root-to-tip path (and not in
+            ``lock_joints``) at 0, or at its nearest limit when 0 is outside them.
+        keys: the robot-file section named in advice (``"arm."``, ``"arms[1]."``).
+
+    Raises:
+        ConfigError: naming the file and the link, joint or attribute.
+    """
+    lock_joints = dict(lock_joints or {})
+
+    def field(name: str) -> str:
+        """The prefix of a message about the root_link, tip or lock_joints field."""
+        return f"{fields}{name}: (in {source}) " if fields else f"{source}: {name}: "
+
+    document = parse_document(text, source=source, root_link=root_link)
+    check_lock_joints(document, lock_joints, field("lock_joints"))
     for role, name in (("root_link", root_link), ("tip", tip)):
-        if name not in links:
-            extra = did_you_mean(str(name), list(links))
+        if name not in document.links:
+            extra = did_you_mean(str(name), list(document.links))
             raise ConfigError(f"{field(role)}link {quote(name)} is not in the URDF{extra}")
 
-    # The path from root_link to tip, walking up from the tip (the tree has no cycle).
-    path: list[_Joint] = []
-    link = tip
-    while link != root_link:
-        if link not in parent_joint:
-            raise ConfigError(f"{field('tip')}link '{tip}' is not below root_link '{root_link}'")
-        joint = parent_joint[link]
-        path.append(joint)
-        link = joint.parent
-    path.reverse()
+    path = document.path(root_link, tip)
+    if path is None:
+        raise ConfigError(f"{field('tip')}link '{tip}' is not below root_link '{root_link}'")
     arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
     if not arm:
         raise ConfigError(
@@ -452,35 +609,24 @@ def parse_urdf(
     if len(arm) > MAX_ARM_JOINTS:
         raise ConfigError(
             f"{source}: the arm from '{root_link}' to '{tip}' has {len(arm)} movable joints; "
-            f"at most {MAX_ARM_JOINTS} are supported (lock the others in arm.lock_joints)"
+            f"at most {MAX_ARM_JOINTS} are supported (lock the others in {keys}lock_joints)"
         )
     arm_names = {j.name for j in arm}
-
-    def rigid_closure(start: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
-        """Links rigidly attached to ``start`` (not across an arm joint), with poses in start's frame."""
-        out = [(start, np.eye(3), np.zeros(3))]
-        stack = [(start, np.eye(3), np.zeros(3))]
-        while stack:
-            name, rotation, translation = stack.pop()
-            for joint in children[name]:
-                if joint.name in arm_names:
-                    continue
-                if joint.kind in MOVABLE and joint.name not in lock_joints:
-                    raise ConfigError(
-                        f"{source}: joint '{joint.name}' ({joint.kind}) is off the path from "
-                        f"'{root_link}' to '{tip}' and not locked; add it to arm.lock_joints "
-                        f"(e.g. {{{joint.name}: 0.0}}) to hold it fixed"
-                    )
-                motion_r, motion_t = _joint_motion(joint, float(lock_joints.get(joint.name, 0.0)))
-                r = rotation @ joint.rotation
-                t = translation + rotation @ joint.translation
-                r, t = r @ motion_r, t + r @ motion_t
-                out.append((joint.child, r, t))
-                stack.append((joint.child, r, t))
-        return out
+    others = [
+        joint
+        for joint in document.subtree_joints(root_link)
+        if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints
+    ]
+    if others and not lock_others:
+        where = f"off the path from '{root_link}' to '{tip}'"
+        raise ConfigError(unlocked_message(source, others, where, keys))
+    lock_joints.update({joint.name: held_value(joint) for joint in others})
 
     starts = [root_link] + [j.child for j in arm]
-    bodies = [rigid_closure(start) for start in starts]
+    bodies = [rigid_closure(document, start, arm_names, lock_joints) for start in starts]
+    for body in bodies:
+        for name, _, _ in body:
+            check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
     pose_in_body = [{name: (r, t) for name, r, t in body} for body in bodies]
 
     n = len(arm)
@@ -494,23 +640,7 @@ def parse_urdf(
         raise ConfigError(f"{source}: tip: link '{tip}' is not rigidly attached to the last arm joint")
     tip_rotation, tip_translation = pose_in_body[n][tip]
 
-    body_mass = np.zeros(n + 1)
-    body_com = np.zeros((n + 1, 3))
-    body_inertia = np.zeros((n + 1, 3, 3))
-    for b, body in enumerate(bodies):
-        mass, moment, about_origin = 0.0, np.zeros(3), np.zeros((3, 3))
-        for name, r, t in body:
-            link = links[name]
-            com = t + r @ link.com
-            mass += link.mass
-            moment += link.mass * com
-            about_origin += r @ link.inertia @ r.T + link.mass * _second_moment(com)
-        com = moment / mass if mass > 0 else np.zeros(3)
-        body_mass[b] = mass
-        body_com[b] = com
-        inertia = about_origin - mass * _second_moment(com)
-        body_inertia[b] = 0.5 * (inertia + inertia.T)
-
+    merged = [merge_links(document, body) for body in bodies]
     return ArmChain(
         source=source,
         root_link=root_link,
@@ -523,13 +653,24 @@ def parse_urdf(
         joint_axis=np.array([j.axis for j in arm]),
         joint_lower=np.array([j.lower for j in arm]),
         joint_upper=np.array([j.upper for j in arm]),
-        body_mass=body_mass,
-        body_com=body_com,
-        body_inertia=body_inertia,
+        body_mass=np.array([m for m, _, _ in merged]),
+        body_com=np.array([c for _, c, _ in merged]),
+        body_inertia=np.array([i for _, _, i in merged]),
         body_links=tuple(tuple(name for name, _, _ in body) for body in bodies),
         tip_rotation=tip_rotation,
         tip_translation=tip_translation,
     )
+
+
+def read_urdf_text(path: str) -> str:
+    """A URDF file's text (at most `MAX_URDF_BYTES` + 1 characters); `ConfigError` when unreadable."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            return handle.read(MAX_URDF_BYTES + 1)
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such URDF file") from None
+    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as error:
+        raise ConfigError(f"{path}: cannot read the URDF file ({type(error).__name__})") from None
 
 
 def read_urdf(
@@ -540,6 +681,8 @@ def read_urdf(
     lock_joints: Mapping[str, float] | None = None,
     inertia_as_written: bool = False,
     fields: str | None = None,
+    lock_others: bool = False,
+    keys: str = "arm.",
 ) -> ArmChain:
     """Read the arm from a URDF file (see `parse_urdf`).
 
@@ -547,13 +690,7 @@ def read_urdf(
         ConfigError: for a missing or unreadable file, and as `parse_urdf`.
     """
     path = os.fspath(path)
-    try:
-        with open(path, encoding="utf-8") as handle:
-            text = handle.read(MAX_URDF_BYTES + 1)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such URDF file") from None
-    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as error:
-        raise ConfigError(f"{path}: cannot read the URDF file ({type(error).__name__})") from None
+    text = read_urdf_text(path)
     return parse_urdf(
         text,
         source=path,
@@ -562,4 +699,6 @@ def read_urdf(
         lock_joints=lock_joints,
         inertia_as_written=inertia_as_written,
         fields=fields,
+        lock_others=lock_others,
+        keys=keys,
     )
