@@ -6,20 +6,31 @@ URDF chain, a tree built from a URDF chain scaled by hand, direct means of
 ``sa.manipulability`` over the same QMC points, and finite differences.
 """
 
+import csv
 import dataclasses
+import subprocess
+import sys
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+import yaml
 
+import spacearm as sa
 from spacearm._core.errors import ConfigError
+from spacearm.analysis.joint_box import box_postures, digital_shifts, sobol_direction_numbers, sobol_points
+from spacearm.io import read_csv
 from spacearm.models.spatial import fields as spatial_fields
 from spacearm.models.spatial.robot import robot_from_chain
 from spacearm.models.spatial.schema import locate_package_file
 from spacearm.models.spatial.urdf import parse_urdf
 from spacearm.models.tree import fields as tree_fields
-from spacearm.models.tree.robot import tree_from_chains
+from spacearm.models.tree.robot import TreeRobot, tree_from_chains
+from spacearm.studies.designs import build_designs
+from spacearm.studies.metrics import design_function, metric_columns
+from spacearm.studies.spec import load_sweep
 
 MOUNT_XYZ = [[0.3, 0.5526, 0.08], [0.3, -0.5526, 0.08]]
 MOUNT_RPY = [[-1.5708, 0.0, 0.0], [1.5708, 0.0, 0.0]]
@@ -201,3 +212,202 @@ def test_fields_are_differentiable(dual):
     )
     mount = jax.grad(lambda x: jnp.sum(tree_fields.set_field(dual, "arms.right.mount.xyz[2]", x).mount_xyz))(0.2)
     assert float(mount) == 1.0
+
+
+# Averages, objectives and the command line on a tree ---------------------------------------
+
+# Until the tree family (its kernels) is registered on TreeRobot, the fields alone are tested.
+needs_family = pytest.mark.skipif(not hasattr(TreeRobot, "family"), reason="the tree family is not registered")
+ARM3DOF = Path(__file__).resolve().parents[1] / "configs" / "urdf" / "arm3dof.urdf"
+
+
+def _small_tree_file(folder: Path) -> Path:
+    """Two 3-DOF arms (configs/urdf/arm3dof.urdf, two copies) on a 100 kg bus: 6 joints, 2 tips."""
+    arm = {"urdf": str(ARM3DOF), "root_link": "arm_base", "tip": "tool"}
+    config = {
+        "name": "two-small",
+        "base": {"mass": 100.0, "com": [0.0, 0.0, 0.0], "inertia": [[9.3, 0, 0], [0, 9.3, 0], [0, 0, 9.3]]},
+        "arms": [
+            {"name": "left", "mount": {"xyz": [0.0, 0.4, 0.3], "rpy": [-1.2, 0.0, 0.0]}, **arm},
+            {"name": "right", "mount": {"xyz": [0.1, -0.4, 0.3], "rpy": [1.2, 0.0, 0.3]}, **arm},
+        ],
+    }
+    path = folder / "two-small.yaml"
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+@pytest.fixture(scope="module")
+def small_tree_file(tmp_path_factory):
+    return _small_tree_file(tmp_path_factory.mktemp("tree"))
+
+
+def _problem_config(robot_file: Path, **changes) -> dict:
+    config = {
+        "name": "two-small-mount",
+        "robot": str(robot_file),
+        "variables": {"arms.right.mount.xyz[0]": [-0.2, 0.3], "arms.right.mount.rpy[1]": [-0.5, 0.5]},
+        "objectives": [{"name": "w_avg", "tip": "left/tool"}, "w_avg[right/tool]", "low_disturbance", "low_total_mass"],
+        "average": {"samples": 256, "randomizations": 8, "seed": 3},
+        "hybrid": {"population": 4, "generations": 1},
+    }
+    config.update(changes)
+    return config
+
+
+def _direct_means(robot, samples: int, randomizations: int, seed: int):
+    """The means of w* per tip and of ||C_w||_F over the fixed QMC rule, from the public kernels."""
+    n = robot.n_joints
+    shifts = digital_shifts(seed, randomizations, n)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples // randomizations, shifts)
+    q = np.asarray(box_postures(robot, unit)).reshape(-1, n)
+    w = np.asarray(jax.jit(sa.manipulability)(robot, q))  # (P, k)
+    C = np.asarray(jax.jit(sa.base_rate_matrix)(robot, q))  # (P, 6, n)
+    return w.mean(axis=0), np.linalg.norm(C[:, 3:, :], axis=(-2, -1)).mean()
+
+
+@needs_family
+def test_per_tip_objectives_equal_direct_means_of_manipulability(small_tree_file):
+    """w_avg of tip i is the mean of sa.manipulability(robot, q)[..., i] over the problem's
+    fixed QMC points; low_disturbance the mean ||C_w||_F over every joint; low_total_mass
+    minus the bus and both arms."""
+    problem = sa.load_problem(_problem_config(small_tree_file))
+    assert problem.objectives == ("w_avg[left/tool]", "w_avg[right/tool]", "low_disturbance", "low_total_mass")
+    x = np.array([0.25, 0.3])
+    values = np.asarray(jax.jit(problem.objective_function())(x))
+    robot = problem.robot(jnp.asarray(x))
+    w, disturbance = _direct_means(robot, 256, 8, 3)
+    assert w.shape == (2,) and abs(w[0] - w[1]) > 1e-3 * w[0]  # two different tips
+    np.testing.assert_allclose(values[:3], [w[0], w[1], -disturbance], rtol=1e-12)
+    total = 100.0 + float(np.sum(robot.root_mass) + np.sum(robot.link_mass))
+    assert values[3] == pytest.approx(-total, rel=1e-15)
+    # The tips by index give the same objectives.
+    by_index = _problem_config(small_tree_file, objectives=[{"name": "w_avg", "tip": 0}, "w_avg[1]"])
+    np.testing.assert_allclose(jax.jit(sa.load_problem(by_index).objective_function())(x), values[:2], rtol=0)
+
+
+@needs_family
+def test_per_tip_objective_gradient_matches_finite_differences(small_tree_file):
+    problem = sa.load_problem(_problem_config(small_tree_file))
+    f = problem.objective_function()
+    x = np.array([0.1, -0.2])
+    jacobian = np.asarray(jax.jit(jax.jacrev(f))(x))
+    step = 1e-6
+    for j in range(2):
+        e = np.eye(2)[j] * step
+        central = (np.asarray(f(x + e)) - np.asarray(f(x - e))) / (2 * step)
+        np.testing.assert_allclose(jacobian[:, j], central, rtol=1e-5, atol=1e-10)
+    assert np.all(jacobian[:2] != 0)  # the right arm's mount moves both tips' w*
+
+
+@needs_family
+def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_file):
+    """A sweep's per-tip columns equal the direct means on a fixed rule (min = max samples)."""
+    options = {"randomizations": 8, "block": 32, "min_samples": 256, "max_samples": 256, "seed": 3}
+    spec = load_sweep(
+        {
+            "name": "t",
+            "robot": str(small_tree_file),
+            "axes": {"x": {"field": "arms.right.mount.xyz[0]", "values": [0.25]}},
+            "metrics": [
+                {"name": "w_avg", "tip": 1, **options},
+                {"name": "w_avg", "tip": "left/tool", **options},
+                {"name": "base_disturbance", **options},
+            ],
+        }
+    )
+    assert metric_columns(spec.metrics)[::2] == ["w_avg_m3[right/tool]", "w_avg_m3[left/tool]", "C_w_avg"]
+    robot, _ = build_designs(spec)
+    single = jax.tree_util.tree_map(lambda leaf: leaf[0], robot)
+    values = jax.jit(design_function(spec.metrics))(single)
+    w, disturbance = _direct_means(single, 256, 8, 3)
+    np.testing.assert_allclose(
+        [values["w_avg_m3[left/tool]"], values["w_avg_m3[right/tool]"], values["C_w_avg"]],
+        [w[0], w[1], disturbance],
+        rtol=1e-12,
+    )
+
+
+@needs_family
+@pytest.mark.parametrize(
+    ("metrics", "message"),
+    [
+        (["w_avg"], "w_avg is per tip and the robot has 2 (left/tool, right/tool)"),
+        ([{"name": "w_avg", "tip": "left/tol"}], "unknown tip 'left/tol' (did you mean 'left/tool'?)"),
+        ([{"name": "w_avg", "tip": 2}], "index 2 out of range"),
+        ([{"name": "base_disturbance", "tip": 0}], "takes no tip"),
+        ([{"name": "w_avg", "tip": 0}, {"name": "w_avg", "tip": "left/tool"}], "listed twice for tip left/tool"),
+    ],
+)
+def test_bad_tips_are_refused(small_tree_file, metrics, message):
+    with pytest.raises(ConfigError) as error:
+        load_sweep(
+            {
+                "name": "t",
+                "robot": str(small_tree_file),
+                "axes": {"x": {"field": "base.mass", "values": [100.0]}},
+                "metrics": metrics,
+            }
+        )
+    assert message in str(error.value)
+
+
+@needs_family
+def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
+    """One subprocess: a 2-design sweep and a 2-variable optimize (population 4, one
+    generation) of a two-arm tree, and a bad field in each file (exit 2, the file and the
+    field named, nothing written)."""
+    sweep = {
+        "name": "two-small-sweep",
+        "robot": str(small_tree_file),
+        "axes": {"z": {"field": "arms.right.mount.xyz[2]", "values": [0.2, 0.4]}},
+        "metrics": [
+            {"name": "w_avg", "tip": "right/tool", "min_samples": 256, "max_samples": 256, "block": 32},
+            {"name": "base_disturbance", "min_samples": 256, "max_samples": 256, "block": 32},
+        ],
+    }
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump(sweep))
+    (tmp_path / "problem.yaml").write_text(yaml.safe_dump(_problem_config(small_tree_file), sort_keys=False))
+    bad_sweep = {**sweep, "axes": {"z": {"field": "arms.rigth.mount.xyz[2]", "values": [0.2]}}}
+    (tmp_path / "bad-sweep.yaml").write_text(yaml.safe_dump(bad_sweep))
+    bad_problem = _problem_config(small_tree_file, variables={"links.left/forarm.mass": [1.0, 2.0]})
+    (tmp_path / "bad-problem.yaml").write_text(yaml.safe_dump(bad_problem))
+    script = (
+        "import sys\nfrom spacearm.cli import main\n"
+        "codes = [main(['sweep', 'sweep.yaml', '--out', 'sweep-out']),"
+        " main(['optimize', 'problem.yaml', '--out', 'opt-out', '--no-baselines']),"
+        " main(['sweep', 'bad-sweep.yaml', '--out', 'bad1']), main(['optimize', 'bad-problem.yaml', '--out', 'bad2'])]\n"
+        "print('codes', codes)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert "codes [0, 0, 2, 2]" in run.stdout, run.stdout + run.stderr
+    assert (
+        "bad-sweep.yaml: axes.z.field: arms.rigth.mount.xyz[2]: unknown arm 'rigth' (did you mean 'right'?)"
+        in run.stderr
+    )
+    assert (
+        "bad-problem.yaml: variables.links.left/forarm.mass.field: links.left/forarm.mass: unknown link 'left/forarm' "
+        "(did you mean 'left/forearm'?)" in run.stderr
+    )
+    assert not (tmp_path / "bad1").exists() and not (tmp_path / "bad2").exists()
+    table = read_csv(tmp_path / "sweep-out" / "table.csv")
+    assert list(table) == [
+        "design",
+        "z",
+        "right_mount_z_m",
+        "w_avg_m3[right/tool]",
+        "w_avg_m3[right/tool]_error",
+        "C_w_avg",
+        "C_w_avg_error",
+    ]
+    assert np.all(np.asarray(table["w_avg_m3[right/tool]"]) > 0)
+    with open(tmp_path / "opt-out" / "pareto.csv") as handle:
+        header = next(csv.reader(handle))
+    assert header == [
+        "arms.right.mount.xyz[0]",
+        "arms.right.mount.rpy[1]",
+        "w_avg[left/tool]",
+        "w_avg[right/tool]",
+        "low_disturbance",
+        "low_total_mass",
+    ]

@@ -90,6 +90,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "the whole-system URDF reader: the bus link, the paths to the tips, lock_others",
     ),
     (
+        "spacearm.models.tree.fields",
+        "Models",
+        "named tree design numbers (each arm's mount, mass and length factors, the bus, link masses and lengths)",
+    ),
+    (
         "spacearm.kinematics",
         "Kinematics",
         "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives",

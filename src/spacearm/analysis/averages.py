@@ -211,7 +211,7 @@ def tip_count(robot) -> int | None:
     return None if tips is None else len(tips)
 
 
-def tip_metric(where: str, robot, metric: str, tip: str | int | None = None) -> str:
+def tip_metric(where: str, robot, metric: str, tip: str | int | None = None, label: str | None = None) -> str:
     """The metric name `joint_averages` takes for ``metric`` at tip ``tip`` of ``robot``.
 
     Args:
@@ -220,21 +220,23 @@ def tip_metric(where: str, robot, metric: str, tip: str | int | None = None) -> 
         metric: a name from `METRICS`.
         tip: a tip's name or index (robots with several tips); None for a one-tip robot
             or a whole-system metric.
+        label: the metric's name in messages (a sweep's or problem's name for it; default ``metric``).
 
     Raises:
         ConfigError: a per-tip metric without a tip on a robot with several, an unknown tip
             (with a did-you-mean), or a tip on a whole-system metric or a one-arm robot.
     """
     count = tip_count(robot)
+    label = label or metric
     if tip is None:
         if count is None or metric not in PER_TIP_METRICS:
             return metric
         if count == 1:
             return f"{metric}[0]"
         names = ", ".join(robot.labels.tip_names) or ", ".join(map(str, range(count)))
-        raise ConfigError(f"{where}: {metric} is per tip and the robot has {count} ({names}); name one with tip:")
+        raise ConfigError(f"{where}: {label} is per tip and the robot has {count} ({names}); name one with tip:")
     if metric not in PER_TIP_METRICS:
-        raise ConfigError(f"{where}.tip: {metric} is a quantity of the whole system (every joint); it takes no tip")
+        raise ConfigError(f"{where}.tip: {label} is a quantity of the whole system (every joint); it takes no tip")
     if count is None:
         raise ConfigError(f"{where}.tip: the robot has one tip (a single arm); leave tip out")
     names = tuple(robot.labels.tip_names)

@@ -127,7 +127,7 @@ def objective_name(where: str, robot, name: str, tip: str | int | None = None) -
         if tip is not None:
             raise ConfigError(f"{where}.tip: {base} is not an average over the joint box; it takes no tip")
         return base
-    metric = tip_metric(where, robot, AVERAGE_OBJECTIVES[base][0], tip)
+    metric = tip_metric(where, robot, AVERAGE_OBJECTIVES[base][0], tip, label=base)
     _, index = split_metric(metric)
     if tip is None:
         return base  # one tip, or a whole-system quantity
@@ -142,7 +142,7 @@ def average_objective(name: str, robot) -> tuple[str, float] | None:
     if base not in AVERAGE_OBJECTIVES:
         return None
     metric, sign = AVERAGE_OBJECTIVES[base]
-    return tip_metric("objectives", robot, metric, _tip(robot, tip)), sign
+    return tip_metric("objectives", robot, metric, _tip(robot, tip), label=base), sign
 
 
 def objective(

@@ -213,7 +213,7 @@ def _check_average_robot(where: str, options: dict, robot) -> None:
 def _average_kind(name: str, options: dict, robot, where: str = "metrics") -> str:
     """The `joint_averages` metric of sweep metric ``name`` on ``robot``: a per-tip metric
     of a robot with several tips carries its tip's index (``manipulability[1]``)."""
-    return tip_metric(where, robot, _AVERAGES[name][0], options.get("tip"))
+    return tip_metric(where, robot, _AVERAGES[name][0], options.get("tip"), label=name)
 
 
 def _average_columns(name: str, options: dict) -> list[str]:

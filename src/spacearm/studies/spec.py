@@ -93,7 +93,9 @@ class SweepSpec:
 
     def summary(self) -> str:
         axes = ", ".join(f"{a.name} ({len(a.values)})" for a in self.axes)
-        names = ", ".join(m.name for m in self.metrics)
+        names = ", ".join(
+            m.name + (f"[{m.options['tip']}]" if m.options.get("tip") is not None else "") for m in self.metrics
+        )
         count = f"{self.n_designs} design" + ("s" if self.n_designs != 1 else "")
         return f"{self.name}: {count} over {axes} [{self.combine}]; metrics {names}"
 
