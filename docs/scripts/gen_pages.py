@@ -79,6 +79,12 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Models",
         "named spatial design numbers (mount, bus, arm scale factors, link masses)",
     ),
+    ("spacearm.models.tree", "Models", "the tree family: several arms, or one branched URDF, on a free-floating bus"),
+    (
+        "spacearm.models.tree.robot",
+        "Models",
+        "the `TreeRobot` pytree (static parents and tip bodies) and its validation",
+    ),
     (
         "spacearm.models.tree.schema",
         "Models",

@@ -19,15 +19,15 @@ names every movable joint off the path that is not locked.
 The pieces (`parse_document`, `rigid_closure`, `merge_links`, `check_link`,
 `check_lock_joints`) also serve the tree reader, `spacearm.models.tree.urdf`.
 
-Inertias as written (checked for the links kept, not the dropped ones): a link without ``<inertial>`` has zero mass and zero inertia. A
-link with mass 0 is taken as written, inertia included, as Pinocchio does (vendor
-files often give the base link mass 0, sometimes with a non-zero inertia). A link with
-a positive mass needs a positive-definite inertia that satisfies the triangle
-inequality (each principal moment at most the sum of the other two, what a physical
-body has); ``inertia_as_written=True`` skips the triangle inequality and accepts zero
-principal moments, as Pinocchio does (MuJoCo refuses such files unless told to
-balance the inertia). Negative masses and negative principal moments are always
-refused.
+Inertias as written (checked for the links kept, not the dropped ones): a link without
+``<inertial>`` has zero mass and zero inertia. A link with mass 0 is taken as written,
+inertia included, as Pinocchio does (vendor files often give the base link mass 0,
+sometimes with a non-zero inertia). A link with a positive mass needs a
+positive-definite inertia that satisfies the triangle inequality (each principal
+moment at most the sum of the other two, what a physical body has);
+``inertia_as_written=True`` skips the triangle inequality and accepts zero principal
+moments, as Pinocchio does (MuJoCo refuses such files unless told to balance the
+inertia). Negative masses and negative principal moments are always refused.
 
 Every problem raises `ConfigError` with one message naming the
 file and the link, joint or attribute.
@@ -510,7 +510,7 @@ def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -
         )
     return (
         f"{source}: {len(joints)} joints are {where} and not locked: {shown}; add them to "
-        f"{keys}lock_joints (e.g. {{{example}, ...}}) to hold them fixed{others}"
+        f"{keys}lock_joints (e.g. {{{example}{', ...' if len(joints) > 2 else ''}}}) to hold them fixed{others}"
     )
 
 
