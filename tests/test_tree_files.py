@@ -620,3 +620,38 @@ def test_single_arm_files_are_unchanged():
     """An ``arm:`` file is still a spatial robot with its shapes (no tip axis)."""
     robot = sa.load_robot(os.path.join(CONFIGS, "ur5-smallsat.yaml"))
     assert type(robot).__name__ == "SpatialRobot" and robot.tip_translation.shape == (3,)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(tips=["L1", "L1"]), r"sc.urdf: tips\[1\]: link 'L1' is already tips\[0\]"),
+        (dict(tips=["Panel"]), r"sc.urdf: tips\[0\]: no movable joint between base_link 'Spacecraft' and 'Panel'"),
+        (dict(tips=["L1"], lock_joints={"J1": 0.3}), r"tips\[0\]: no movable joint .* \(all fixed or locked\)"),
+        (dict(tips=[]), r"sc.urdf: tips: give one or more tip links"),
+        (dict(tips=["L1"]), r"sc.urdf: joint 'J2' \(continuous\) is off the paths from base_link 'Spacecraft'"),
+        (
+            dict(tips=["L1"], lock_joints={"J11": 0.0}),
+            r"sc.urdf: lock_joints: unknown joint 'J11' \(did you mean 'J1'\?\)",
+        ),
+        (dict(tips=["L1"], base_link="L1"), r"sc.urdf: tips\[0\]: no movable joint between base_link 'L1' and 'L1'"),
+    ],
+)
+def test_system_urdf_errors(options, message):
+    options = {"source": "sc.urdf", "base_link": "Spacecraft", "inertia_as_written": True, **options}
+    with pytest.raises(sa.ConfigError, match=message):
+        parse_urdf_tree(SPART_STYLE, **options)
+
+
+def test_a_bus_without_mass_is_refused(tmp_path):
+    text = SPART_STYLE.replace('<mass value="100"/>', '<mass value="0"/>').replace(
+        '<mass value="20"/>', '<mass value="0"/>'
+    )
+    (tmp_path / "sc.urdf").write_text(text)
+    config = {"name": "t", "system": {"urdf": "sc.urdf", "base_link": "Spacecraft", "tips": ["L1", "L2"]}}
+    with pytest.raises(
+        sa.ConfigError,
+        match=r"robot.yaml: system.base_link: the bus 'Spacecraft' and the links rigidly attached to it "
+        r"\(Spacecraft, Panel\) have no mass",
+    ):
+        sa.load_robot(_write(tmp_path, config))
