@@ -655,3 +655,20 @@ def test_a_bus_without_mass_is_refused(tmp_path):
         r"\(Spacecraft, Panel\) have no mass",
     ):
         sa.load_robot(_write(tmp_path, config))
+
+
+def test_a_floating_joint_above_the_bus_is_dropped():
+    """Simulator-style files hang the spacecraft from ``world`` by a floating joint: above the
+    bus it is dropped with its link; below the bus it is refused."""
+    above = SPART_STYLE.replace(
+        "</robot>",
+        '<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
+        '<child link="Spacecraft"/></joint></robot>',
+    )
+    tree = parse_urdf_tree(above, source="sc.urdf", base_link="Spacecraft", tips=["L1", "L2"], inertia_as_written=True)
+    assert tree.joint_names == ("J1", "J2") and "world" not in tree.body_links[0]
+    below = SPART_STYLE.replace('name="J2" type="continuous"', 'name="J2" type="floating"')
+    with pytest.raises(sa.ConfigError, match=r"sc.urdf: joint 'J2': type 'floating' is not supported"):
+        parse_urdf_tree(below, source="sc.urdf", base_link="Spacecraft", tips=["L1"], inertia_as_written=True)
+    with pytest.raises(sa.ConfigError, match=r"lock_joints: joint 'float' is floating; only movable joints"):
+        parse_urdf_tree(above, source="sc.urdf", base_link="Spacecraft", tips=["L1", "L2"], lock_joints={"float": 0.0})
