@@ -672,3 +672,55 @@ def test_a_floating_joint_above_the_bus_is_dropped():
         parse_urdf_tree(below, source="sc.urdf", base_link="Spacecraft", tips=["L1"], inertia_as_written=True)
     with pytest.raises(sa.ConfigError, match=r"lock_joints: joint 'float' is floating; only movable joints"):
         parse_urdf_tree(above, source="sc.urdf", base_link="Spacecraft", tips=["L1", "L2"], lock_joints={"float": 0.0})
+
+
+def test_three_arm_moving_bodies_agree_with_mujoco():
+    """MuJoCo's own URDF reader (it fuses the bus into its world body): the moving bodies'
+    mass, centroid and inertia about it, in the bus frame, at random joints."""
+    mujoco = pytest.importorskip("mujoco")
+    robot = sa.load_robot(os.path.join(CONFIGS, "three-arm-servicer.yaml"))
+    model = mujoco.MjModel.from_xml_path(os.path.join(CONFIGS, "urdf", "three_arm_servicer.urdf"))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(1)
+    lower = np.where(np.isfinite(robot.joint_lower), robot.joint_lower, -3.0)
+    upper = np.where(np.isfinite(robot.joint_upper), robot.joint_upper, 3.0)
+    for _ in range(3):
+        q = rng.uniform(lower, upper)
+        values = dict(zip(robot.joint_names, q, strict=True))
+        values.update(Right_Finger_L_Joint=0.02, Right_Finger_R_Joint=0.02)
+        for j in range(model.njnt):
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+            data.qpos[model.jnt_qposadr[j]] = values.get(name, 0.0)
+        mujoco.mj_kinematics(model, data)
+        # MuJoCo's moving bodies, less the camera (merged into our bus by lock_others)
+        camera = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "Camera_Head")
+        bodies = [b for b in range(1, model.nbody) if b != camera]
+        mass = model.body_mass[bodies]
+        centroid = mass @ data.xipos[bodies] / mass.sum()
+        theirs = np.zeros((3, 3))
+        for b in bodies:
+            rotation = data.ximat[b].reshape(3, 3)
+            d = data.xipos[b] - centroid
+            theirs += rotation @ np.diag(model.body_inertia[b]) @ rotation.T
+            theirs += model.body_mass[b] * (d @ d * np.eye(3) - np.outer(d, d))
+        # ours: walk the tree for every body's pose, then the same sums
+        frames, poses = [], []
+        for j, parent in enumerate(robot.parents):
+            rotation, origin = (np.eye(3), np.zeros(3)) if parent < 0 else poses[parent]
+            r = rotation @ robot.joint_rotation[j]
+            p = origin + rotation @ robot.joint_translation[j]
+            if robot.joint_kinds[j] == "revolute":
+                r = r @ _rot(robot.joint_axis[j], q[j])
+            else:
+                p = p + r @ robot.joint_axis[j] * q[j]
+            poses.append((r, p))
+            frames.append((r, p + r @ robot.link_com[j]))
+        ours_mass = robot.link_mass.sum()
+        ours_centroid = sum(m * c for m, (_, c) in zip(robot.link_mass, frames, strict=True)) / ours_mass
+        ours = np.zeros((3, 3))
+        for m, inertia, (r, c) in zip(robot.link_mass, robot.link_inertia, frames, strict=True):
+            d = c - ours_centroid
+            ours += r @ inertia @ r.T + m * (d @ d * np.eye(3) - np.outer(d, d))
+        assert ours_mass == pytest.approx(mass.sum(), rel=1e-12)
+        np.testing.assert_allclose(ours_centroid, centroid, atol=1e-9)
+        np.testing.assert_allclose(ours, theirs, atol=1e-8)
