@@ -597,6 +597,8 @@ def test_arms_take_lock_others(tmp_path):
     assert "2 joints are off the path from 'right_arm_mount' to 'right_gripper' and not locked" in message
     assert "'r_gripper_l_finger_joint' (prismatic), 'r_gripper_r_finger_joint' (prismatic)" in message
     assert "arms[1].lock_others: true" in message
+    with pytest.raises(sa.ConfigError, match=r"link 'left_gripper': .*\(arms\[0\].inertia_as_written: true takes it"):
+        sa.load_robot(_arms_file(tmp_path, [_baxter_arm("left", inertia_as_written=None)]))
 
 
 def test_arms_from_different_urdfs_with_the_same_joint_names(tmp_path):
