@@ -30,6 +30,7 @@ from .kinematics import (
     generalized_jacobian as generalized_jacobian,
     manipulability as manipulability,
     manipulability_ellipsoid as manipulability_ellipsoid,
+    relative_jacobian as relative_jacobian,
     tip_position as tip_position,
 )
 from .models import family_of as family_of, load_robot as load_robot
@@ -47,6 +48,7 @@ from .models.planar.closed_forms import (
     tip_coefficients as tip_coefficients,
 )
 from .models.spatial import SpatialRobot as SpatialRobot
+from .models.tree import TreeRobot as TreeRobot
 
 # Public names from the higher layers, imported on first use. Each entry: public name ->
 # module under spacearm.
@@ -75,6 +77,7 @@ __all__ = [
     "ConfigError",
     "PlanarRobot",
     "SpatialRobot",
+    "TreeRobot",
     "__version__",
     "angular_momentum",
     "arm_jacobian",
@@ -95,6 +98,7 @@ __all__ = [
     "manipulability_ellipsoid",
     "manipulability_on_grid",
     "momentum_inertias",
+    "relative_jacobian",
     "robot_frame_tip_position",
     "stack_robots",
     "tip_coefficients",

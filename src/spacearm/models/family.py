@@ -72,6 +72,14 @@ class RobotFamily:
         """The number of joints n (static)."""
         raise NotImplementedError
 
+    def tip_count(self, robot) -> int | None:
+        """The number of tips k of a family with a tip axis (static); ``None``: one tip, no tip axis.
+
+        With a tip axis, ``tip`` gives ``(k, d)``, ``jacobians`` stack the tips' rows
+        (``(k m, b)``, ``(k m, n)``) and the public kernels give ``(..., k, ...)``.
+        """
+        return None
+
     def tip(self, robot, posture: jax.Array) -> jax.Array:
         """``(d,)`` tip position about the system centroid, m (spatial: bus axes)."""
         raise NotImplementedError
@@ -139,7 +147,7 @@ def family_of(robot) -> RobotFamily:
     """The family of a robot pytree (its class attribute ``family``)."""
     family = getattr(type(robot), "family", None)
     if not isinstance(family, RobotFamily):
-        raise TypeError(f"expected a spacearm robot (PlanarRobot or SpatialRobot), got {type(robot).__name__}")
+        raise TypeError(f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}")
     return family
 
 
