@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 
 import spacearm as sa
 from spacearm.cli import main
+from spacearm.models.family import RobotFamily, family_of
 from spacearm.models.spatial import primitives
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.planning import plan_pose_reach
@@ -96,6 +97,23 @@ def test_tip_follows_the_line_and_the_geodesic(ur5, ur5_case):
         assert Rotation.from_matrix(T.T @ expected).magnitude() < 1e-10
         np.testing.assert_allclose(np.asarray(history.tip[k]), p, atol=1e-12)
         np.testing.assert_allclose(np.asarray(history.tip_rotation[k]), T, atol=1e-12)
+        p_ref, T_ref = sa.motion.pose_on_path(p0, T0, p1, T1, s)
+        np.testing.assert_allclose(np.asarray(p_ref), p0 + s * (p1 - p0), atol=1e-15)
+        np.testing.assert_allclose(np.asarray(T_ref), expected, atol=1e-14)
+
+
+def test_spatial_pose_maps_equal_the_generic_seam_default(ur5, ur5_case):
+    """The spatial one-pass pose maps equal the seam's default over the primitives
+    (J_M - J_S I_S^-1 I_M and the attitude-rate map), and the tip frame the chain's."""
+    family, q = family_of(ur5), ur5_case["q0"]
+    J, A = (np.asarray(x) for x in family.pose_maps(ur5, q))
+    J_generic, A_generic = (np.asarray(x) for x in RobotFamily.pose_maps(family, ur5, q))
+    np.testing.assert_allclose(J, J_generic, atol=1e-13)
+    np.testing.assert_allclose(A, A_generic, atol=1e-13)
+    np.testing.assert_allclose(J, np.asarray(sa.generalized_jacobian(ur5, q)), atol=1e-13)
+    p, T = _inertial_tip_frame(ur5, q, np.eye(3))
+    np.testing.assert_allclose(np.asarray(family.tip_frame(ur5, q)[0]), p, atol=1e-14)
+    np.testing.assert_allclose(np.asarray(family.tip_frame(ur5, q)[1]), T, atol=1e-14)
 
 
 def test_a_second_target_does_not_compile_again(ur5, ur5_case):
