@@ -117,17 +117,17 @@ def test_spatial_pose_maps_equal_the_generic_seam_default(ur5, ur5_case):
 
 
 def test_a_second_target_does_not_compile_again(ur5, ur5_case):
-    sa.straight_pose_path(ur5, ur5_case["q0"], ur5_case["p1"], ur5_case["T1"], base_rotation=ur5_case["R0"])
+    """The fixture's program (256 steps) runs a new start, target and bus attitude."""
     with count_compiles() as compiles:
         path = sa.straight_pose_path(
-            ur5, ur5_case["q0"], ur5_case["p0"] - 0.5 * MOVE, ur5_case["T0"], base_rotation=np.eye(3)
+            ur5, ur5_case["q0"] + 0.01, ur5_case["p0"] - 0.5 * MOVE, ur5_case["T0"], base_rotation=np.eye(3), steps=256
         )
     assert path.reached
     assert sum(compiles.values()) == 0, dict(compiles)
 
 
 def test_stops_before_a_joint_limit(ur5, ur5_case):
-    """Joint 1 runs from 10 deg down to -5.2 deg: a lower limit at 0 stops the path before it."""
+    """Joint 1 runs from 10 deg down to -5.2 deg: a lower limit at 0 stops the path on it."""
     full = ur5_case["path"]
     q_full = np.asarray(full.history.joints)
     assert q_full[0, 0] > 0 > q_full[-1, 0]
@@ -139,15 +139,21 @@ def test_stops_before_a_joint_limit(ur5, ur5_case):
     )
     assert path.outcome == "joint limit" and int(path.limit_joint) == 0
     first_past = int(np.argmax(q_full[:, 0] < 0))
-    assert float(path.progress) == (first_past - 1) / 256
-    np.testing.assert_allclose(np.asarray(path.end_joints), q_full[first_past - 1], atol=1e-13)
+    s = float(path.progress)
+    assert (first_past - 1) / 256 <= s < first_past / 256
+    # the event located inside its step: joint 1 on its limit, the tip still on the line
+    q_end = np.asarray(path.end_joints)
+    assert 0.0 <= q_end[0] < 1e-10
+    p = _inertial_tip_frame(ur5, q_end, np.asarray(path.end_rotation))[0]
+    p0, p1 = ur5_case["p0"], ur5_case["p1"]
+    assert np.linalg.norm(p - (p0 + s * (p1 - p0))) < 1e-10
     assert float(path.position_error) > 1e-3
 
 
 def test_stops_before_a_singular_posture(ur5, ur5_case):
     """sigma_min(J*) falls along the way back from the target to the start (NumPy's SVD of
     J* along that path's history): a threshold between its first and smallest values stops
-    the path at the last sample above it."""
+    the path where sigma_min reaches it, inside the step where it crosses."""
     full = ur5_case["path"]
     back = dict(q_start=np.asarray(full.end_joints), base_rotation=np.asarray(full.end_rotation), steps=256)
     way_back = sa.straight_pose_path(
@@ -165,8 +171,12 @@ def test_stops_before_a_singular_posture(ur5, ur5_case):
     )
     assert path.outcome == "singular"
     first_below = int(np.argmax(below))
-    assert float(path.progress) == (first_below - 1) / 256
-    np.testing.assert_allclose(np.asarray(path.end_joints), joints[first_below - 1], atol=1e-13)
+    assert (first_below - 1) / 256 <= float(path.progress) < first_below / 256
+    # the event located inside its step: sigma_min(J*) at the end is the threshold
+    J_end = np.asarray(sa.generalized_jacobian(ur5, np.asarray(path.end_joints)))
+    sigma_end = np.linalg.svd(J_end, compute_uv=False)[-1]
+    assert 0.0 <= sigma_end - threshold < 1e-10
+    assert abs(float(path.min_singular) - sigma_end) < 1e-12
 
 
 def test_redundant_arm_uses_minimum_norm_rates():

@@ -22,9 +22,12 @@ tests/test_pose_paths.py); the end pose error is returned so a caller can check.
 After each step the path stops BEFORE a posture where the smallest singular value of
 J* falls below ``sing_threshold`` (the tip twist can no longer be commanded: a
 kinematic or dynamic singularity), where the step is not finite, or where a joint is
-past its limit: the end is then the last accepted step, within 1/steps of the event in
-s. The reasons are those of the straight tip paths (`spacearm.motion.path_ends`):
-``REASON_MAX_LENGTH`` means the target was reached (s = 1).
+past its limit. The event is then located inside that step by bisection on the step's
+length (`EVENT_BISECTIONS` halvings, keeping the side before the event, in the same
+loop as the steps: one copy of the step in the program), so the end lies on the limit,
+or at the threshold, to 2^-40 of a step (tests/test_pose_paths.py: joint 1 on its limit
+to 1e-10 rad). The reasons are those of the straight tip paths
+(`spacearm.motion.path_ends`): ``REASON_MAX_LENGTH`` means the target was reached (s = 1).
 
 Everything the family provides goes through the seam
 (`spacearm.models.family.RobotFamily.pose_maps` and ``tip_frame``), so any family
@@ -48,6 +51,7 @@ from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR
 
 __all__ = [
     "DEFAULT_POSE_STEPS",
+    "EVENT_BISECTIONS",
     "POSE_REASONS",
     "PoseHistory",
     "PosePath",
@@ -57,6 +61,8 @@ __all__ = [
 ]
 
 DEFAULT_POSE_STEPS = 128
+EVENT_BISECTIONS = 40  # an event is located to 2^-40 of a step in s
+STEPPING, LOCATING, DONE = 0, 1, 2  # the integrator's modes
 POSE_REASONS = {REASON_SINGULAR: "singular", REASON_MAX_LENGTH: "reached", REASON_JOINT_LIMIT: "joint limit"}
 
 
@@ -64,10 +70,10 @@ POSE_REASONS = {REASON_SINGULAR: "singular", REASON_MAX_LENGTH: "reached", REASO
 @dataclasses.dataclass(frozen=True)
 class PoseHistory:
     """The states of a straight pose path at s = k / steps, k = 0..steps (after an early
-    end, the later rows repeat the end).
+    end, the later rows repeat the located end).
 
     Attributes:
-        progress: ``(steps+1,)`` s of each row (its nominal value; rows after the end keep it).
+        progress: ``(steps+1,)`` s of each row.
         joints: ``(steps+1, n)`` joint positions.
         base_rotation: ``(steps+1, 3, 3)`` bus attitude (bus axes -> inertial axes).
         tip: ``(steps+1, 3)`` tip origin, inertial axes, about the system centroid, m.
@@ -91,13 +97,13 @@ class PosePath:
         end_rotation: ``(3, 3)`` bus attitude there (bus axes -> inertial axes).
         end_tip: ``(3,)`` tip origin there, inertial axes, about the system centroid, m.
         end_tip_rotation: ``(3, 3)`` tip axes there, inertial axes.
-        progress: ``()`` s at the end (1 when reached).
+        progress: ``()`` s at the end (1 when reached; an event located inside its step).
         reason: ``()`` int32: 1 (``REASON_MAX_LENGTH``) reached the target, 0 singular
             (sigma_min of J* below the threshold next), 2 a joint limit next.
         limit_joint: ``()`` int32 index of the first joint past its limit (-1 if none).
         position_error: ``()`` |end_tip - target position|, m.
         rotation_error: ``()`` geodesic angle between the end tip axes and the target, rad.
-        min_singular: ``()`` the smallest sigma_min of J* over the accepted postures.
+        min_singular: ``()`` the smallest sigma_min of J* over the steps and the end.
         history: a `PoseHistory`, or None when not asked for.
     """
 
@@ -194,39 +200,74 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
     h = jnp.asarray(1.0 / steps, dtype)
     y0 = family.join_state(robot, q0, group.to_coords(R0))
 
-    def advance(carry, k):
-        y, stopped, reason, limit_joint, k_end, min_sigma = carry
-        y_new = jax.lax.cond(
-            stopped, lambda y: y, lambda y: rk_step(field, y, h, rolled=family.straight_field_loops), y
-        )
-        joints, _ = family.split_state(robot, y_new)
+    step = functools.partial(rk_step, field, rolled=family.straight_field_loops)
+
+    def check(y):
+        """(sigma_min of J*, singular, past a limit, the joints past a limit) at a state."""
+        joints, _ = family.split_state(robot, y)
         sigma = _smallest_singular(family, robot, joints)
         outside = (joints < lower) | (joints > upper)
-        singular = ~jnp.all(jnp.isfinite(y_new)) | ~(sigma >= sing_threshold)
-        limit = jnp.any(outside) & ~singular
-        stop = ~stopped & (singular | limit)
-        reason = jnp.where(stop, jnp.where(singular, REASON_SINGULAR, REASON_JOINT_LIMIT), reason)
-        limit_joint = jnp.where(stop & limit, jnp.argmax(outside).astype(jnp.int32), limit_joint)
-        accept = ~stopped & ~stop
-        y = jnp.where(accept, y_new, y)
-        k_end = jnp.where(accept, k + 1, k_end)
-        min_sigma = jnp.where(accept, jnp.minimum(min_sigma, sigma), min_sigma)
-        stopped = stopped | stop
-        return (y, stopped, reason, limit_joint, k_end, min_sigma), y
+        singular = ~jnp.all(jnp.isfinite(y)) | ~(sigma >= sing_threshold)
+        return sigma, singular, jnp.any(outside) & ~singular, outside
 
-    sigma0 = _smallest_singular(family, robot, q0)
-    carry0 = (
-        y0,
-        jnp.asarray(False),
-        jnp.asarray(REASON_MAX_LENGTH, jnp.int32),
-        jnp.asarray(-1, jnp.int32),
-        jnp.asarray(0, jnp.int32),
-        sigma0,
+    # One scan, one copy of the step in the program: full steps while no event; after
+    # one, bisection on the rejected step's fraction, keeping the side before the event.
+    # Every step before an event is accepted, so output i is the state at s = (i + 1) / steps.
+
+    def advance(state):
+        y, mode = state["y"], state["mode"]
+        locating = mode == LOCATING
+        middle = 0.5 * (state["low"] + state["high"])
+        y_try = step(y, jnp.where(locating, middle, 1.0) * h)
+        sigma, singular, limit, outside = check(y_try)
+        ok = ~(singular | limit)
+        k = state["k"] + jnp.where(~locating & ok, 1, 0)
+        event = ~locating & ~ok
+        low = jnp.where(locating & ok, middle, state["low"])
+        halvings = state["halvings"] + jnp.where(locating, 1, 0)
+        mode = jnp.where(
+            locating,
+            jnp.where(halvings >= EVENT_BISECTIONS, DONE, LOCATING),
+            jnp.where(ok, jnp.where(k >= steps, DONE, STEPPING), LOCATING),
+        )
+        return dict(
+            y=jnp.where(~locating & ok, y_try, y),
+            y_low=jnp.where(locating & ok, y_try, jnp.where(event, y, state["y_low"])),
+            mode=mode,
+            k=k,
+            reason=jnp.where(event, jnp.where(singular, REASON_SINGULAR, REASON_JOINT_LIMIT), state["reason"]),
+            limit_joint=jnp.where(event & limit, jnp.argmax(outside).astype(jnp.int32), state["limit_joint"]),
+            low=low,
+            high=jnp.where(locating & ~ok, middle, state["high"]),
+            halvings=halvings,
+            min_sigma=jnp.where(ok, jnp.minimum(state["min_sigma"], sigma), state["min_sigma"]),
+        )
+
+    def scan_body(state, _):
+        state = jax.lax.cond(state["mode"] == DONE, lambda state: state, advance, state)
+        return state, state["y"]
+
+    zero = jnp.zeros((), dtype)
+    start = dict(
+        y=y0,
+        y_low=y0,
+        mode=jnp.asarray(STEPPING),
+        k=jnp.asarray(0),
+        reason=jnp.asarray(REASON_MAX_LENGTH, jnp.int32),
+        limit_joint=jnp.asarray(-1, jnp.int32),
+        low=zero,
+        high=jnp.ones((), dtype),
+        halvings=jnp.asarray(0),
+        min_sigma=_smallest_singular(family, robot, q0),
     )
-    (y, _, reason, limit_joint, k_end, min_sigma), ys = jax.lax.scan(
-        advance, carry0, jnp.arange(steps, dtype=jnp.int32)
-    )
-    ys = jnp.concatenate([y0[None], ys], axis=0)
+    end, outputs = jax.lax.scan(scan_body, start, None, length=steps + EVENT_BISECTIONS)
+    k_end, reason, limit_joint, min_sigma = end["k"], end["reason"], end["limit_joint"], end["min_sigma"]
+    stopped = reason != REASON_MAX_LENGTH
+    y = jnp.where(stopped, end["y_low"], end["y"])
+    progress = (k_end.astype(dtype) + jnp.where(stopped, end["low"], zero)) / steps
+    rows = jnp.arange(steps + 1)
+    ys = jnp.concatenate([y0[None], outputs[:steps]], axis=0)
+    ys = jnp.where((rows > k_end)[:, None], y, ys)  # after the end: the located end
 
     def frame(y):
         joints, coords = family.split_state(robot, y)
@@ -235,9 +276,12 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
         return joints, R, p, T
 
     joints, R, p, T = jax.vmap(frame)(ys)
-    k_end_rows = jnp.minimum(jnp.arange(steps + 1), k_end)
     history = PoseHistory(
-        progress=k_end_rows.astype(dtype) / steps, joints=joints, base_rotation=R, tip=p, tip_rotation=T
+        progress=jnp.where(rows > k_end, progress, rows.astype(dtype) / steps),
+        joints=joints,
+        base_rotation=R,
+        tip=p,
+        tip_rotation=T,
     )
     q_end, R_end, p_end, T_end = frame(y)
     return PosePath(
@@ -245,7 +289,7 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
         end_rotation=R_end,
         end_tip=p_end,
         end_tip_rotation=T_end,
-        progress=k_end.astype(dtype) / steps,
+        progress=progress,
         reason=reason,
         limit_joint=limit_joint,
         position_error=jnp.linalg.norm(p_end - target_position),
