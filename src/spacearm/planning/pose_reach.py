@@ -140,12 +140,12 @@ def plan_pose_reach(
         s = float(path.progress)
         left = f"the tip is {error:.3g} m and {np.degrees(rotation_error):.3g} deg from the target there"
         if reason == REASON_SINGULAR:
-            why = f"J* is singular next (sigma_min below {sing_threshold:.3g})"
+            why = f"J* nears a singular posture (its sigma_min reaches the threshold {sing_threshold:.3g})"
         else:
             j = int(path.limit_joint)
             lower = np.broadcast_to(np.asarray(robot.joint_lower, float), joints.shape[1:])[j]
             upper = np.broadcast_to(np.asarray(robot.joint_upper, float), joints.shape[1:])[j]
-            why = f"joint {j + 1} reaches its limit [{lower:.6g}, {upper:.6g}] next"
+            why = f"joint {j + 1} reaches its limit [{lower:.6g}, {upper:.6g}]"
         raise ConfigError(
             f"target: the straight pose path stops at s = {s:.3f} of the way: {why}; {left} "
             "(a straight pose path has no reorientation fallback: try another start posture or target)"
