@@ -597,6 +597,8 @@ def test_arms_take_lock_others(tmp_path):
     assert "2 joints are off the path from 'right_arm_mount' to 'right_gripper' and not locked" in message
     assert "'r_gripper_l_finger_joint' (prismatic), 'r_gripper_r_finger_joint' (prismatic)" in message
     assert "arms[1].lock_others: true" in message
+    with pytest.raises(sa.ConfigError, match=r"link 'left_gripper': .*\(arms\[0\].inertia_as_written: true takes it"):
+        sa.load_robot(_arms_file(tmp_path, [_baxter_arm("left", inertia_as_written=None)]))
 
 
 def test_arms_from_different_urdfs_with_the_same_joint_names(tmp_path):
@@ -620,3 +622,107 @@ def test_single_arm_files_are_unchanged():
     """An ``arm:`` file is still a spatial robot with its shapes (no tip axis)."""
     robot = sa.load_robot(os.path.join(CONFIGS, "ur5-smallsat.yaml"))
     assert type(robot).__name__ == "SpatialRobot" and robot.tip_translation.shape == (3,)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(tips=["L1", "L1"]), r"sc.urdf: tips\[1\]: link 'L1' is already tips\[0\]"),
+        (dict(tips=["Panel"]), r"sc.urdf: tips\[0\]: no movable joint between base_link 'Spacecraft' and 'Panel'"),
+        (dict(tips=["L1"], lock_joints={"J1": 0.3}), r"tips\[0\]: no movable joint .* \(all fixed or locked\)"),
+        (dict(tips=[]), r"sc.urdf: tips: give one or more tip links"),
+        (dict(tips=["L1"]), r"sc.urdf: joint 'J2' \(continuous\) is off the paths from base_link 'Spacecraft'"),
+        (
+            dict(tips=["L1"], lock_joints={"J11": 0.0}),
+            r"sc.urdf: lock_joints: unknown joint 'J11' \(did you mean 'J1'\?\)",
+        ),
+        (dict(tips=["L1"], base_link="L1"), r"sc.urdf: tips\[0\]: no movable joint between base_link 'L1' and 'L1'"),
+    ],
+)
+def test_system_urdf_errors(options, message):
+    options = {"source": "sc.urdf", "base_link": "Spacecraft", "inertia_as_written": True, **options}
+    with pytest.raises(sa.ConfigError, match=message):
+        parse_urdf_tree(SPART_STYLE, **options)
+
+
+def test_a_bus_without_mass_is_refused(tmp_path):
+    text = SPART_STYLE.replace('<mass value="100"/>', '<mass value="0"/>').replace(
+        '<mass value="20"/>', '<mass value="0"/>'
+    )
+    (tmp_path / "sc.urdf").write_text(text)
+    config = {"name": "t", "system": {"urdf": "sc.urdf", "base_link": "Spacecraft", "tips": ["L1", "L2"]}}
+    with pytest.raises(
+        sa.ConfigError,
+        match=r"robot.yaml: system.base_link: the bus 'Spacecraft' and the links rigidly attached to it "
+        r"\(Spacecraft, Panel\) have no mass",
+    ):
+        sa.load_robot(_write(tmp_path, config))
+
+
+def test_a_floating_joint_above_the_bus_is_dropped():
+    """Simulator-style files hang the spacecraft from ``world`` by a floating joint: above the
+    bus it is dropped with its link; below the bus it is refused."""
+    above = SPART_STYLE.replace(
+        "</robot>",
+        '<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
+        '<child link="Spacecraft"/></joint></robot>',
+    )
+    tree = parse_urdf_tree(above, source="sc.urdf", base_link="Spacecraft", tips=["L1", "L2"], inertia_as_written=True)
+    assert tree.joint_names == ("J1", "J2") and "world" not in tree.body_links[0]
+    below = SPART_STYLE.replace('name="J2" type="continuous"', 'name="J2" type="floating"')
+    with pytest.raises(sa.ConfigError, match=r"sc.urdf: joint 'J2': type 'floating' is not supported"):
+        parse_urdf_tree(below, source="sc.urdf", base_link="Spacecraft", tips=["L1"], inertia_as_written=True)
+    with pytest.raises(sa.ConfigError, match=r"lock_joints: joint 'float' is floating; only movable joints"):
+        parse_urdf_tree(above, source="sc.urdf", base_link="Spacecraft", tips=["L1", "L2"], lock_joints={"float": 0.0})
+
+
+def test_three_arm_moving_bodies_agree_with_mujoco():
+    """MuJoCo's own URDF reader (it fuses the bus into its world body): the moving bodies'
+    mass, centroid and inertia about it, in the bus frame, at random joints."""
+    mujoco = pytest.importorskip("mujoco")
+    robot = sa.load_robot(os.path.join(CONFIGS, "three-arm-servicer.yaml"))
+    model = mujoco.MjModel.from_xml_path(os.path.join(CONFIGS, "urdf", "three_arm_servicer.urdf"))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(1)
+    lower = np.where(np.isfinite(robot.joint_lower), robot.joint_lower, -3.0)
+    upper = np.where(np.isfinite(robot.joint_upper), robot.joint_upper, 3.0)
+    for _ in range(3):
+        q = rng.uniform(lower, upper)
+        values = dict(zip(robot.joint_names, q, strict=True))
+        values.update(Right_Finger_L_Joint=0.02, Right_Finger_R_Joint=0.02)
+        for j in range(model.njnt):
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+            data.qpos[model.jnt_qposadr[j]] = values.get(name, 0.0)
+        mujoco.mj_kinematics(model, data)
+        # MuJoCo's moving bodies, less the camera (merged into our bus by lock_others)
+        camera = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "Camera_Head")
+        bodies = [b for b in range(1, model.nbody) if b != camera]
+        mass = model.body_mass[bodies]
+        centroid = mass @ data.xipos[bodies] / mass.sum()
+        theirs = np.zeros((3, 3))
+        for b in bodies:
+            rotation = data.ximat[b].reshape(3, 3)
+            d = data.xipos[b] - centroid
+            theirs += rotation @ np.diag(model.body_inertia[b]) @ rotation.T
+            theirs += model.body_mass[b] * (d @ d * np.eye(3) - np.outer(d, d))
+        # ours: walk the tree for every body's pose, then the same sums
+        frames, poses = [], []
+        for j, parent in enumerate(robot.parents):
+            rotation, origin = (np.eye(3), np.zeros(3)) if parent < 0 else poses[parent]
+            r = rotation @ robot.joint_rotation[j]
+            p = origin + rotation @ robot.joint_translation[j]
+            if robot.joint_kinds[j] == "revolute":
+                r = r @ _rot(robot.joint_axis[j], q[j])
+            else:
+                p = p + r @ robot.joint_axis[j] * q[j]
+            poses.append((r, p))
+            frames.append((r, p + r @ robot.link_com[j]))
+        ours_mass = robot.link_mass.sum()
+        ours_centroid = sum(m * c for m, (_, c) in zip(robot.link_mass, frames, strict=True)) / ours_mass
+        ours = np.zeros((3, 3))
+        for m, inertia, (r, c) in zip(robot.link_mass, robot.link_inertia, frames, strict=True):
+            d = c - ours_centroid
+            ours += r @ inertia @ r.T + m * (d @ d * np.eye(3) - np.outer(d, d))
+        assert ours_mass == pytest.approx(mass.sum(), rel=1e-12)
+        np.testing.assert_allclose(ours_centroid, centroid, atol=1e-9)
+        np.testing.assert_allclose(ours, theirs, atol=1e-8)

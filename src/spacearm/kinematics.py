@@ -12,9 +12,14 @@ Generalized Jacobian (Umetani & Yoshida 1990, eq. 6, in any dimension):
 
 the tip twist per joint rate at zero momentum. Spatial J* is expressed in inertial axes
 as blkdiag(R, R) J*_bus, R the bus attitude.
+
+A family with several tips (trees of arms on one bus) puts a tip axis before each
+per-tip result: tips ``(..., k, 3)``, J* ``(..., k, 6, n)``, w* ``(..., k)``.
 """
 
 from __future__ import annotations
+
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -36,6 +41,7 @@ __all__ = [
     "gram_root_determinant",
     "manipulability",
     "manipulability_ellipsoid",
+    "relative_jacobian",
     "square_determinant",
     "straight_path_rates",
     "tip_position",
@@ -89,21 +95,25 @@ def straight_path_rates(J: jax.Array, direction: jax.Array, sign0: jax.Array) ->
 # Batched over leading axes -------------------------------------------------------------
 
 
-def _rotate_vector(family: RobotFamily, value, base_rotation):
-    if base_rotation is None:
-        return value
-    if not family.rotates_with_base:
-        raise TypeError(f"base_rotation applies to spatial robots; a {family.name} posture carries its base attitude")
-    return jnp.einsum("...ij,...j->...i", base_rotation, value)
-
-
-def _rotate_twist_rows(family: RobotFamily, J, base_rotation):
-    """blkdiag(R, R) J for spatial twists [v; w] (J*_inertial = blkdiag(R, R) J*_bus)."""
-    if base_rotation is None:
-        return J
+def _attitude(family: RobotFamily, robot, base_rotation):
+    """The bus attitude ``(..., 3, 3)``, with a tip axis inserted for a family with several tips."""
     if not family.rotates_with_base:
         raise TypeError(f"base_rotation applies to spatial robots; a {family.name} posture carries its base attitude")
     R = jnp.asarray(base_rotation)
+    return R if family.tip_count(robot) is None else R[..., None, :, :]
+
+
+def _rotate_vector(family: RobotFamily, robot, value, base_rotation):
+    if base_rotation is None:
+        return value
+    return jnp.einsum("...ij,...j->...i", _attitude(family, robot, base_rotation), value)
+
+
+def _rotate_twist_rows(family: RobotFamily, robot, J, base_rotation):
+    """blkdiag(R, R) J for spatial twists [v; w] (J*_inertial = blkdiag(R, R) J*_bus)."""
+    if base_rotation is None:
+        return J
+    R = _attitude(family, robot, base_rotation)
     top = jnp.einsum("...ij,...jk->...ik", R, J[..., :3, :])
     bottom = jnp.einsum("...ij,...jk->...ik", R, J[..., 3:, :])
     return jnp.concatenate([top, bottom], axis=-2)
@@ -118,7 +128,9 @@ def generic_tip_position(robot, posture: jax.Array) -> jax.Array:
 def generic_generalized_jacobian(robot, posture: jax.Array) -> jax.Array:
     """J* = J_M - J_S I_S^-1 I_M (eq. 6) from the family's primitives only, ``(..., m, n)``."""
     family = family_of(robot)
-    return map_leading(lambda p: _jstar_one(family, robot, p), posture, core_ndims=(1,))
+    J = map_leading(lambda p: _jstar_one(family, robot, p), posture, core_ndims=(1,))
+    tips = family.tip_count(robot)
+    return J if tips is None else J.reshape(J.shape[:-2] + (tips, -1, J.shape[-1]))
 
 
 def generic_manipulability(robot, posture: jax.Array) -> jax.Array:
@@ -138,12 +150,12 @@ def tip_position(robot, posture: jax.Array, base_rotation: jax.Array | None = No
         base_rotation: spatial only, ``(..., 3, 3)`` bus attitude R (default identity).
 
     Returns:
-        ``(..., 2)`` planar or ``(..., 3)`` spatial, m.
+        ``(..., 2)`` planar, ``(..., 3)`` spatial or ``(..., k, 3)`` for k tips, m.
     """
     family = family_of(robot)
     fast = family.fast_paths.get("tip_position")
     p = fast(robot, posture) if fast is not None else generic_tip_position(robot, posture)
-    return _rotate_vector(family, p, base_rotation)
+    return _rotate_vector(family, robot, p, base_rotation)
 
 
 @jax.jit
@@ -157,12 +169,13 @@ def generalized_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | N
 
     Returns:
         Planar ``(..., 2, n)``: tip velocity (m/s) per joint rate. Spatial ``(..., 6, n)``:
-        rows [v; w] of the tip-frame origin, inertial axes, per joint rate.
+        rows [v; w] of the tip-frame origin, inertial axes, per joint rate; ``(..., k, 6, n)``
+        for k tips, over all joints (a tip's J* is not zero in other arms' columns).
     """
     family = family_of(robot)
     fast = family.fast_paths.get("generalized_jacobian")
     J = fast(robot, posture) if fast is not None else generic_generalized_jacobian(robot, posture)
-    return _rotate_twist_rows(family, J, base_rotation)
+    return _rotate_twist_rows(family, robot, J, base_rotation)
 
 
 @jax.jit
@@ -174,6 +187,9 @@ def manipulability(robot, posture: jax.Array) -> jax.Array:
 
     Args:
         posture: planar ``(..., n+1)`` (phi0 ignored); spatial ``(..., n)``.
+
+    Returns:
+        ``(...)``, or ``(..., k)`` per tip for k tips.
     """
     family = family_of(robot)
     fast = family.fast_paths.get("manipulability")
@@ -247,3 +263,47 @@ def fixed_base_manipulability(robot, joints: jax.Array) -> jax.Array:
     if fast is not None:
         return fast(robot, joints)
     return gram_root_determinant(fixed_base_jacobian(robot, joints)[..., : family.translational_rows, :])
+
+
+def _tip_index(robot, tip) -> int:
+    names = tuple(getattr(robot, "tip_names", ()))
+    count = family_of(robot).tip_count(robot)
+    if isinstance(tip, str):
+        if tip not in names:
+            raise ValueError(f"relative_jacobian: unknown tip {tip!r}; the tips are {list(names)}")
+        return names.index(tip)
+    index = int(tip)
+    if not -count <= index < count:
+        raise ValueError(f"relative_jacobian: tip index {index} out of range for {count} tips")
+    return index % count
+
+
+@functools.partial(jax.jit, static_argnames=("tips",))
+def relative_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None = None, *, tips=(0, 1)):
+    """Twist of tip j seen from a frame moving with tip i, per joint rate, inertial axes.
+
+    J_rel = [Jv_j - Jv_i + [p_j - p_i]x Jw_i ; Jw_j - Jw_i] from the two tips' J*: the
+    velocity of tip j's origin and the angular velocity of its frame relative to tip i.
+    The common bus twist cancels, so it equals the same expression from the fixed-base
+    Jacobians (in bus axes, rotated by R): relative tasks do not see the bus inertia.
+
+    Args:
+        robot: a robot with several tips (a tree of arms).
+        posture: ``(..., n)`` joint positions.
+        base_rotation: ``(..., 3, 3)`` bus attitude (default identity).
+        tips: ``(i, j)`` tip indices or tip names (static).
+
+    Returns:
+        ``(..., 6, n)``.
+    """
+    family = family_of(robot)
+    if family.tip_count(robot) is None:
+        raise TypeError(f"relative_jacobian: needs a robot with several tips, got a {type(robot).__name__}")
+    i, j = (_tip_index(robot, t) for t in tips)
+    J = generalized_jacobian(robot, posture, base_rotation)
+    p = tip_position(robot, posture, base_rotation)
+    d = p[..., j, :] - p[..., i, :]
+    w_i = J[..., i, 3:, :]
+    lever = jnp.cross(d[..., :, None], w_i, axisa=-2, axisb=-2, axisc=-2)
+    top = J[..., j, :3, :] - J[..., i, :3, :] + lever
+    return jnp.concatenate([top, J[..., j, 3:, :] - w_i], axis=-2)

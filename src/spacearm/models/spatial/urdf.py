@@ -19,15 +19,15 @@ names every movable joint off the path that is not locked.
 The pieces (`parse_document`, `rigid_closure`, `merge_links`, `check_link`,
 `check_lock_joints`) also serve the tree reader, `spacearm.models.tree.urdf`.
 
-Inertias as written (checked for the links kept, not the dropped ones): a link without ``<inertial>`` has zero mass and zero inertia. A
-link with mass 0 is taken as written, inertia included, as Pinocchio does (vendor
-files often give the base link mass 0, sometimes with a non-zero inertia). A link with
-a positive mass needs a positive-definite inertia that satisfies the triangle
-inequality (each principal moment at most the sum of the other two, what a physical
-body has); ``inertia_as_written=True`` skips the triangle inequality and accepts zero
-principal moments, as Pinocchio does (MuJoCo refuses such files unless told to
-balance the inertia). Negative masses and negative principal moments are always
-refused.
+Inertias as written (checked for the links kept, not the dropped ones): a link without
+``<inertial>`` has zero mass and zero inertia. A link with mass 0 is taken as written,
+inertia included, as Pinocchio does (vendor files often give the base link mass 0,
+sometimes with a non-zero inertia). A link with a positive mass needs a
+positive-definite inertia that satisfies the triangle inequality (each principal
+moment at most the sum of the other two, what a physical body has);
+``inertia_as_written=True`` skips the triangle inequality and accepts zero principal
+moments, as Pinocchio does (MuJoCo refuses such files unless told to balance the
+inertia). Negative masses and negative principal moments are always refused.
 
 Every problem raises `ConfigError` with one message naming the
 file and the link, joint or attribute.
@@ -51,6 +51,7 @@ __all__ = [
     "ArmChain",
     "UrdfDocument",
     "check_inertia",
+    "check_kinds",
     "check_link",
     "check_lock_joints",
     "held_value",
@@ -292,11 +293,6 @@ def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
     name = element.get("name")
     where = f"{source}: joint '{name}': "
     kind = element.get("type")
-    if kind in ("floating", "planar"):
-        raise ConfigError(
-            f"{where}type '{kind}' is not supported (the bus is the only free body; arm joints are "
-            "revolute, continuous, prismatic or fixed)"
-        )
     if kind not in _KNOWN_TYPES:
         extra = did_you_mean(str(kind), _KNOWN_TYPES)
         raise ConfigError(f"{where}unknown type {kind!r}{extra}")
@@ -312,7 +308,7 @@ def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
         ends[end] = link
     rotation, translation = _origin(where, element)
     axis = np.array([1.0, 0.0, 0.0])
-    if kind != "fixed":
+    if kind in MOVABLE:
         axis_element = element.find("axis")
         if axis_element is not None:
             axis = _floats(f"{where}axis xyz", axis_element.get("xyz"), 3, default=(1.0, 0.0, 0.0))
@@ -478,6 +474,8 @@ def check_lock_joints(document: UrdfDocument, lock_joints: Mapping[str, float], 
         joint = joints[name]
         if joint.kind == "fixed":
             raise ConfigError(f"{where}joint '{name}' is fixed already; only movable joints are locked")
+        if joint.kind not in MOVABLE:
+            raise ConfigError(f"{where}joint '{name}' is {joint.kind}; only movable joints are locked")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ConfigError(f"{where}joint '{name}': the value must be a finite number, got {quote(value)}")
         if not joint.lower <= value <= joint.upper:
@@ -491,6 +489,18 @@ def check_lock_joints(document: UrdfDocument, lock_joints: Mapping[str, float], 
 def held_value(joint: _Joint) -> float:
     """Where ``lock_others`` holds a joint: 0, or the nearest limit when 0 is outside them."""
     return float(min(max(0.0, joint.lower), joint.upper))
+
+
+def check_kinds(document: UrdfDocument, joints: list[_Joint]) -> None:
+    """Refuse a floating or planar joint among the kept ones (below the root): the bus is the
+    only free body. Above the root they are dropped with their links (a ``world`` link's
+    floating joint)."""
+    for joint in joints:
+        if joint.kind in ("floating", "planar"):
+            raise ConfigError(
+                f"{document.source}: joint '{joint.name}': type '{joint.kind}' is not supported (the bus is "
+                "the only free body; arm joints are revolute, continuous, prismatic or fixed)"
+            )
 
 
 def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -> str:
@@ -510,7 +520,7 @@ def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -
         )
     return (
         f"{source}: {len(joints)} joints are {where} and not locked: {shown}; add them to "
-        f"{keys}lock_joints (e.g. {{{example}, ...}}) to hold them fixed{others}"
+        f"{keys}lock_joints (e.g. {{{example}{', ...' if len(joints) > 2 else ''}}}) to hold them fixed{others}"
     )
 
 
@@ -601,6 +611,8 @@ def parse_urdf(
     path = document.path(root_link, tip)
     if path is None:
         raise ConfigError(f"{field('tip')}link '{tip}' is not below root_link '{root_link}'")
+    below = document.subtree_joints(root_link)
+    check_kinds(document, below)
     arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
     if not arm:
         raise ConfigError(
@@ -614,7 +626,7 @@ def parse_urdf(
     arm_names = {j.name for j in arm}
     others = [
         joint
-        for joint in document.subtree_joints(root_link)
+        for joint in below
         if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints
     ]
     if others and not lock_others:

@@ -27,6 +27,7 @@ from ..._core.errors import ConfigError
 from ..._core.schema import did_you_mean, quote
 from ..spatial.urdf import (
     MOVABLE,
+    check_kinds,
     check_link,
     check_lock_joints,
     held_value,
@@ -150,6 +151,9 @@ def parse_urdf_tree(
             raise ConfigError(f"{where}link '{tip}' is not below base_link '{base_link}'")
         paths.append(path)
 
+    below = document.subtree_joints(base_link)
+    check_kinds(document, below)
+
     # Joint order: tip by tip, each path from the bus outward, no joint twice.
     order = []
     kept: set[str] = set()
@@ -170,9 +174,7 @@ def parse_urdf_tree(
             f"at most {MAX_TREE_JOINTS} are supported (lock some in {keys}lock_joints)"
         )
     others = [
-        joint
-        for joint in document.subtree_joints(base_link)
-        if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints
+        joint for joint in below if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints
     ]
     if others and not lock_others:
         where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"

@@ -1,0 +1,459 @@
+"""Per-posture primitives of the tree family: one design, one posture, no batch axes.
+
+The same pass as the spatial chain (`spacearm.models.spatial.primitives`, whose scalar
+helpers and forward/backward steps are imported, not copied), walked over a tree:
+the joints split into segments, maximal runs where joint j hangs from body j-1. The
+forward pass scans each segment from its parent frame (a root's mount frame, or a
+body of an earlier segment); the backward pass walks the segments in reverse order,
+each body adding the totals (first mass moment, inertia about the bus-frame origin)
+of the segments that hang from it, so every joint sees its whole subtree.
+
+Everything is in the bus frame; the generic layer rotates results by the bus attitude.
+With p_j, L_j the linear and angular momentum (about the bus-frame origin) of joint
+j's subtree moving at unit rate, G the system centroid, M the total mass, I~ the
+system inertia about G and A = I~^-1 I~_q (I~_q columns L_j - G x p_j), the bus
+angular velocity is -A qdot and the Generalized Jacobian of tip t is
+
+    J*_v,t = J_v,t - P / M + [r_t]x A,    J*_w,t = J_w,t - A
+
+(Umetani & Yoshida 1990, eq. 6, in 3-D), with J_v,t, J_w,t the fixed-base Jacobian
+of tip t (zero in the columns of joints off its path) and r_t the tip about G. The
+terms in P and A are not masked: moving one arm turns and shifts the bus, and with it
+every other tip. It equals J_M - J_S I_S^-1 I_M for `jacobians` and `momentum_map`.
+
+Base twist coordinates: b = [v; w], the velocity of the bus centroid and the bus
+angular velocity, bus axes (as the spatial family).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..spatial.primitives import (
+    _add,
+    _axis_frame,
+    _backward_step,
+    _coupling,
+    _cross,
+    _forward_step,
+    _matmul,
+    _matvec,
+    _outer,
+    _pack,
+    _point_inertia,
+    _rows,
+    _scale,
+    _second_moment,
+    _skew,
+    _sub,
+    _sym_add,
+    _sym_full,
+    _vec,
+    batched,
+    rpy_to_matrix,
+)
+from .robot import TreeRobot
+
+__all__ = [
+    "TreeConstants",
+    "arm_inertia",
+    "base_twist_map",
+    "fixed_base_jacobian",
+    "generalized_jacobian",
+    "jacobians",
+    "mass_matrix",
+    "momentum_map",
+    "segments",
+    "tip",
+    "tip_pose",
+    "tree_constants",
+]
+
+# Static topology ----------------------------------------------------------------------
+
+
+@functools.lru_cache(maxsize=256)
+def segments(parents: tuple[int, ...]) -> tuple[tuple[int, int, int], ...]:
+    """``(start, stop, parent)`` per segment: joints start..stop-1 form a chain
+    (``parents[j] == j - 1`` inside), hanging from ``parent`` (a body index or ``-1 - r``)."""
+    out, start = [], 0
+    for j in range(1, len(parents) + 1):
+        if j == len(parents) or parents[j] != j - 1:
+            out.append((start, j, parents[start]))
+            start = j
+    return tuple(out)
+
+
+@functools.lru_cache(maxsize=256)
+def descendants(parents: tuple[int, ...]) -> np.ndarray:
+    """``(n, n)`` booleans: body k is in the subtree of joint j (k == j included)."""
+    n = len(parents)
+    mask = np.eye(n, dtype=bool)
+    for k in range(n - 1, -1, -1):
+        p = parents[k]
+        if p >= 0:
+            mask[p] |= mask[k]
+    return mask
+
+
+# Design-only constants -----------------------------------------------------------------
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class TreeConstants:
+    """Design-only arrays of one tree design (body frames turned so each joint axis is z).
+
+    Attributes:
+        mount_rotation: ``(r, 3, 3)`` root axes in the bus frame.  mount_xyz: ``(r, 3)``.
+        placement: ``(n, 3, 3)`` joint frame j in its parent's (turned) frame.
+        offset: ``(n, 3)`` joint j origin in its parent's frame, m.
+        link_mass: ``(n,)``.  link_com: ``(n, 3)``.  link_inertia: ``(n, 3, 3)`` (turned frames).
+        subtree_mass: ``(n,)`` mass of joint j's subtree, kg.
+        total_mass: ``()`` M, kg.
+        fixed_moment: ``(3,)`` first mass moment of the bus and all roots, bus frame.
+        fixed_inertia: ``(3, 3)`` their inertia about the bus-frame origin.
+        tip_offset: ``(k, 3)`` tip origins in their bodies' turned frames.
+        tip_rotation: ``(k, 3, 3)`` tip axes in those frames.
+        base_com: ``(3,)`` bus centroid, bus frame.
+    """
+
+    mount_rotation: jax.Array
+    mount_xyz: jax.Array
+    placement: jax.Array
+    offset: jax.Array
+    link_mass: jax.Array
+    link_com: jax.Array
+    link_inertia: jax.Array
+    subtree_mass: jax.Array
+    total_mass: jax.Array
+    fixed_moment: jax.Array
+    fixed_inertia: jax.Array
+    tip_offset: jax.Array
+    tip_rotation: jax.Array
+    base_com: jax.Array
+
+
+def tree_constants(robot: TreeRobot) -> TreeConstants:
+    """Design-only constants of one (unbatched) tree design; see `TreeConstants`."""
+    parents = np.asarray(robot.parents)
+    frames = jax.vmap(_axis_frame)(jnp.asarray(robot.joint_axis))  # (n, 3, 3) Q_j
+    identity = jnp.eye(3, dtype=frames.dtype)
+    before = jnp.where((parents >= 0)[:, None, None], frames[np.maximum(parents, 0)], identity)
+    placement = jnp.einsum("kji,kjl,klm->kim", before, robot.joint_rotation, frames)
+    offset = jnp.einsum("kji,kj->ki", before, robot.joint_translation)
+    mount_rotation = jax.vmap(rpy_to_matrix)(jnp.asarray(robot.mount_rpy))
+    mount_xyz = jnp.asarray(robot.mount_xyz)
+    root_mass = jnp.asarray(robot.root_mass)
+    root_com = mount_xyz + jnp.einsum("rij,rj->ri", mount_rotation, robot.root_com)
+    root_inertia = jnp.einsum("rij,rjk,rlk->ril", mount_rotation, robot.root_inertia, mount_rotation)
+    link_mass = jnp.asarray(robot.link_mass)
+    tips = np.asarray(robot.tip_bodies)
+    base_com = jnp.asarray(robot.base_com)
+    return TreeConstants(
+        mount_rotation=mount_rotation,
+        mount_xyz=mount_xyz,
+        placement=placement,
+        offset=offset,
+        link_mass=link_mass,
+        link_com=jnp.einsum("kji,kj->ki", frames, robot.link_com),
+        link_inertia=jnp.einsum("kji,kjl,klm->kim", frames, robot.link_inertia, frames),
+        subtree_mass=jnp.asarray(descendants(robot.parents), link_mass.dtype) @ link_mass,
+        total_mass=robot.base_mass + jnp.sum(root_mass) + jnp.sum(link_mass),
+        fixed_moment=robot.base_mass * base_com + root_mass @ root_com,
+        fixed_inertia=(
+            robot.base_inertia
+            + robot.base_mass * _second_moment(base_com)
+            + jnp.sum(root_inertia, axis=0)
+            + jnp.sum(root_mass[:, None, None] * jax.vmap(_second_moment)(root_com), axis=0)
+        ),
+        tip_offset=jnp.einsum("kji,kj->ki", frames[tips], robot.tip_translation),
+        tip_rotation=jnp.einsum("kji,kjl->kil", frames[tips], robot.tip_rotation),
+        base_com=base_com,
+    )
+
+
+# The pass over the tree -----------------------------------------------------------------
+
+
+@dataclasses.dataclass
+class _TreePass:
+    """One pass over the tree; per-joint 3-tuples of ``(n, *batch)``, per-tip of ``(k, *batch)``."""
+
+    rotations: tuple  # body axes (turned frames), 3x3 tuple of (n, *batch)
+    origins: tuple  # joint origins o_j
+    axes: tuple  # unit joint axes a_j
+    tips: tuple  # tip origins, bus frame, (k, *batch) components
+    tip_rotations: tuple  # tip axes, 3x3 tuple of (k, *batch)
+    prismatic: jax.Array  # (n, 1, ...)
+    momentum: tuple = None
+    angular: tuple = None
+    centroid: tuple = None
+    mass: jax.Array = None
+    inertia_g: tuple = None
+
+
+def _cat(parts):
+    """Concatenate per-segment component tuples (nested) along the leading joint axis."""
+    if isinstance(parts[0], tuple):
+        return tuple(_cat([p[i] for p in parts]) for i in range(len(parts[0])))
+    return jnp.concatenate(parts, axis=0)
+
+
+def _index(nested, i):
+    if isinstance(nested, tuple):
+        return tuple(_index(x, i) for x in nested)
+    return nested[i]
+
+
+def _tree_backward_step(carry, x):
+    """`_backward_step` after adding the totals of the segments hanging from this body."""
+    (extra_moment, extra_about), rest = x[:2], x[2:]
+    moment, about = carry
+    return _backward_step((_add(moment, extra_moment), _sym_add(about, extra_about)), rest)
+
+
+def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
+    """Forward and backward pass for joint positions ``q (n, *batch)`` (batch axes last)."""
+    cst = tree_constants(robot)
+    q = jnp.asarray(q)
+    batch = q.shape[1:]
+    flags = jnp.asarray([k == "prismatic" for k in robot.joint_kinds], dtype=q.dtype)
+    flags = flags.reshape((-1,) + (1,) * len(batch))
+    angle = q * (1.0 - flags)
+    slide = q * flags
+    cos, sin = jnp.cos(angle), jnp.sin(angle)
+    spread = lambda x: jnp.broadcast_to(x, batch)
+    segs = segments(robot.parents)
+    where = {}  # body index -> (segment number, local index)
+    outs = []
+    for s, (start, stop, parent) in enumerate(segs):
+        if parent < 0:
+            r = -1 - parent
+            carry = (
+                tuple(tuple(spread(cst.mount_rotation[r, i, c]) for c in range(3)) for i in range(3)),
+                tuple(spread(cst.mount_xyz[r, i]) for i in range(3)),
+            )
+        else:
+            seg, local = where[parent]
+            rot, joint_origin, axis = (_index(outs[seg][i], local) for i in range(3))
+            carry = (rot, _add(joint_origin, _scale(slide[parent], axis)))
+        part = slice(start, stop)
+        xs = (
+            cst.placement[part],
+            cst.offset[part],
+            cos[part],
+            sin[part],
+            slide[part],
+            cst.link_com[part],
+            cst.link_inertia[part],
+        )
+        _, out = jax.lax.scan(_forward_step, carry, xs)
+        outs.append(out)
+        for j in range(start, stop):
+            where[j] = (s, j - start)
+    rotations, origins, axes, centroids, inertias = (_cat([o[i] for o in outs]) for i in range(5))
+    bodies = np.asarray(robot.tip_bodies)
+    body_rot = _index(rotations, bodies)
+    body_origin = _add(_index(origins, bodies), _scale(slide[bodies], _index(axes, bodies)))
+    offset = tuple(cst.tip_offset[:, i].reshape((-1,) + (1,) * len(batch)) for i in range(3))
+    tips = _add(body_origin, _matvec(body_rot, offset))
+    tip_rot = tuple(
+        tuple(cst.tip_rotation[:, i, c].reshape((-1,) + (1,) * len(batch)) for c in range(3)) for i in range(3)
+    )
+    state = _TreePass(
+        rotations=rotations,
+        origins=origins,
+        axes=axes,
+        tips=tips,
+        tip_rotations=_matmul(body_rot, tip_rot),
+        prismatic=flags,
+    )
+    if not with_momentum:
+        return state
+    zero = jnp.zeros(batch, q.dtype)
+    totals: dict[int, list] = {}  # parent body/root -> totals of the segments hanging from it
+    momentum_parts, angular_parts = [None] * len(segs), [None] * len(segs)
+    flat_flags = flags.reshape(-1)
+    for s in range(len(segs) - 1, -1, -1):
+        start, stop, parent = segs[s]
+        part = slice(start, stop)
+        xs = (
+            cst.link_mass[part],
+            _index(centroids, part),
+            _index(inertias, part),
+            _index(axes, part),
+            _index(origins, part),
+            cst.subtree_mass[part],
+            flat_flags[part],
+        )
+        init = ((zero,) * 3, (zero,) * 6)
+        children = [j for j in range(start, stop) if j in totals]
+        if children:
+            extra = []
+            for j in range(start, stop):
+                hanging = totals.get(j, [init])
+                moment = functools.reduce(_add, [h[0] for h in hanging])
+                about = functools.reduce(_sym_add, [h[1] for h in hanging])
+                extra.append((moment, about))
+            extra_moment = tuple(jnp.stack([e[0][i] for e in extra]) for i in range(3))
+            extra_about = tuple(jnp.stack([e[1][i] for e in extra]) for i in range(6))
+            total, (p, l) = jax.lax.scan(_tree_backward_step, init, (extra_moment, extra_about, *xs), reverse=True)
+        else:
+            total, (p, l) = jax.lax.scan(_backward_step, init, xs, reverse=True)
+        momentum_parts[s], angular_parts[s] = p, l
+        totals.setdefault(parent, []).append(total)
+    roots = [t for key, group in totals.items() if key < 0 for t in group]
+    fixed = cst.fixed_inertia
+    moment = functools.reduce(_add, [t[0] for t in roots], _vec(cst.fixed_moment))
+    about = functools.reduce(
+        _sym_add, [t[1] for t in roots], (fixed[0, 0], fixed[1, 1], fixed[2, 2], fixed[0, 1], fixed[0, 2], fixed[1, 2])
+    )
+    mass = cst.total_mass
+    centroid = _scale(1.0 / mass, moment)
+    state.momentum, state.angular = _cat(momentum_parts), _cat(angular_parts)
+    state.centroid, state.mass = centroid, mass
+    state.inertia_g = tuple(x - y for x, y in zip(about, _point_inertia(mass, centroid), strict=False))
+    return state
+
+
+def _expand(x, batch_ndim):
+    return x.reshape(x.shape + (1,) * batch_ndim)
+
+
+def _fixed_columns(robot: TreeRobot, state: _TreePass):
+    """Fixed-base Jacobian of every tip: (v, w) 3-tuples of ``(k, n, *batch)`` (zero off each tip's path)."""
+    batch_ndim = state.prismatic.ndim - 1
+    mask = jnp.asarray(_expand(robot.support, batch_ndim), state.prismatic.dtype)  # (k, n, 1..)
+    revolute = 1.0 - state.prismatic
+    axes = tuple(a[None] for a in state.axes)
+    tips = tuple(t[:, None] for t in state.tips)
+    lever = _cross(axes, _sub(tips, tuple(o[None] for o in state.origins)))
+    v = _add(_scale(revolute, lever), _scale(state.prismatic, axes))
+    return _scale(mask, v), _scale(mask * revolute, axes)
+
+
+def _tip_rows(*vectors):
+    """``(k, 3 * len(vectors), n, *batch)`` from 3-tuples of ``(k, n, *batch)``."""
+    return jnp.stack([component for vector in vectors for component in vector], axis=1)
+
+
+def _jstar_from(robot, state):
+    _, solved = _coupling(state)
+    v, w = _fixed_columns(robot, state)
+    solved_k = tuple(a[None] for a in solved)
+    r_t = tuple(t[:, None] for t in _sub(state.tips, state.centroid))
+    momentum = tuple(p[None] for p in state.momentum)
+    v_star = _add(_sub(v, _scale(1.0 / state.mass, momentum)), _cross(r_t, solved_k))
+    return _tip_rows(v_star, _sub(w, solved_k))
+
+
+# Kernels in batch-last form (q (n, *batch)) ----------------------------------------------
+
+
+def _tip_minor(robot, q):
+    state = _tree_pass(robot, q)
+    return jnp.stack(_sub(state.tips, tuple(c[None] for c in state.centroid)), axis=1)
+
+
+def _fixed_minor(robot, q):
+    return _tip_rows(*_fixed_columns(robot, _tree_pass(robot, q, with_momentum=False)))
+
+
+def _jstar_minor(robot, q):
+    return _jstar_from(robot, _tree_pass(robot, q))
+
+
+def _base_twist_minor(robot, q):
+    state = _tree_pass(robot, q)
+    _, solved = _coupling(state)
+    r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
+    v = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(r_g, solved))
+    return _rows(v, _scale(-1.0, solved))
+
+
+def _mass_from(robot, state):
+    """H_m over the tree: joint j and k interact only when one is in the other's subtree."""
+    revolute = 1.0 - state.prismatic
+    lever = _cross(state.axes, state.origins)
+    upper = revolute[:, None] * (_outer(state.axes, state.angular) - _outer(lever, state.momentum))
+    upper = upper + state.prismatic[:, None] * _outer(state.axes, state.momentum)
+    down = _expand(descendants(robot.parents), upper.ndim - 2)
+    zero = jnp.zeros((), upper.dtype)
+    return jnp.where(down, upper, jnp.where(np.swapaxes(down, 0, 1), jnp.swapaxes(upper, 0, 1), zero))
+
+
+def _mass_minor(robot, q):
+    return _mass_from(robot, _tree_pass(robot, q))
+
+
+def _arm_inertia_minor(robot, q):
+    state = _tree_pass(robot, q)
+    coupling, solved = _coupling(state)
+    return _mass_from(robot, state) - _outer(state.momentum, state.momentum) / state.mass - _outer(coupling, solved)
+
+
+# Primitives (one design, one posture; also any leading batch of postures) -----------------
+
+tip = batched(_tip_minor, 2)
+tip.__doc__ = """``(..., k, 3)`` tip origins about the system centroid, bus axes, m, for ``q (..., n)``."""
+
+fixed_base_jacobian = batched(_fixed_minor, 3)
+fixed_base_jacobian.__doc__ = """``(..., k, 6, n)`` tip twists [v; w] per joint rate, bus held fixed, bus axes
+(zero in the columns of joints off each tip's path)."""
+
+generalized_jacobian = batched(_jstar_minor, 3)
+generalized_jacobian.__doc__ = """``(..., k, 6, n)`` J* of every tip over all joints at zero momentum, bus axes.
+
+The closed form of the module docstring: one pass over the tree and one 3x3 solve per posture."""
+
+base_twist_map = batched(_base_twist_minor, 2)
+base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate, bus axes."""
+
+mass_matrix = batched(_mass_minor, 2)
+mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arms with the bus held fixed."""
+
+arm_inertia = batched(_arm_inertia_minor, 2)
+arm_inertia.__doc__ = """``(..., n, n)`` H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q, the inertia at zero momentum."""
+
+
+def tip_pose(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Tip frames with the bus frame fixed, one posture: ``(k, 3, 3)`` axes and ``(k, 3)`` origins."""
+    state = _tree_pass(robot, jnp.asarray(q), with_momentum=False)
+    rotation = jnp.moveaxis(_pack(state.tip_rotations), -1, 0)
+    return rotation, jnp.stack(state.tips, axis=-1)
+
+
+def jacobians(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """One posture: J_S ``(6k, 6)`` (tip twists per bus twist [v of bus centroid; w]) and
+    J_M ``(6k, n)``, tip by tip, bus axes."""
+    state = _tree_pass(robot, jnp.asarray(q), with_momentum=False)
+    base_com = _vec(jnp.asarray(robot.base_com))
+    blocks = []
+    for t in range(robot.n_tips):
+        skew = _skew(_sub(_index(state.tips, t), base_com))
+        j_s = [[1.0 if c == r else 0.0 for c in range(3)] + [-skew[r][c] for c in range(3)] for r in range(3)]
+        j_s += [[0.0] * 3 + [1.0 if c == r else 0.0 for c in range(3)] for r in range(3)]
+        blocks.append(_pack(j_s))
+    J_M = _tip_rows(*_fixed_columns(robot, state))
+    return jnp.concatenate(blocks, axis=0), J_M.reshape((-1,) + J_M.shape[2:])
+
+
+def momentum_map(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """One posture: I_S ``(6, 6)`` and I_M ``(6, n)``; total [linear; angular about the bus
+    centroid] momentum is I_S [v; w] + I_M qdot (bus twist [v of bus centroid; w]), bus axes."""
+    state = _tree_pass(robot, jnp.asarray(q))
+    base_com = _vec(jnp.asarray(robot.base_com))
+    mass = state.mass
+    r_g = _sub(state.centroid, base_com)
+    skew = _skew(r_g)
+    about_com = _sym_full(_sym_add(state.inertia_g, _point_inertia(mass, r_g)))
+    i_s = [[mass if c == r else 0.0 for c in range(3)] + [-mass * skew[r][c] for c in range(3)] for r in range(3)]
+    i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
+    angular = _sub(state.angular, _cross(base_com, state.momentum))
+    return _pack(i_s), _rows(state.momentum, angular)

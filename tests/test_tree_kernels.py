@@ -1,0 +1,273 @@
+"""Tree kernels (several arms on one bus) against Pinocchio and MuJoCo.
+
+Two UR5 (example-robot-data) on a 400 kg cube, as in a public dual-arm space-robot
+model, and random branched trees whose tips share torso joints (revolute, continuous
+and prismatic joints, random inertials), each written as one URDF for the references
+(tests/tree_references.py) and built as a TreeRobot from the same numbers. Tips, J*
+over all joints, w*, the relative Jacobian, C_w and the reaction null space agree to
+1e-10; the bus attitude after a closed joint loop of both arms to 1e-8 rad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import spacearm as sa
+from spacearm.kinematics import generic_generalized_jacobian, generic_manipulability, generic_tip_position
+from spacearm.models.spatial import locate_package_file, read_urdf
+from spacearm.models.spatial.urdf import rpy_matrix
+from spacearm.models.tree import TREE, tree_from_chains
+from spacearm.models.tree.primitives import segments
+
+from .tree_references import PinocchioTree, random_tree, relative, system_urdf
+
+pin = pytest.importorskip("pinocchio")
+
+UR5 = "robots/ur_description/urdf/ur5_robot.urdf"
+MOUNT_XYZ = [[0.3, 0.5526, 0.08], [0.3, -0.5526, 0.08]]
+MOUNT_RPY = [[-np.pi / 2, 0.0, 0.0], [np.pi / 2, 0.0, 0.0]]
+BUS_MASS = 400.0
+BUS_COM = np.array([0.01, -0.02, 0.03])
+BUS_INERTIA = BUS_MASS * (2 * 0.4726) ** 2 / 6 * np.eye(3) + np.array([[0, 1, 0], [1, 0, -2], [0, -2, 3.0]])
+SEEDS = (0, 1, 2, 3)
+
+
+def _rotation(rng):
+    return rpy_matrix(rng.uniform(-np.pi, np.pi, size=3) * np.array([1.0, 0.45, 1.0]))
+
+
+@pytest.fixture(scope="session")
+def dual():
+    """(TreeRobot, system URDF text) of two UR5 on the cube."""
+    path = locate_package_file("test", "example-robot-data", UR5)
+    with open(path, encoding="utf-8") as handle:
+        text = handle.read()
+    chain = read_urdf(path, root_link="base_link", tip="tool0")
+    robot = tree_from_chains(
+        [chain, chain],
+        arm_names=["left", "right"],
+        mount_xyz=MOUNT_XYZ,
+        mount_rpy=MOUNT_RPY,
+        base_mass=BUS_MASS,
+        base_com=BUS_COM,
+        base_inertia=BUS_INERTIA,
+        name="dual_ur5",
+    )
+    urdf = system_urdf(
+        base_mass=BUS_MASS,
+        base_com=BUS_COM,
+        base_inertia=BUS_INERTIA,
+        arms=[(f"{arm}/", text, "base_link", x, r) for arm, x, r in zip(("left", "right"), MOUNT_XYZ, MOUNT_RPY)],
+    )
+    return robot, urdf
+
+
+@pytest.fixture(scope="session")
+def dual_pin(dual):
+    robot, urdf = dual
+    return PinocchioTree(urdf, robot.joint_names, robot.tip_names)
+
+
+@pytest.fixture(scope="session")
+def dual_postures():
+    rng = np.random.default_rng(7)
+    return rng.uniform(-np.pi, np.pi, size=(6, 12)), np.stack([_rotation(rng) for _ in range(6)])
+
+
+def _blkdiag(R, J):
+    return np.concatenate([R @ J[..., :3, :], R @ J[..., 3:, :]], axis=-2)
+
+
+def _check_against(robot, reference, q, R):
+    """Every public kernel at postures q (b, n) and attitudes R (b, 3, 3) against the reference."""
+    tips = np.asarray(sa.tip_position(robot, q, base_rotation=R))
+    J = np.asarray(sa.generalized_jacobian(robot, q, base_rotation=R))
+    w = np.asarray(sa.manipulability(robot, q))
+    C = np.asarray(sa.base_rate_matrix(robot, q))
+    fixed = np.asarray(sa.fixed_base_jacobian(robot, q))
+    k, n = robot.n_tips, robot.n_joints
+    assert tips.shape == (len(q), k, 3) and J.shape == (len(q), k, 6, n)
+    assert w.shape == (len(q), k) and C.shape == (len(q), 6, n) and fixed.shape == (len(q), k, 6, n)
+    pairs = [(i, j) for i in range(k) for j in range(k) if i != j][:3]
+    for b in range(len(q)):
+        ref = reference.evaluate(q[b])
+        np.testing.assert_allclose(tips[b], ref["tip"] @ R[b].T, atol=1e-10)
+        np.testing.assert_allclose(J[b], _blkdiag(R[b], ref["jstar"]), atol=1e-10)
+        np.testing.assert_allclose(fixed[b], ref["fixed"], atol=1e-10)
+        Jv = ref["jstar"][:, :3]
+        np.testing.assert_allclose(w[b], np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, 1, 2))), rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(C[b, 3:], ref["base"][3:], atol=1e-10)
+        # The reaction null space: rank C_w = 3, dimension n - 3, and the reference's C_w vanishes on it.
+        _, sv, vt = np.linalg.svd(C[b, 3:])
+        assert sv[-1] > 1e-6 * sv[0]
+        null = vt[3:].T
+        assert null.shape == (n, n - 3)
+        np.testing.assert_allclose(ref["base"][3:] @ null, 0.0, atol=1e-10)
+        for i, j in pairs:
+            J_rel = np.asarray(sa.relative_jacobian(robot, q[b], base_rotation=R[b], tips=(i, j)))
+            expected = _blkdiag(R[b], relative(ref["jstar"], ref["tip"], i, j))
+            np.testing.assert_allclose(J_rel, expected, atol=1e-10)
+            # The bus drops out: the same from the fixed-base Jacobians.
+            np.testing.assert_allclose(J_rel, _blkdiag(R[b], relative(ref["fixed"], ref["tip"], i, j)), atol=1e-10)
+
+
+def test_dual_ur5_against_pinocchio(dual, dual_pin, dual_postures):
+    """Tips, J*, w*, J_rel, C_w and the reaction null space of two UR5 on a cube (Pinocchio free-flyer)."""
+    robot, _ = dual
+    q, R = dual_postures
+    _check_against(robot, dual_pin, q, R)
+    by_name = sa.relative_jacobian(robot, q[0], tips=("right/tool0", "left/tool0"))
+    np.testing.assert_allclose(by_name, sa.relative_jacobian(robot, q[0], tips=(1, 0)), atol=0)
+
+
+def test_other_arm_columns_are_not_zero(dual, dual_pin, dual_postures, capsys):
+    """Tip 1's J* has non-zero columns for arm 2 (a few % of its own: moving arm 2 moves the bus)."""
+    robot, _ = dual
+    q, _ = dual_postures
+    J = np.asarray(sa.generalized_jacobian(robot, q))
+    ratio = np.linalg.norm(J[:, 0, :, 6:], axis=(1, 2)) / np.linalg.norm(J[:, 0, :, :6], axis=(1, 2))
+    reference = [dual_pin.evaluate(x)["jstar"][0] for x in q]
+    expected = [np.linalg.norm(j[:, 6:]) / np.linalg.norm(j[:, :6]) for j in reference]
+    np.testing.assert_allclose(ratio, expected, rtol=1e-9)
+    assert np.all(ratio > 1e-3) and np.all(ratio < 0.2)
+    fixed = np.asarray(sa.fixed_base_jacobian(robot, q))
+    assert np.all(fixed[:, 0, :, 6:] == 0) and np.all(fixed[:, 1, :, :6] == 0)
+    with capsys.disabled():
+        print(f"\n  dual UR5: arm 2 columns / arm 1 columns of tip 1's J*: median {np.median(ratio):.2%}")
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_random_tree_against_pinocchio(seed):
+    """A random tree (shared torso, revolute/continuous/prismatic joints, three tips) against Pinocchio."""
+    urdf, robot = random_tree(seed)
+    assert min(robot.support[:, 0]) and len(set(robot.labels.urdf_types)) >= 2
+    reference = PinocchioTree(urdf, robot.joint_names, robot.tip_names)
+    rng = np.random.default_rng(100 + seed)
+    q = rng.uniform(-1.5, 1.5, size=(2, robot.n_joints))
+    R = np.stack([_rotation(rng) for _ in range(2)])
+    _check_against(robot, reference, q, R)
+    # H_m and H* over the tree (Pinocchio's joint-space block and its Schur complement).
+    model, data = reference.model, reference.data
+    M = pin.crba(model, data, reference.config(q[0]))
+    M = np.triu(M) + np.triu(M, 1).T
+    cols = np.array([j.idx_v for j in reference.joints])
+    H_m = M[np.ix_(cols, cols)]
+    H_star = H_m - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
+    np.testing.assert_allclose(TREE.mass_matrix(robot, q[0]), H_m, atol=1e-10)
+    np.testing.assert_allclose(TREE.arm_inertia(robot, q[0]), H_star, atol=1e-10)
+
+
+def test_segments_of_a_tree():
+    _, robot = random_tree(0, torso=2, branches=(3, 1, 2))
+    assert segments(robot.parents) == ((0, 5, -1), (5, 6, 1), (6, 8, 1))
+
+
+def test_generic_path_equals_fast_path(dual):
+    """J_M - J_S I_S^-1 I_M from the stacked primitives equals the closed form, per tip."""
+    robot, _ = dual
+    q = np.random.default_rng(3).uniform(-2, 2, size=(3, 12))
+    np.testing.assert_allclose(generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-12)
+    np.testing.assert_allclose(generic_tip_position(robot, q), sa.tip_position(robot, q), atol=1e-14)
+    np.testing.assert_allclose(generic_manipulability(robot, q), sa.manipulability(robot, q), rtol=1e-10)
+    I_S, I_M = TREE.momentum_map(robot, q[0])
+    np.testing.assert_allclose(-np.linalg.solve(I_S, I_M), sa.base_rate_matrix(robot, q[0]), atol=1e-12)
+
+
+def test_batch_shapes_and_blocks(dual):
+    """Leading batch axes, an attitude per posture, and the blocked path for big batches."""
+    robot, _ = dual
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-2, 2, size=(2, 3, 12))
+    R = np.stack([np.stack([_rotation(rng) for _ in range(3)]) for _ in range(2)])
+    J = sa.generalized_jacobian(robot, q, base_rotation=R)
+    assert J.shape == (2, 3, 2, 6, 12) and sa.tip_position(robot, q, base_rotation=R).shape == (2, 3, 2, 3)
+    np.testing.assert_allclose(J[1, 2], _blkdiag(R[1, 2], np.asarray(sa.generalized_jacobian(robot, q[1, 2]))))
+    assert sa.relative_jacobian(robot, q, base_rotation=R, tips=(0, 1)).shape == (2, 3, 6, 12)
+    many = rng.uniform(-2, 2, size=(2100, 12))
+    w = np.asarray(sa.manipulability(robot, many))
+    np.testing.assert_allclose(w[[0, 2099]], np.asarray(sa.manipulability(robot, many[[0, 2099]])), rtol=1e-12)
+
+
+def test_relative_jacobian_refuses():
+    _, robot = random_tree(1)
+    with pytest.raises(ValueError, match="unknown tip 'nope'"):
+        sa.relative_jacobian(robot, np.zeros(robot.n_joints), tips=("tip0", "nope"))
+    with pytest.raises(ValueError, match="out of range"):
+        sa.relative_jacobian(robot, np.zeros(robot.n_joints), tips=(0, 5))
+
+
+def _pinocchio_loop(reference, waypoints, steps):
+    """Bus attitude after a joint polyline: RK4 on R' = R [C_w(q) q']x, C_w from Pinocchio."""
+
+    def omega(q, rate):
+        return reference.evaluate(q)["base"][3:] @ rate
+
+    def hat(w):
+        return np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+
+    R = np.eye(3)
+    for a, b in zip(waypoints[:-1], waypoints[1:]):
+        rate, h = b - a, 1.0 / steps
+        for i in range(steps):
+            t = i * h
+            w0, wm, w1 = omega(a + t * rate, rate), omega(a + (t + h / 2) * rate, rate), omega(a + (t + h) * rate, rate)
+            k1 = R @ hat(w0)
+            k2 = (R + h / 2 * k1) @ hat(wm)
+            k3 = (R + h / 2 * k2) @ hat(wm)
+            k4 = (R + h * k3) @ hat(w1)
+            R = R + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return R
+
+
+def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin):
+    """A closed joint loop of both arms turns the bus; Magnus over the tree = RK4 over Pinocchio (1e-8 rad)."""
+    robot, _ = dual
+    rng = np.random.default_rng(11)
+    start = rng.uniform(-1, 1, size=12)
+    waypoints = np.stack([start, start + rng.uniform(-1, 1, 12), start + rng.uniform(-1, 1, 12), start])
+    R_end, q_end = sa.integrate_joint_path(robot, start, waypoints)
+    np.testing.assert_allclose(q_end, start)
+    reference = _pinocchio_loop(dual_pin, waypoints, 150)
+    angle = np.linalg.norm(_log(np.asarray(R_end).T @ reference))
+    turned = np.linalg.norm(_log(reference))
+    assert turned > 1e-3, turned
+    assert angle < 1e-8, angle
+
+
+def _log(R):
+    angle = np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / 2
+    return w if angle < 1e-12 else w * angle / np.sin(angle)
+
+
+def test_dual_ur5_against_mujoco(dual, dual_postures):
+    """MuJoCo's own URDF import with a free joint on the bus: mj_jac + momentum conservation."""
+    mujoco = pytest.importorskip("mujoco")
+    robot, urdf = dual
+    urdf = urdf.replace(
+        '<robot name="system">', '<robot name="system"><mujoco><compiler fusestatic="false"/></mujoco>', 1
+    )
+    spec = mujoco.MjSpec.from_string(urdf)
+    spec.option.gravity = [0, 0, 0]
+    spec.worldbody.first_body().add_freejoint()
+    model = spec.compile()
+    model.dof_damping[:] = model.dof_armature[:] = model.dof_frictionloss[:] = 0
+    data = mujoco.MjData(model)
+    joints = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name) for name in robot.joint_names]
+    cols = np.array([model.jnt_dofadr[j] for j in joints])
+    bodies = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name) for name in robot.tip_names]
+    q, _ = dual_postures
+    J = np.asarray(sa.generalized_jacobian(robot, q))
+    for b in range(len(q)):
+        data.qpos[:7] = [0, 0, 0, 1, 0, 0, 0]
+        data.qpos[[model.jnt_qposadr[j] for j in joints]] = q[b]
+        mujoco.mj_forward(model, data)
+        M = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, M)
+        solve = np.linalg.solve(M[:6, :6], M[:6][:, cols])
+        for t, body in enumerate(bodies):
+            jp, jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+            mujoco.mj_jac(model, data, jp, jr, data.xpos[body], body)
+            full = np.vstack([jp, jr])
+            np.testing.assert_allclose(J[b, t], full[:, cols] - full[:, :6] @ solve, atol=1e-10)
