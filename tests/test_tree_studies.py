@@ -27,7 +27,7 @@ from spacearm.models.spatial.robot import robot_from_chain
 from spacearm.models.spatial.schema import locate_package_file
 from spacearm.models.spatial.urdf import parse_urdf
 from spacearm.models.tree import fields as tree_fields
-from spacearm.models.tree.robot import TreeRobot, tree_from_chains
+from spacearm.models.tree.robot import tree_from_chains
 from spacearm.studies.designs import build_designs
 from spacearm.studies.metrics import design_function, metric_columns
 from spacearm.studies.spec import load_sweep
@@ -216,8 +216,6 @@ def test_fields_are_differentiable(dual):
 
 # Averages, objectives and the command line on a tree ---------------------------------------
 
-# Until the tree family (its kernels) is registered on TreeRobot, the fields alone are tested.
-needs_family = pytest.mark.skipif(not hasattr(TreeRobot, "family"), reason="the tree family is not registered")
 ARM3DOF = Path(__file__).resolve().parents[1] / "configs" / "urdf" / "arm3dof.urdf"
 
 
@@ -266,7 +264,6 @@ def _direct_means(robot, samples: int, randomizations: int, seed: int):
     return w.mean(axis=0), np.linalg.norm(C[:, 3:, :], axis=(-2, -1)).mean()
 
 
-@needs_family
 def test_per_tip_objectives_equal_direct_means_of_manipulability(small_tree_file):
     """w_avg of tip i is the mean of sa.manipulability(robot, q)[..., i] over the problem's
     fixed QMC points; low_disturbance the mean ||C_w||_F over every joint; low_total_mass
@@ -286,7 +283,6 @@ def test_per_tip_objectives_equal_direct_means_of_manipulability(small_tree_file
     np.testing.assert_allclose(jax.jit(sa.load_problem(by_index).objective_function())(x), values[:2], rtol=0)
 
 
-@needs_family
 def test_per_tip_objective_gradient_matches_finite_differences(small_tree_file):
     problem = sa.load_problem(_problem_config(small_tree_file))
     f = problem.objective_function()
@@ -300,7 +296,6 @@ def test_per_tip_objective_gradient_matches_finite_differences(small_tree_file):
     assert np.all(jacobian[:2] != 0)  # the right arm's mount moves both tips' w*
 
 
-@needs_family
 def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_file):
     """A sweep's per-tip columns equal the direct means on a fixed rule (min = max samples)."""
     options = {"randomizations": 8, "block": 32, "min_samples": 256, "max_samples": 256, "seed": 3}
@@ -328,7 +323,6 @@ def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_fil
     )
 
 
-@needs_family
 @pytest.mark.parametrize(
     ("metrics", "message"),
     [
@@ -352,7 +346,6 @@ def test_bad_tips_are_refused(small_tree_file, metrics, message):
     assert message in str(error.value)
 
 
-@needs_family
 def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
     """One subprocess: a 2-design sweep and a 2-variable optimize (population 4, one
     generation) of a two-arm tree, and a bad field in each file (exit 2, the file and the

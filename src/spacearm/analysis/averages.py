@@ -206,9 +206,9 @@ def split_metric(metric: str) -> tuple[str, int | None]:
 
 
 def tip_count(robot) -> int | None:
-    """The number of tips k of a robot whose per-tip quantities carry a tip axis, else None."""
-    tips = getattr(robot, "tip_bodies", None)
-    return None if tips is None else len(tips)
+    """The number of tips k of a robot whose per-tip quantities carry a tip axis, else None
+    (the family's `RobotFamily.tip_count`)."""
+    return family_of(robot).tip_count(robot)
 
 
 def tip_metric(where: str, robot, metric: str, tip: str | int | None = None, label: str | None = None) -> str:
