@@ -21,6 +21,7 @@ import yaml
 import spacearm as sa
 from spacearm._core.errors import ConfigError
 from spacearm.analysis.joint_box import box_postures, digital_shifts, sobol_direction_numbers, sobol_points
+from spacearm.cli.validate import validate_file
 from spacearm.io import read_csv
 from spacearm.models.spatial import fields as spatial_fields
 from spacearm.models.spatial.robot import robot_from_chain
@@ -404,3 +405,14 @@ def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
         "low_disturbance",
         "low_total_mass",
     ]
+
+
+def test_shipped_tree_examples_validate():
+    """The two-UR5 servicer's sweep and Pareto problem (needs example-robot-data)."""
+    assert validate_file("sweeps/dual-ur5-mount.yaml")[0] == "sweep"
+    spec = load_sweep("sweeps/dual-ur5-mount.yaml")
+    assert metric_columns(spec.metrics)[::2] == ["w_avg_m3[left/tool0]", "w_avg_m3[right/tool0]", "C_w_avg"]
+    problem = sa.load_problem("sweeps/pareto-dual-ur5.yaml")
+    assert problem.objectives == ("w_avg[left/tool0]", "w_avg[right/tool0]", "low_disturbance")
+    assert problem.variable_names == ("arms.right.mount.xyz[0]", "arms.right.mount.xyz[2]", "arms.right.mount.rpy[1]")
+    assert problem.reference_point is None

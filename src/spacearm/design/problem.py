@@ -19,6 +19,13 @@ reference_point: [0.0, 0.0, -1.0]
 average: {samples: 2048, randomizations: 8, seed: 0}   # one fixed QMC rule for every design
 ```
 
+On a robot with several arms (a tree) the variables are its fields
+(``arms.right.mount.xyz[0]``, ``links.left/forearm_link.length``;
+`spacearm.models.tree.fields`) and a per-tip objective names its tip, as
+``{name: w_avg, tip: left/tool0}`` or ``w_avg[left/tool0]`` (the name it then carries in
+``pareto.csv``); ``low_disturbance`` and ``low_total_mass`` are of the whole system
+(see ``sweeps/pareto-dual-ur5.yaml``).
+
 Joint-box averages use one fixed randomized-QMC rule (`joint_averages` with
 ``min_samples = max_samples``): the same points for every design, so each objective is a
 smooth, deterministic function of the design with an exact gradient for that rule, and
