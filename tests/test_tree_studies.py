@@ -28,6 +28,7 @@ from spacearm.models.spatial.robot import robot_from_chain
 from spacearm.models.spatial.schema import locate_package_file
 from spacearm.models.spatial.urdf import parse_urdf
 from spacearm.models.tree import fields as tree_fields
+from spacearm.models.tree.family import TREE
 from spacearm.models.tree.robot import tree_from_chains
 from spacearm.studies.designs import build_designs
 from spacearm.studies.metrics import design_function, metric_columns
@@ -265,14 +266,19 @@ def _direct_means(robot, samples: int, randomizations: int, seed: int):
     return w.mean(axis=0), np.linalg.norm(C[:, 3:, :], axis=(-2, -1)).mean()
 
 
-def _direct_gci(robot, samples: int, randomizations: int, seed: int):
-    """The mean 1/kappa of each tip's J*_v over the fixed QMC rule (NumPy singular values)."""
+def _direct_gci_and_wd(robot, samples: int, randomizations: int, seed: int):
+    """The means of 1/kappa of each tip's J*_v (NumPy singular values) and of its
+    w_d = sqrt det(J*_v H*^-1 H*^-T J*_v^T) (NumPy solve and determinant) over the fixed QMC rule."""
     n = robot.n_joints
     shifts = digital_shifts(seed, randomizations, n)
     unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples // randomizations, shifts)
     q = np.asarray(box_postures(robot, unit)).reshape(-1, n)
-    singular = np.linalg.svd(np.asarray(jax.jit(sa.generalized_jacobian)(robot, q))[..., :3, :], compute_uv=False)
-    return (singular[..., -1] / singular[..., 0]).mean(axis=0)  # (k,)
+    J = np.asarray(jax.jit(sa.generalized_jacobian)(robot, q))[..., :3, :]  # (P, k, 3, n)
+    singular = np.linalg.svd(J, compute_uv=False)
+    H = np.asarray(jax.jit(TREE.arm_inertia)(robot, q))  # (P, n, n)
+    K = np.swapaxes(np.linalg.solve(H[:, None], np.swapaxes(J, -1, -2)), -1, -2)  # J H^-1 (H symmetric)
+    w_d = np.sqrt(np.linalg.det(K @ np.swapaxes(K, -1, -2)))
+    return (singular[..., -1] / singular[..., 0]).mean(axis=0), w_d.mean(axis=0)  # (k,), (k,)
 
 
 def test_per_tip_objectives_equal_direct_means_of_manipulability(small_tree_file):
@@ -320,17 +326,19 @@ def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_fil
                 {"name": "w_avg", "tip": "left/tool", **options},
                 {"name": "base_disturbance", **options},
                 {"name": "gci", "tip": "right/tool", **options},
+                {"name": "dynamic_manipulability", "tip": "left/tool", **options},
             ],
         }
     )
-    columns = ["w_avg_m3[right/tool]", "w_avg_m3[left/tool]", "C_w_avg", "gci[right/tool]"]
+    columns = ["w_avg_m3[right/tool]", "w_avg_m3[left/tool]", "C_w_avg", "gci[right/tool]", "w_d_avg[left/tool]"]
     assert metric_columns(spec.metrics)[::2] == columns
     robot, _ = build_designs(spec)
     single = jax.tree_util.tree_map(lambda leaf: leaf[0], robot)
     values = jax.jit(design_function(spec.metrics))(single)
     w, disturbance = _direct_means(single, 256, 8, 3)
-    gci = _direct_gci(single, 256, 8, 3)
-    np.testing.assert_allclose([values[c] for c in columns], [w[1], w[0], disturbance, gci[1]], rtol=1e-12)
+    gci, w_d = _direct_gci_and_wd(single, 256, 8, 3)
+    expected = [w[1], w[0], disturbance, gci[1], w_d[0]]
+    np.testing.assert_allclose([values[c] for c in columns], expected, rtol=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -425,3 +433,26 @@ def test_shipped_tree_examples_validate():
     assert problem.objectives == ("w_avg[left/tool0]", "w_avg[right/tool0]", "low_disturbance")
     assert problem.variable_names == ("arms.right.mount.xyz[0]", "arms.right.mount.xyz[2]", "arms.right.mount.rpy[1]")
     assert problem.reference_point is None
+
+
+def test_fields_of_a_whole_system_urdf():
+    """configs/three-arm-servicer.yaml (one root, a turret carrying two arms, prismatic joints):
+    the system's length factor scales the prismatic limits only; the turret's length factor
+    scales both joints hanging from it and nothing else; a link mass keeps the radius of gyration."""
+    robot = sa.load_robot("configs/three-arm-servicer.yaml")
+    assert tree_fields.arm_names(robot) == ("Servicer_Bus",)
+    scaled = tree_fields.set_field(robot, "arms.Servicer_Bus.length", 1.5)
+    prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
+    np.testing.assert_array_equal(scaled.joint_upper[prismatic], 1.5 * robot.joint_upper[prismatic])
+    np.testing.assert_array_equal(scaled.joint_upper[~prismatic], robot.joint_upper[~prismatic])
+    np.testing.assert_array_equal(scaled.joint_translation, 1.5 * robot.joint_translation)
+    np.testing.assert_array_equal(scaled.mount_xyz, robot.mount_xyz)
+    turret = tree_fields.set_field(robot, "links.Turret.length", 2.0)
+    moved = np.flatnonzero(np.any(turret.joint_translation != robot.joint_translation, axis=-1))
+    assert [robot.joint_names[j] for j in moved] == ["Right_Shoulder", "Boom_Deploy"]
+    np.testing.assert_array_equal(turret.joint_translation[moved], 2.0 * robot.joint_translation[moved])
+    assert _changed(robot, turret) == {"joint_translation", "link_com", "link_inertia"}
+    heavy = tree_fields.set_field(robot, "links.Boom_Arm.mass", 2 * float(robot.link_mass[8]))
+    np.testing.assert_allclose(heavy.link_inertia[8], 2 * robot.link_inertia[8], rtol=1e-15)
+    with pytest.raises(ConfigError, match="link 'Boom_EE' is merged into body 'Boom_Tool'"):
+        tree_fields.check_field("f.yaml: axes.a", "links.Boom_EE.mass", robot)

@@ -150,9 +150,11 @@ def posture_quantities(robot, posture: jax.Array, needs: tuple[str, ...]) -> dic
     fast = family.fast_paths.get("posture_quantities")
     if fast is not None:
         return fast(robot, posture, tuple(needs))
-    if "arm_inertia" in needs:
-        raise ConfigError(f"metric: the arm inertia H* is not available for {family.name} robots")
     out = {}
+    if "arm_inertia" in needs:
+        if not hasattr(family, "arm_inertia"):
+            raise ConfigError(f"metric: the arm inertia H* is not available for {family.name} robots")
+        out["arm_inertia"] = family.arm_inertia(robot, posture)  # batched over postures (tree primitives)
     if "jacobian" in needs:
         out["jacobian"] = generalized_jacobian(robot, posture)
     if "base_rate" in needs:
