@@ -433,6 +433,10 @@ def test_shipped_tree_examples_validate():
     assert problem.objectives == ("w_avg[left/tool0]", "w_avg[right/tool0]", "low_disturbance")
     assert problem.variable_names == ("arms.right.mount.xyz[0]", "arms.right.mount.xyz[2]", "arms.right.mount.rpy[1]")
     assert problem.reference_point is None
+    config = yaml.safe_load(Path("sweeps/pareto-dual-ur5.yaml").read_text())
+    del config["objectives"]  # the default on several arms: each tip's w_avg and the disturbance
+    default = sa.load_problem(config, base_dir="sweeps")
+    assert default.objectives == problem.objectives
 
 
 def test_fields_of_a_whole_system_urdf():

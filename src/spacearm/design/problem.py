@@ -457,9 +457,11 @@ def problem_from_mapping(
 
     # Objectives of the family, their options.
     allowed = objectives_for(family.name)
-    raw_objectives = config.get(
-        "objectives", list(allowed[:2]) if family.name == "planar" else ["w_avg", "low_disturbance"]
-    )
+    tips = family.tip_count(base)
+    default = ["w_avg", "low_disturbance"]
+    if tips is not None and tips > 1:  # several arms: each tip's w_avg, and the system's disturbance
+        default = [{"name": "w_avg", "tip": t} for t in range(tips)] + ["low_disturbance"]
+    raw_objectives = config.get("objectives", list(allowed[:2]) if family.name == "planar" else default)
     if not isinstance(raw_objectives, (list, tuple)):
         raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
     objectives = tuple(
