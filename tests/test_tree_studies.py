@@ -8,6 +8,8 @@ URDF chain, a tree built from a URDF chain scaled by hand, direct means of
 
 import csv
 import dataclasses
+import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -222,8 +224,9 @@ ARM3DOF = Path(__file__).resolve().parents[1] / "configs" / "urdf" / "arm3dof.ur
 
 
 def _small_tree_file(folder: Path) -> Path:
-    """Two 3-DOF arms (configs/urdf/arm3dof.urdf, two copies) on a 100 kg bus: 6 joints, 2 tips."""
-    arm = {"urdf": str(ARM3DOF), "root_link": "arm_base", "tip": "tool"}
+    """Two 3-DOF arms (configs/urdf/arm3dof.urdf, two copies beside the file) on a 100 kg bus: 6 joints, 2 tips."""
+    shutil.copy(ARM3DOF, folder / "arm3dof.urdf")
+    arm = {"urdf": "arm3dof.urdf", "root_link": "arm_base", "tip": "tool"}
     config = {
         "name": "two-small",
         "base": {"mass": 100.0, "com": [0.0, 0.0, 0.0], "inertia": [[9.3, 0, 0], [0, 9.3, 0], [0, 0, 9.3]]},
@@ -412,6 +415,10 @@ def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
         "C_w_avg_error",
     ]
     assert np.all(np.asarray(table["w_avg_m3[right/tool]"]) > 0)
+    # The resolved config is itself a sweep file: the arms' URDF paths work from here too.
+    config = json.loads((tmp_path / "sweep-out" / "manifest.json").read_text())["config"]
+    assert config["metrics"][0]["tip"] == "right/tool"
+    assert load_sweep(config).robot.tip_names == ("left/tool", "right/tool")
     with open(tmp_path / "opt-out" / "pareto.csv") as handle:
         header = next(csv.reader(handle))
     assert header == [
