@@ -10,11 +10,14 @@ over all joints, w*, the relative Jacobian, C_w and the reaction null space agre
 
 from __future__ import annotations
 
+import itertools
+
+import jax
 import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.kinematics import generic_generalized_jacobian, generic_manipulability, generic_tip_position
+from spacearm.kinematics import generic_generalized_jacobian, generic_tip_position
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import TREE, tree_from_chains
@@ -30,7 +33,7 @@ MOUNT_RPY = [[-np.pi / 2, 0.0, 0.0], [np.pi / 2, 0.0, 0.0]]
 BUS_MASS = 400.0
 BUS_COM = np.array([0.01, -0.02, 0.03])
 BUS_INERTIA = BUS_MASS * (2 * 0.4726) ** 2 / 6 * np.eye(3) + np.array([[0, 1, 0], [1, 0, -2], [0, -2, 3.0]])
-SEEDS = (0, 1, 2, 3)
+SEEDS = (0, 1, 2)
 
 
 def _rotation(rng):
@@ -58,7 +61,10 @@ def dual():
         base_mass=BUS_MASS,
         base_com=BUS_COM,
         base_inertia=BUS_INERTIA,
-        arms=[(f"{arm}/", text, "base_link", x, r) for arm, x, r in zip(("left", "right"), MOUNT_XYZ, MOUNT_RPY)],
+        arms=[
+            (f"{arm}/", text, "base_link", x, r)
+            for arm, x, r in zip(("left", "right"), MOUNT_XYZ, MOUNT_RPY, strict=True)
+        ],
     )
     return robot, urdf
 
@@ -90,6 +96,7 @@ def _check_against(robot, reference, q, R):
     assert tips.shape == (len(q), k, 3) and J.shape == (len(q), k, 6, n)
     assert w.shape == (len(q), k) and C.shape == (len(q), 6, n) and fixed.shape == (len(q), k, 6, n)
     pairs = [(i, j) for i in range(k) for j in range(k) if i != j][:3]
+    relatives = {pair: np.asarray(sa.relative_jacobian(robot, q, base_rotation=R, tips=pair)) for pair in pairs}
     for b in range(len(q)):
         ref = reference.evaluate(q[b])
         np.testing.assert_allclose(tips[b], ref["tip"] @ R[b].T, atol=1e-10)
@@ -105,7 +112,7 @@ def _check_against(robot, reference, q, R):
         assert null.shape == (n, n - 3)
         np.testing.assert_allclose(ref["base"][3:] @ null, 0.0, atol=1e-10)
         for i, j in pairs:
-            J_rel = np.asarray(sa.relative_jacobian(robot, q[b], base_rotation=R[b], tips=(i, j)))
+            J_rel = relatives[i, j][b]
             expected = _blkdiag(R[b], relative(ref["jstar"], ref["tip"], i, j))
             np.testing.assert_allclose(J_rel, expected, atol=1e-10)
             # The bus drops out: the same from the fixed-base Jacobians.
@@ -139,7 +146,9 @@ def test_other_arm_columns_are_not_zero(dual, dual_pin, dual_postures, capsys):
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_random_tree_against_pinocchio(seed):
-    """A random tree (shared torso, revolute/continuous/prismatic joints, three tips) against Pinocchio."""
+    """A random tree (shared torso, revolute/continuous/prismatic joints, three tips) against Pinocchio.
+
+    Each seed draws other joint kinds, a new static structure: its kernels compile anew (a few s each)."""
     urdf, robot = random_tree(seed)
     assert min(robot.support[:, 0]) and len(set(robot.labels.urdf_types)) >= 2
     reference = PinocchioTree(urdf, robot.joint_names, robot.tip_names)
@@ -154,8 +163,8 @@ def test_random_tree_against_pinocchio(seed):
     cols = np.array([j.idx_v for j in reference.joints])
     H_m = M[np.ix_(cols, cols)]
     H_star = H_m - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
-    np.testing.assert_allclose(TREE.mass_matrix(robot, q[0]), H_m, atol=1e-10)
-    np.testing.assert_allclose(TREE.arm_inertia(robot, q[0]), H_star, atol=1e-10)
+    np.testing.assert_allclose(jax.jit(TREE.mass_matrix)(robot, q[0]), H_m, atol=1e-10)
+    np.testing.assert_allclose(jax.jit(TREE.arm_inertia)(robot, q[0]), H_star, atol=1e-10)
 
 
 def test_segments_of_a_tree():
@@ -167,10 +176,13 @@ def test_generic_path_equals_fast_path(dual):
     """J_M - J_S I_S^-1 I_M from the stacked primitives equals the closed form, per tip."""
     robot, _ = dual
     q = np.random.default_rng(3).uniform(-2, 2, size=(3, 12))
-    np.testing.assert_allclose(generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-12)
-    np.testing.assert_allclose(generic_tip_position(robot, q), sa.tip_position(robot, q), atol=1e-14)
-    np.testing.assert_allclose(generic_manipulability(robot, q), sa.manipulability(robot, q), rtol=1e-10)
-    I_S, I_M = TREE.momentum_map(robot, q[0])
+    generic = jax.jit(lambda r, x: (generic_generalized_jacobian(r, x), generic_tip_position(r, x)))(robot, q)
+    np.testing.assert_allclose(generic[0], sa.generalized_jacobian(robot, q), atol=1e-12)
+    np.testing.assert_allclose(generic[1], sa.tip_position(robot, q), atol=1e-14)
+    Jv = np.asarray(generic[0])[..., :3, :]
+    w = np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, -1, -2)))
+    np.testing.assert_allclose(w, sa.manipulability(robot, q), rtol=1e-10)
+    I_S, I_M = jax.jit(TREE.momentum_map)(robot, q[0])
     np.testing.assert_allclose(-np.linalg.solve(I_S, I_M), sa.base_rate_matrix(robot, q[0]), atol=1e-12)
 
 
@@ -207,7 +219,7 @@ def _pinocchio_loop(reference, waypoints, steps):
         return np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
 
     R = np.eye(3)
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         rate, h = b - a, 1.0 / steps
         for i in range(steps):
             t = i * h

@@ -147,7 +147,9 @@ def family_of(robot) -> RobotFamily:
     """The family of a robot pytree (its class attribute ``family``)."""
     family = getattr(type(robot), "family", None)
     if not isinstance(family, RobotFamily):
-        raise TypeError(f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}")
+        raise TypeError(
+            f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}"
+        )
     return family
 
 

@@ -457,4 +457,3 @@ def momentum_map(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
     angular = _sub(state.angular, _cross(base_com, state.momentum))
     return _pack(i_s), _rows(state.momentum, angular)
-
