@@ -344,13 +344,24 @@ def _tip_rows(*vectors):
 
 
 def _jstar_from(robot, state):
+    """``(k, 6, n, *batch)`` J* of every tip, the module docstring's closed form regrouped.
+
+    With w*_t = S_t a - A (S_t the support mask; a zero for prismatic joints) and
+    r_t = tip_t - G: J*_v,t = w*_t x tip_t + S_t (prismatic a - revolute a x o) - P/M - G x A,
+    so the per-tip work is one cross product per column (the rest is shared by the tips).
+    """
     _, solved = _coupling(state)
-    v, w = _fixed_columns(robot, state)
-    solved_k = tuple(a[None] for a in solved)
-    r_t = tuple(t[:, None] for t in _sub(state.tips, state.centroid))
-    momentum = tuple(p[None] for p in state.momentum)
-    v_star = _add(_sub(v, _scale(1.0 / state.mass, momentum)), _cross(r_t, solved_k))
-    return _tip_rows(v_star, _sub(w, solved_k))
+    batch_ndim = state.prismatic.ndim - 1
+    mask = jnp.asarray(_expand(robot.support, batch_ndim), state.prismatic.dtype)  # (k, n, 1..)
+    revolute = 1.0 - state.prismatic
+    own = _sub(_scale(state.prismatic, state.axes), _scale(revolute, _cross(state.axes, state.origins)))
+    shared = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(state.centroid, solved))
+    turning = _scale(revolute, state.axes)
+    w_star = tuple(mask * x[None] - y[None] for x, y in zip(turning, solved, strict=True))
+    tips = tuple(t[:, None] for t in state.tips)
+    lever = _cross(w_star, tips)
+    v_star = tuple(l + mask * o[None] + c[None] for l, o, c in zip(lever, own, shared, strict=True))
+    return _tip_rows(v_star, w_star)
 
 
 # Kernels in batch-last form (q (n, *batch)) ----------------------------------------------
