@@ -7,7 +7,7 @@ joints, w* ``(k,)``; the bus quantities (C, H*, the attitude) have none.
 
 Fast paths (each equals the generic path over the primitives; tests/test_tree_kernels.py):
 the batch-last pass over the tree (`spacearm.models.tree.primitives`), J* by the 3x3
-closed form for all tips at once, w* per tip from its translational rows.
+closed form for all tips at once, w* per tip by Cauchy-Binet inside the same batch-last pass.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from .primitives import (
     fixed_base_jacobian,
     generalized_jacobian,
     jacobians,
+    manipulability,
     mass_matrix,
     momentum_map,
     tip,
@@ -36,10 +37,6 @@ from .primitives import (
 from .robot import TreeRobot
 
 __all__ = ["TREE", "TreeFamily"]
-
-
-def _manipulability(robot, posture):
-    return gram_root_determinant(generalized_jacobian(robot, posture)[..., :3, :])
 
 
 def _base_rate(robot, posture, joint_rates):
@@ -65,7 +62,7 @@ class TreeFamily(RobotFamily):
     fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
         "tip_position": tip,
         "generalized_jacobian": generalized_jacobian,
-        "manipulability": _manipulability,
+        "manipulability": manipulability,
         "base_rate": _base_rate,
         "base_rate_matrix": base_twist_map,
         "fixed_base_jacobian": fixed_base_jacobian,

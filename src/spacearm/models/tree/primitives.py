@@ -40,6 +40,7 @@ from ..spatial.primitives import (
     _backward_step,
     _coupling,
     _cross,
+    _dot,
     _forward_step,
     _matmul,
     _matvec,
@@ -66,6 +67,7 @@ __all__ = [
     "fixed_base_jacobian",
     "generalized_jacobian",
     "jacobians",
+    "manipulability",
     "mass_matrix",
     "momentum_map",
     "segments",
@@ -380,6 +382,24 @@ def _jstar_minor(robot, q):
     return _jstar_from(robot, _tree_pass(robot, q))
 
 
+def _wstar_minor(robot, q):
+    """``(k, *batch)`` translational w* of every tip: sqrt of the sum of squared 3x3 minors
+    of J*_v (Cauchy-Binet; no cancellation near rank loss). Minor (i, j, l), i < j < l, is
+    (c_i x c_j) . c_l: one step per middle column j over contiguous slices (no gathers)."""
+    J = _jstar_minor(robot, q)[:, :3]  # (k, 3, n, *batch)
+    n = robot.n_joints
+    cols = tuple(J[:, c] for c in range(3))  # (k, n, *batch)
+    squares = jnp.zeros((J.shape[0],) + J.shape[3:], J.dtype)
+    for j in range(1, n - 1):
+        middle = tuple(c[:, j : j + 1] for c in cols)  # (k, 1, *batch)
+        cross = _cross(tuple(c[:, :j] for c in cols), middle)  # (k, j, *batch): c_i x c_j, i < j
+        after = tuple(c[:, None, j + 1 :] for c in cols)  # (k, 1, n-j-1, *batch)
+        minors = _dot(tuple(x[:, :, None] for x in cross), after)  # (k, j, n-j-1, *batch)
+        squares = squares + jnp.sum(minors * minors, axis=(1, 2))
+    positive = squares > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, squares, 1.0)), 0.0)
+
+
 def _base_twist_minor(robot, q):
     state = _tree_pass(robot, q)
     _, solved = _coupling(state)
@@ -422,6 +442,9 @@ generalized_jacobian = batched(_jstar_minor, 3)
 generalized_jacobian.__doc__ = """``(..., k, 6, n)`` J* of every tip over all joints at zero momentum, bus axes.
 
 The closed form of the module docstring: one pass over the tree and one 3x3 solve per posture."""
+
+manipulability = batched(_wstar_minor, 1)
+manipulability.__doc__ = """``(..., k)`` translational w* = sqrt det(J*_v J*_v^T) of every tip, m^3."""
 
 base_twist_map = batched(_base_twist_minor, 2)
 base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate, bus axes."""
