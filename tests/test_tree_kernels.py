@@ -18,6 +18,7 @@ import pytest
 
 import spacearm as sa
 from spacearm.kinematics import generic_generalized_jacobian, generic_tip_position
+from spacearm.models import tree
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import TREE, tree_from_chains
@@ -163,8 +164,35 @@ def test_random_tree_against_pinocchio(seed):
     cols = np.array([j.idx_v for j in reference.joints])
     H_m = M[np.ix_(cols, cols)]
     H_star = H_m - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
-    np.testing.assert_allclose(jax.jit(TREE.mass_matrix)(robot, q[0]), H_m, atol=1e-10)
-    np.testing.assert_allclose(jax.jit(TREE.arm_inertia)(robot, q[0]), H_star, atol=1e-10)
+    np.testing.assert_allclose(tree.mass_matrix(robot, q[0]), H_m, atol=1e-10)
+    np.testing.assert_allclose(tree.arm_inertia(robot, q[0]), H_star, atol=1e-10)
+
+
+def test_tree_metrics_against_pinocchio(dual, dual_pin, dual_postures):
+    """C in inertial axes, the reaction null space, w*_w and w_d per tip from Pinocchio's M and J*."""
+    robot, _ = dual
+    q, R = dual_postures
+    C = np.asarray(tree.base_twist_map(robot, q, base_rotation=R))
+    N = np.asarray(tree.reaction_null_space(robot, q))
+    w_rot = np.asarray(tree.rotational_manipulability(robot, q))
+    w_d = np.asarray(tree.dynamic_manipulability(robot, q))
+    assert N.shape == (len(q), 12, 9) and w_d.shape == (len(q), 2)
+    model, data = dual_pin.model, dual_pin.data
+    cols = np.array([j.idx_v for j in dual_pin.joints])
+    for b in range(len(q)):
+        ref = dual_pin.evaluate(q[b])
+        np.testing.assert_allclose(C[b, 3:], R[b] @ ref["base"][3:], atol=1e-10)
+        np.testing.assert_allclose(N[b].T @ N[b], np.eye(9), atol=1e-12)
+        np.testing.assert_allclose(ref["base"][3:] @ N[b], 0.0, atol=1e-10)
+        Jw = ref["jstar"][:, 3:]
+        np.testing.assert_allclose(w_rot[b], np.sqrt(np.linalg.det(Jw @ np.swapaxes(Jw, 1, 2))), rtol=1e-9)
+        M = pin.crba(model, data, dual_pin.config(q[b]))
+        M = np.triu(M) + np.triu(M, 1).T
+        H = M[np.ix_(cols, cols)] - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
+        K = ref["jstar"][:, :3] @ np.linalg.inv(H)
+        np.testing.assert_allclose(w_d[b], np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9)
+    with pytest.raises(TypeError, match="tree arms only"):
+        tree.mass_matrix(sa.umetani1990(), np.zeros(2))
 
 
 def test_segments_of_a_tree():
