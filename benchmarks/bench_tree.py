@@ -1,7 +1,8 @@
 """Throughput of the tree Generalized Jacobian: two UR5 on a 400 kg cube (12 joints, 2 tips).
 
 J* of both tips over all joints ``(2, 6, 12)``, float64, for a batch of random postures
-(one jitted call, warm), against Pinocchio in a Python loop in the same run (warm too):
+(one jitted call, warm; on one XLA CPU device, and split over one device per core with
+shard_map), against Pinocchio in a Python loop in the same run (warm too):
 per posture crba, computeJointJacobians, the two frame Jacobians and one 6x6 solve (the
 momentum-based J*, free-flyer on the bus, one URDF with prefixed copies of the arm).
 The first postures are checked against Pinocchio before anything is timed. Wall and
@@ -17,15 +18,19 @@ import os
 import sys
 import time
 
+CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+os.environ.setdefault("XLA_FLAGS", f"--xla_force_host_platform_device_count={CORES}")
+
 import jax
 
 jax.config.update("jax_enable_x64", True)
 
 import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 import spacearm as sa
 from spacearm.models.spatial import locate_package_file, read_urdf
-from spacearm.models.tree import tree_from_chains
+from spacearm.models.tree import primitives, tree_from_chains
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 sys.path.insert(0, ROOT)
@@ -105,8 +110,11 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     robot, urdf = build()
+    devices = jax.devices()
     rng = np.random.default_rng(0)
-    q = rng.uniform(-np.pi, np.pi, size=(args.postures, robot.n_joints))
+    count = args.postures - args.postures % len(devices)
+    q = rng.uniform(-np.pi, np.pi, size=(count, robot.n_joints))
+    print(f"two UR5 on a 400 kg cube: {count:,} postures, float64, {len(devices)} CPU device(s), {CORES} core(s)")
     jstar = pinocchio_loop(urdf, robot)
 
     kernel = jax.jit(sa.generalized_jacobian)
@@ -119,6 +127,19 @@ def main(argv=None) -> int:
 
     kernel(robot, q).block_until_ready()  # warm at the timed shape
     wall, cpu = timed(lambda: kernel(robot, q).block_until_ready(), args.repeats)
+    mesh = Mesh(np.array(devices), ("postures",))
+    sharded = jax.jit(
+        jax.shard_map(
+            primitives.generalized_jacobian,
+            mesh=mesh,
+            in_specs=(PartitionSpec(), PartitionSpec("postures")),
+            out_specs=PartitionSpec("postures"),
+            check_vma=False,  # scan carries start replicated and become per-shard
+        )
+    )
+    q_sharded = jax.device_put(q, NamedSharding(mesh, PartitionSpec("postures")))
+    np.testing.assert_allclose(np.asarray(sharded(robot, q_sharded))[:8], ours, atol=1e-14)
+    all_wall, _ = timed(lambda: sharded(robot, q_sharded).block_until_ready(), args.repeats)
     n_pin = min(args.pinocchio, len(q))
     for i in range(min(100, n_pin)):  # warm
         jstar(q[i])
@@ -130,12 +151,14 @@ def main(argv=None) -> int:
     pin_wall, pin_cpu = timed(loop, args.repeats)
     rate = lambda count, seconds: count / seconds
     print(f"spacearm  J* (2, 6, 12): {rate(len(q), wall):12,.0f} postures/s wall, {rate(len(q), cpu):12,.0f} per CPU s")
+    print(f"  split over {len(devices)} device(s): {rate(len(q), all_wall):12,.0f} postures/s wall")
     print(
         f"Pinocchio J* loop      : {rate(n_pin, pin_wall):12,.0f} postures/s wall, {rate(n_pin, pin_cpu):12,.0f} per CPU s"
     )
     print(
-        f"ratio: {rate(len(q), wall) / rate(n_pin, pin_wall):.1f}x wall, "
-        f"{rate(len(q), cpu) / rate(n_pin, pin_cpu):.1f}x CPU time"
+        f"ratio, one device: {rate(len(q), wall) / rate(n_pin, pin_wall):.1f}x wall, "
+        f"{rate(len(q), cpu) / rate(n_pin, pin_cpu):.1f}x CPU time; "
+        f"all {len(devices)} device(s): {rate(len(q), all_wall) / rate(n_pin, pin_wall):.1f}x wall"
     )
     return 0
 
