@@ -260,7 +260,7 @@ def _pinocchio_loop(reference, waypoints, steps):
     return R
 
 
-def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin):
+def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin, capsys):
     """A closed joint loop of both arms turns the bus; Magnus over the tree = RK4 over Pinocchio (1e-8 rad)."""
     robot, _ = dual
     rng = np.random.default_rng(11)
@@ -273,6 +273,8 @@ def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin):
     turned = np.linalg.norm(_log(reference))
     assert turned > 1e-3, turned
     assert angle < 1e-8, angle
+    with capsys.disabled():
+        print(f"\n  dual UR5 loop: bus turned {turned:.4f} rad, Magnus vs Pinocchio RK4 {angle:.1e} rad")
 
 
 def _log(R):
