@@ -22,7 +22,7 @@ from spacearm.models import tree
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import TREE, tree_from_chains
-from spacearm.models.tree.primitives import segments
+from spacearm.models.tree.primitives import POSTURE_QUANTITIES, segments
 
 from .tree_references import PinocchioTree, random_tree, relative, system_urdf
 
@@ -193,6 +193,17 @@ def test_tree_metrics_against_pinocchio(dual, dual_pin, dual_postures):
         np.testing.assert_allclose(w_d[b], np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9)
     with pytest.raises(TypeError, match="tree arms only"):
         tree.mass_matrix(sa.umetani1990(), np.zeros(2))
+
+
+def test_posture_quantities_in_one_pass(dual):
+    """J*, C and H* from one pass over the tree equal their own kernels."""
+    robot, _ = dual
+    q = np.random.default_rng(9).uniform(-2, 2, size=(2, 3, 12))
+    got = jax.jit(lambda r, x: TREE.fast_paths["posture_quantities"](r, x, POSTURE_QUANTITIES))(robot, q)
+    assert got["jacobian"].shape == (2, 3, 2, 6, 12) and got["arm_inertia"].shape == (2, 3, 12, 12)
+    np.testing.assert_allclose(got["jacobian"], sa.generalized_jacobian(robot, q), atol=1e-13)
+    np.testing.assert_allclose(got["base_rate"], sa.base_rate_matrix(robot, q), atol=1e-13)
+    np.testing.assert_allclose(got["arm_inertia"], tree.arm_inertia(robot, q), atol=1e-12)
 
 
 def test_segments_of_a_tree():

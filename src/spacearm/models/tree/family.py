@@ -32,6 +32,7 @@ from .primitives import (
     manipulability,
     mass_matrix,
     momentum_map,
+    posture_quantities,
     tip,
 )
 from .robot import TreeRobot
@@ -67,6 +68,7 @@ class TreeFamily(RobotFamily):
         "base_rate_matrix": base_twist_map,
         "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
+        "posture_quantities": posture_quantities,
     }
     fields = None  # design fields for trees are not defined yet
     attitude = SO3

@@ -61,6 +61,7 @@ from ..spatial.primitives import (
 from .robot import TreeRobot
 
 __all__ = [
+    "POSTURE_QUANTITIES",
     "TreeConstants",
     "arm_inertia",
     "base_twist_map",
@@ -70,6 +71,7 @@ __all__ = [
     "manipulability",
     "mass_matrix",
     "momentum_map",
+    "posture_quantities",
     "segments",
     "tip",
     "tip_pose",
@@ -454,6 +456,50 @@ mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arm
 
 arm_inertia = batched(_arm_inertia_minor, 2)
 arm_inertia.__doc__ = """``(..., n, n)`` H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q, the inertia at zero momentum."""
+
+
+POSTURE_QUANTITIES = ("jacobian", "base_rate", "arm_inertia")
+
+
+def _posture_quantities_minor(robot, q, needs):
+    """J* rows of all tips (6k), C (6) and H* (n) stacked by rows ``(rows, n, *batch)`` from ONE pass."""
+    state = _tree_pass(robot, q)
+    coupling, solved = _coupling(state)
+    parts = []
+    if "jacobian" in needs:
+        J = _jstar_from(robot, state)
+        parts.append(J.reshape((-1,) + J.shape[2:]))
+    if "base_rate" in needs:
+        r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
+        v_bus = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(r_g, solved))
+        parts.append(_rows(v_bus, _scale(-1.0, solved)))
+    if "arm_inertia" in needs:
+        H = _mass_from(robot, state) - _outer(state.momentum, state.momentum) / state.mass
+        parts.append(H - _outer(coupling, solved))
+    return jnp.concatenate(parts, axis=0)
+
+
+def posture_quantities(robot: TreeRobot, q: jax.Array, needs: tuple[str, ...]) -> dict[str, jax.Array]:
+    """The per-posture matrices posture metrics need, from one pass over the tree per posture.
+
+    Args:
+        robot: one design.
+        q: ``(..., n)`` joint positions.
+        needs: a subset of `POSTURE_QUANTITIES` (static): ``"jacobian"`` J* ``(..., k, 6, n)``,
+            ``"base_rate"`` C ``(..., 6, n)``, ``"arm_inertia"`` H* ``(..., n, n)``; bus axes,
+            each equal to its own kernel above.
+    """
+    wanted = tuple(name for name in POSTURE_QUANTITIES if name in needs)
+    stacked = batched(lambda r, x: _posture_quantities_minor(r, x, wanted), 2)(robot, q)
+    k, n = robot.n_tips, robot.n_joints
+    rows = {"jacobian": 6 * k, "base_rate": 6, "arm_inertia": n}
+    out, start = {}, 0
+    for name in wanted:
+        out[name] = stacked[..., start : start + rows[name], :]
+        start += rows[name]
+    if "jacobian" in out:
+        out["jacobian"] = out["jacobian"].reshape(out["jacobian"].shape[:-2] + (k, 6, n))
+    return out
 
 
 def tip_pose(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
