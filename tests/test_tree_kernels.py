@@ -21,7 +21,7 @@ from spacearm.kinematics import generic_generalized_jacobian, generic_tip_positi
 from spacearm.models import tree
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.urdf import rpy_matrix
-from spacearm.models.tree import TREE, tree_from_chains
+from spacearm.models.tree import TREE, stack_tree_robots, tree_from_chains
 from spacearm.models.tree.primitives import POSTURE_QUANTITIES, segments
 
 from .tree_references import PinocchioTree, random_tree, relative, system_urdf
@@ -204,6 +204,26 @@ def test_posture_quantities_in_one_pass(dual):
     np.testing.assert_allclose(got["jacobian"], sa.generalized_jacobian(robot, q), atol=1e-13)
     np.testing.assert_allclose(got["base_rate"], sa.base_rate_matrix(robot, q), atol=1e-13)
     np.testing.assert_allclose(got["arm_inertia"], tree.arm_inertia(robot, q), atol=1e-12)
+
+
+def test_second_mount_moves_first_w_star(dual):
+    """d w*_1 / d mount_xyz of arm 2 is not zero and matches central differences.
+
+    Compiles the reverse-mode program of the tree pass (~10 s CPU), and a design vmap."""
+    robot, _ = dual
+    q = np.random.default_rng(4).uniform(-2, 2, size=12)
+    w_first = lambda r: sa.manipulability(r, q)[0]
+    grad = np.asarray(jax.grad(w_first)(robot).mount_xyz)
+    h, moved = 1e-6, []
+    for sign in (1.0, -1.0):
+        xyz = np.array(robot.mount_xyz)
+        xyz[1, 1] += sign * h
+        moved.append(float(w_first(robot.replace(mount_xyz=xyz))))
+    assert abs(grad[1, 1]) > 1e-5
+    np.testing.assert_allclose(grad[1, 1], (moved[0] - moved[1]) / (2 * h), rtol=1e-5)
+    designs = stack_tree_robots([robot, robot.replace(mount_xyz=np.array(robot.mount_xyz) + 0.1)])
+    J = jax.vmap(sa.generalized_jacobian, in_axes=(0, None))(designs, q)
+    np.testing.assert_allclose(J[1], sa.generalized_jacobian(jax.tree.map(lambda x: x[1], designs), q), atol=1e-14)
 
 
 def test_segments_of_a_tree():
