@@ -266,6 +266,10 @@ def test_relative_jacobian_refuses():
         sa.relative_jacobian(robot, np.zeros(robot.n_joints), tips=("tip0", "nope"))
     with pytest.raises(ValueError, match="out of range"):
         sa.relative_jacobian(robot, np.zeros(robot.n_joints), tips=(0, 5))
+    with pytest.raises(TypeError, match="several tips, got a PlanarRobot"):
+        sa.relative_jacobian(sa.umetani1990(), np.zeros(3))
+    with pytest.raises(TypeError, match="straight tip paths are not available for trees"):
+        TREE.straight_maps(robot, np.zeros(robot.n_joints))
 
 
 def _pinocchio_loop(reference, waypoints, steps):

@@ -112,6 +112,17 @@ class TreeFamily(RobotFamily):
         """``(n, n)`` H*, the inertia of all arms at zero momentum."""
         return arm_inertia(robot, joints)
 
+    # Not defined for trees yet: a straight path or a shell needs a chosen tip.
+
+    def straight_maps(self, robot: TreeRobot, joints: jax.Array):
+        raise TypeError(
+            "straight tip paths are not available for trees of arms yet (a path needs a chosen tip); "
+            "use integrate_joint_path for joint paths of all arms"
+        )
+
+    def tip_shell(self, robot: TreeRobot):
+        raise TypeError("the reach shell is not available for trees of arms yet (it needs a chosen tip)")
+
 
 TREE = TreeFamily()
 TreeRobot.family = TREE
