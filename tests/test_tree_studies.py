@@ -420,7 +420,10 @@ def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
     assert config["metrics"][0]["tip"] == "right/tool"
     assert load_sweep(config).robot.tip_names == ("left/tool", "right/tool")
     with open(tmp_path / "opt-out" / "pareto.csv") as handle:
-        header = next(csv.reader(handle))
+        header, *rows = list(csv.reader(handle))
+    front = np.array(rows, dtype=float)
+    problem = sa.load_problem(tmp_path / "problem.yaml")
+    np.testing.assert_allclose(problem.batch_function()(front[:, :2]), front[:, 2:], rtol=1e-12)
     assert header == [
         "arms.right.mount.xyz[0]",
         "arms.right.mount.rpy[1]",
