@@ -304,6 +304,8 @@ def test_per_tip_objectives_equal_direct_means_of_manipulability(small_tree_file
 
 
 def test_per_tip_objective_gradient_matches_finite_differences(small_tree_file):
+    """The reverse-mode Jacobian of the per-tip and whole-system objectives against central
+    differences (about 10 s: a reverse-mode program and eager objective calls)."""
     problem = sa.load_problem(_problem_config(small_tree_file))
     f = problem.objective_function()
     x = np.array([0.1, -0.2])
@@ -370,7 +372,8 @@ def test_bad_tips_are_refused(small_tree_file, metrics, message):
 def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
     """One subprocess: a 2-design sweep and a 2-variable optimize (population 4, one
     generation) of a two-arm tree, and a bad field in each file (exit 2, the file and the
-    field named, nothing written)."""
+    field named, nothing written). About 30 s: the subprocess compiles a sweep program and
+    the search's value and value-and-gradient programs (one process for all four runs)."""
     sweep = {
         "name": "two-small-sweep",
         "robot": str(small_tree_file),
@@ -470,3 +473,22 @@ def test_fields_of_a_whole_system_urdf():
     np.testing.assert_allclose(heavy.link_inertia[8], 2 * robot.link_inertia[8], rtol=1e-15)
     with pytest.raises(ConfigError, match="link 'Boom_EE' is merged into body 'Boom_Tool'"):
         tree_fields.check_field("f.yaml: axes.a", "links.Boom_EE.mass", robot)
+
+
+def test_whole_system_problem_with_a_shared_turret_and_prismatic_joints():
+    """configs/three-arm-servicer.yaml: two tips share the turret joint, two joints are
+    prismatic, three continuous; the per-tip objectives are still the direct means.
+    About 20 s cold: it compiles the objective program of a 10-joint tree."""
+    config = {
+        "name": "three-arm",
+        "robot": "../configs/three-arm-servicer.yaml",
+        "variables": {"links.Turret.length": [0.8, 1.2], "base.mass": [400.0, 900.0]},
+        "objectives": ["w_avg[Right_EE]", {"name": "w_avg", "tip": "Boom_EE"}, "low_disturbance"],
+        "average": {"samples": 128, "randomizations": 8, "seed": 1},
+    }
+    problem = sa.load_problem(config, base_dir="sweeps")
+    x = np.array([1.1, 500.0])
+    values = np.asarray(jax.jit(problem.objective_function())(x))
+    robot = problem.robot(jnp.asarray(x))
+    w, disturbance = _direct_means(robot, 128, 8, 1)
+    np.testing.assert_allclose(values, [w[1], w[2], -disturbance], rtol=1e-12)
