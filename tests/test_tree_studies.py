@@ -346,6 +346,35 @@ def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_fil
     np.testing.assert_allclose([values[c] for c in columns], expected, rtol=1e-12)
 
 
+def test_posture_metric_of_one_tip(small_tree_file):
+    """The posture metric of a tip: w* of that tip, 1/kappa of its J*_v rows over every joint
+    (NumPy singular values) and the whole system's ||C_w||_F at q_deg."""
+    q_deg = [10.0, -40.0, 70.0, 25.0, 50.0, -30.0]
+    spec = load_sweep(
+        {
+            "name": "t",
+            "robot": str(small_tree_file),
+            "axes": {"x": {"field": "base.mass", "values": [100.0]}},
+            "metrics": [{"name": "posture", "tip": 1, "q_deg": q_deg}, {"name": "posture", "tip": 0, "q_deg": q_deg}],
+        }
+    )
+    columns = ["w_star_m3[right/tool]", "inverse_condition[right/tool]", "C_w_fro", "w_star_m3[left/tool]"]
+    assert metric_columns(spec.metrics)[:4] == columns
+    robot = jax.tree_util.tree_map(lambda leaf: leaf[0], build_designs(spec)[0])
+    values = jax.jit(design_function(spec.metrics))(robot)
+    q = np.radians(q_deg)
+    J = np.asarray(sa.generalized_jacobian(robot, q))[:, :3, :]
+    singular = np.linalg.svd(J, compute_uv=False)
+    expected = [
+        np.sqrt(np.linalg.det(J[1] @ J[1].T)),
+        singular[1, -1] / singular[1, 0],
+        np.linalg.norm(np.asarray(sa.base_rate_matrix(robot, q))[3:]),
+        np.sqrt(np.linalg.det(J[0] @ J[0].T)),
+    ]
+    np.testing.assert_allclose([values[c] for c in columns], expected, rtol=1e-11)
+    assert values["inverse_condition[left/tool]"] == pytest.approx(singular[0, -1] / singular[0, 0], rel=1e-11)
+
+
 @pytest.mark.parametrize(
     ("metrics", "message"),
     [
@@ -353,6 +382,7 @@ def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_fil
         ([{"name": "w_avg", "tip": "left/tol"}], "unknown tip 'left/tol' (did you mean 'left/tool'?)"),
         ([{"name": "w_avg", "tip": 2}], "index 2 out of range"),
         ([{"name": "base_disturbance", "tip": 0}], "takes no tip"),
+        (["posture"], "posture is per tip and the robot has 2"),
         ([{"name": "w_avg", "tip": 0}, {"name": "w_avg", "tip": "left/tool"}], "listed twice for tip left/tool"),
     ],
 )

@@ -150,13 +150,28 @@ def _straight_area(robot, options):
 
 
 def _check_posture(where: str, options: dict) -> None:
-    check_keys(f"{where}: ", options, {"q_deg"})
+    check_keys(f"{where}: ", options, {"q_deg", "tip"})
+    tip = options.get("tip")
+    if tip is not None and (isinstance(tip, bool) or not isinstance(tip, (str, int))):
+        raise ConfigError(f"{where}.tip: a tip's name or index, got {tip!r}")
     q = options.get("q_deg")
     if q is not None and (not isinstance(q, (list, tuple)) or not all(is_number(v) for v in q)):
         raise ConfigError(f"{where}.q_deg: must be a list of joint positions in degrees, one per joint")
 
 
+def _posture_tip(options: dict, robot, where: str = "metrics") -> int | None:
+    """The tip index the ``posture`` metric reads on a robot with several tips (None: one tip)."""
+    return split_metric(tip_metric(where, robot, "manipulability", options.get("tip"), label="posture"))[1]
+
+
+def _posture_columns(options: dict) -> list[str]:
+    """w*, 1/kappa (of the chosen tip, named in the column on a robot with several) and ||C_w||_F."""
+    tip = f"[{options['tip']}]" if options.get("tip") is not None else ""
+    return [f"w_star_m3{tip}", f"inverse_condition{tip}", "C_w_fro"]
+
+
 def _check_posture_robot(where: str, options: dict, robot) -> None:
+    _posture_tip(options, robot, where)
     q = options.get("q_deg")
     if q is not None and len(q) != robot.n_joints:
         raise ConfigError(f"{where}.q_deg: needs {robot.n_joints} joint positions (one per joint), got {len(q)}")
@@ -169,12 +184,17 @@ def _posture(robot, options):
     q_deg = jnp.asarray(options.get("q_deg", [30.0] * n), dtype=robot.base_mass.dtype)
     prismatic = jnp.asarray([kind == "prismatic" for kind in robot.joint_kinds])
     q = jnp.where(prismatic, q_deg, jnp.radians(q_deg))
-    singular = jnp.linalg.svd(generalized_jacobian(robot, q)[:3], compute_uv=False)
+    J, w = generalized_jacobian(robot, q), manipulability(robot, q)
+    tip = _posture_tip(options, robot)
+    if tip is not None:  # several tips: the chosen tip's rows of J* over every joint
+        J, w = J[tip], w[tip]
+    singular = jnp.linalg.svd(J[:3], compute_uv=False)
     largest = singular[0]
+    w_star, inverse_condition, disturbance = _posture_columns(options)
     return {
-        "w_star_m3": manipulability(robot, q),
-        "inverse_condition": jnp.where(largest > 0, singular[-1] / jnp.where(largest > 0, largest, 1.0), 0.0),
-        "C_w_fro": jnp.linalg.norm(base_rate_matrix(robot, q)[3:]),
+        w_star: w,
+        inverse_condition: jnp.where(largest > 0, singular[-1] / jnp.where(largest > 0, largest, 1.0), 0.0),
+        disturbance: jnp.linalg.norm(base_rate_matrix(robot, q)[3:]),
     }
 
 
@@ -247,9 +267,11 @@ def resolve_tips(where: str, metrics: Sequence[MetricSpec], robot) -> tuple[Metr
     """
     resolved = []
     for i, metric in enumerate(metrics):
-        if metric.name in _AVERAGES:
-            kind = _average_kind(metric.name, metric.options, robot, where=f"{where}[{i}]")
-            _, tip = split_metric(kind)
+        if metric.name in _AVERAGES or metric.name == "posture":
+            if metric.name == "posture":
+                tip = _posture_tip(metric.options, robot, where=f"{where}[{i}]")
+            else:
+                _, tip = split_metric(_average_kind(metric.name, metric.options, robot, where=f"{where}[{i}]"))
             if metric.options.get("tip") is not None:
                 names = tuple(robot.labels.tip_names)
                 metric = MetricSpec(metric.name, {**metric.options, "tip": names[tip] if names else tip})
@@ -330,12 +352,12 @@ METRICS: dict[str, Metric] = {
     ),
     "posture": Metric(
         _posture,
-        lambda o: ["w_star_m3", "inverse_condition", "C_w_fro"],
+        _posture_columns,
         check=_check_posture,
         check_robot=_check_posture_robot,
-        families=("spatial",),
+        families=("spatial", "tree"),
         description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
-        "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)",
+        "1/kappa(J*_v) (of one tip: option tip on a robot with several), ||C_w||_F (bus rad/s per joint rad/s)",
     ),
 }
 METRICS["reach_radii"] = Metric(
@@ -408,9 +430,9 @@ def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], di
                 values.update({column: averages[kind].value, error: averages[kind].error})
         for metric in metrics:
             entry = METRICS[metric.name]
-            if metric.name in _AVERAGES or entry.fn in done:
+            if metric.name in _AVERAGES or (entry.fn, str(metric.options.get("tip"))) in done:
                 continue
-            done.add(entry.fn)
+            done.add((entry.fn, str(metric.options.get("tip"))))
             values.update(entry.fn(robot, metric.options))
         return {column: values[column] for column in wanted}
 
