@@ -146,6 +146,11 @@ def test_parse_hybrid_checks_its_section():
         parse_hybrid("f.yaml", {"population": 2})
     with pytest.raises(ConfigError, match="populaton"):
         parse_hybrid("f.yaml", {"populaton": 12})
+    assert parse_hybrid("f.yaml", {"jacobian": "reverse", "gradient_share": 0}).jacobian == "reverse"
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.jacobian: must be one of auto, reverse, differences"):
+        parse_hybrid("f.yaml", {"jacobian": "forward"})
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.gradient_share: must lie in \[0, 1\]"):
+        parse_hybrid("f.yaml", {"gradient_share": 1.5})
 
 
 @pytest.fixture(scope="module")
@@ -172,6 +177,32 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     # Each heavy program compiled once: the value program and the gradient (VJP) program.
     heavy = {name: count for name, count in compiles.items() if "evaluate" in name or "pull" in name}
     assert heavy and max(heavy.values()) == 1, compiles
+
+
+def test_hybrid_reverse_jacobian_steps_like_the_differences():
+    """The vector-Jacobian product (one more program) and the forward differences through
+    the value program give the same design-space gradients, so the same run to a few
+    digits; the population rule stops a run without densification once the population's
+    own hypervolume rose no higher for ``population_patience`` generations."""
+    problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR))
+    runs = {}
+    for jacobian in ("reverse", "differences"):
+        settings = HybridSettings(
+            population=16, generations=40, seed=3, jacobian=jacobian, densify=False, population_patience=3
+        )
+        with count_compiles() as compiles:
+            runs[jacobian] = hybrid_search(problem, settings)
+        pulls = [count for name, count in compiles.items() if "pull" in name]
+        assert pulls == ([1] if jacobian == "reverse" else []), dict(compiles)
+    reverse, differences = runs["reverse"], runs["differences"]
+    assert reverse.extra["jacobian"] == "reverse" and differences.extra["jacobian"] == "differences"
+    first = len(reverse.checkpoints[1:3])  # the first two generations, before paths can part
+    for a, b in zip(reverse.checkpoints[1 : 1 + first], differences.checkpoints[1 : 1 + first], strict=True):
+        assert a["population_hypervolume"] == pytest.approx(b["population_hypervolume"], rel=1e-6)
+    for run in runs.values():
+        assert run.extra["stop_reason"].startswith("converged: the population") and run.extra["generations"] < 40
+        population_hv = [c["population_hypervolume"] for c in run.checkpoints]
+        assert max(population_hv[-3:]) <= max(population_hv[:-3]) * (1 + 1e-9)
 
 
 def test_hybrid_gradient_steps_raise_the_hypervolume_of_a_population(planar_hybrid):
