@@ -183,12 +183,19 @@ def test_hybrid_reverse_jacobian_steps_like_the_differences():
     """The vector-Jacobian product (one more program) and the forward differences through
     the value program give the same design-space gradients, so the same run to a few
     digits; the population rule stops a run without densification once the population's
-    own hypervolume rose no higher for ``population_patience`` generations."""
+    own hypervolume rose no higher for ``population_patience`` generations and the
+    archive's gained less than ``population_tolerance``."""
     problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR))
     runs = {}
     for jacobian in ("reverse", "differences"):
         settings = HybridSettings(
-            population=16, generations=40, seed=3, jacobian=jacobian, densify=False, population_patience=3
+            population=16,
+            generations=40,
+            seed=3,
+            jacobian=jacobian,
+            densify=False,
+            population_patience=3,
+            population_tolerance=1e-2,
         )
         with count_compiles() as compiles:
             runs[jacobian] = hybrid_search(problem, settings)
@@ -203,6 +210,8 @@ def test_hybrid_reverse_jacobian_steps_like_the_differences():
         assert run.extra["stop_reason"].startswith("converged: the population") and run.extra["generations"] < 40
         population_hv = [c["population_hypervolume"] for c in run.checkpoints]
         assert max(population_hv[-3:]) <= max(population_hv[:-3]) * (1 + 1e-9)
+        archive_hv = [c["hypervolume"] for c in run.checkpoints]
+        assert archive_hv[-1] - archive_hv[-4] <= 1e-2 * archive_hv[-1]
 
 
 def test_hybrid_gradient_steps_raise_the_hypervolume_of_a_population(planar_hybrid):

@@ -31,7 +31,8 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
 3. **Stopping** from the front's own convergence: the archive's hypervolume gained less
    than ``tolerance`` (relative) over the last ``patience`` generations; or, without the
    two-objective densification, the population's own hypervolume rose no higher in the
-   last ``population_patience`` generations; or a budget of generations, evaluations or
+   last ``population_patience`` generations while the archive's gained less than
+   ``population_tolerance``; or a budget of generations, evaluations or
    seconds ran out.
 
 Every design is evaluated by the problem's own ``batch_function()`` in batches of the
@@ -76,7 +77,8 @@ class HybridSettings:
         population_patience: without densification (three or more objectives, or
             ``densify: false``), also stop when the population's own hypervolume has not
             risen above its best by more than ``tolerance`` (relative) for this many
-            generations (0: never).
+            generations (0: never) while the archive's hypervolume gained less than
+            ``population_tolerance`` (relative) over them.
         gradient_share: share of the population that takes a gradient step each
             generation (the front first, at random within a layer); the rest of the
             evaluations go to offspring.
@@ -102,6 +104,7 @@ class HybridSettings:
     patience: int = 10
     tolerance: float = 1e-9
     population_patience: int = 5
+    population_tolerance: float = 1e-3
     gradient_share: float = 0.5
     jacobian: str = "auto"
     initial_step: float = 0.05
@@ -459,14 +462,20 @@ def hybrid_search(
             break
         # Without densification the population is the front the search refines: once its
         # own hypervolume stops rising (a set near the hypervolume-optimal distribution of
-        # its size; what remains are crowding fluctuations), later generations only add
-        # designs near the same front.
+        # its size; what remains are crowding fluctuations) and the archive barely gains,
+        # later generations only add designs near the same front. (The population alone
+        # settles early on pareto-ur5-arm, at 98.9 % of the best known, while its archive
+        # still gained 6e-3 in 5 generations; on pareto-mount-ur5, 5e-4.)
         population_hv = [c["population_hypervolume"] for c in checkpoints]
         wait = settings.population_patience
         if not densifying and wait and len(population_hv) > wait:
             best_before = max(population_hv[:-wait])
-            if max(population_hv[-wait:]) <= best_before + settings.tolerance * abs(best_before):
-                stop_reason = f"converged: the population's hypervolume rose no higher in {wait} generations"
+            settled = max(population_hv[-wait:]) <= best_before + settings.tolerance * abs(best_before)
+            if settled and hv[-1] - hv[-1 - wait] <= settings.population_tolerance * abs(hv[-1]):
+                stop_reason = (
+                    f"converged: the population's hypervolume rose no higher in {wait} generations, "
+                    f"the archive's by less than {settings.population_tolerance:g}"
+                )
                 break
         evaluations = counts["value"] + counts["value_and_gradient"]
         if settings.max_evaluations is not None and evaluations >= settings.max_evaluations:
