@@ -34,7 +34,7 @@ jax.config.update("jax_enable_x64", True)
 from spacearm._core.schema import read_yaml
 from spacearm.design.baselines import nsga2_search
 from spacearm.design.fronts import hypervolume
-from spacearm.design.hybrid import hybrid_search, parse_hybrid
+from spacearm.design.hybrid import JACOBIANS, hybrid_search, parse_hybrid
 from spacearm.design.spatial_problem import load_design_problem
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,6 +62,8 @@ def bench(
     factor: float,
     tolerance: float | None = None,
     generations: int | None = None,
+    jacobian: str | None = None,
+    gradient_share: float | None = None,
 ) -> dict:
     path = ROOT / "sweeps" / f"{name}.yaml"
     config = read_yaml(path, what="design problem file")
@@ -75,6 +77,10 @@ def bench(
         settings = dataclasses.replace(settings, tolerance=tolerance)
     if generations is not None:
         settings = dataclasses.replace(settings, generations=generations)
+    if jacobian is not None:
+        settings = dataclasses.replace(settings, jacobian=jacobian)
+    if gradient_share is not None:
+        settings = dataclasses.replace(settings, gradient_share=gradient_share)
     print(f"== {name}: {len(problem.variables)} variables, objectives {', '.join(problem.objectives)}", flush=True)
     print(f"  load average {' '.join(f'{v:.1f}' for v in os.getloadavg())}", flush=True)
     cpu = cpu_seconds()
@@ -84,7 +90,7 @@ def bench(
     hybrid_wall = hybrid.compile_seconds + hybrid.run_seconds
     print(
         f"  hybrid: compile {hybrid.compile_seconds:.1f} s, run {hybrid.run_seconds:.1f} s, "
-        f"{hybrid.evaluations} evaluations, {hybrid.extra['generations']} generations ({hybrid.extra['stop_reason']}), "
+        f"{hybrid.evaluations} evaluations, {hybrid.extra['generations']} generations, {hybrid.extra['jacobian']} J ({hybrid.extra['stop_reason']}), "
         f"{hybrid_cpu:.1f} CPU s",
         flush=True,
     )
@@ -146,10 +152,21 @@ def main() -> None:
     parser.add_argument("--population", type=int, default=None, help="the hybrid's population (default: the file's)")
     parser.add_argument("--tolerance", type=float, default=None, help="the hybrid's stopping tolerance")
     parser.add_argument("--generations", type=int, default=None, help="the hybrid's most generations")
+    parser.add_argument("--jacobian", choices=JACOBIANS, default=None, help="the hybrid's design-space gradients")
+    parser.add_argument("--gradient-share", type=float, default=None, help="the hybrid's stepping share")
     parser.add_argument("--factor", type=float, default=3.0, help="NSGA-II's wall time / the hybrid's (default 3)")
     args = parser.parse_args()
     rows = [
-        bench(name, args.max_seconds, args.population, args.factor, args.tolerance, args.generations)
+        bench(
+            name,
+            args.max_seconds,
+            args.population,
+            args.factor,
+            args.tolerance,
+            args.generations,
+            args.jacobian,
+            args.gradient_share,
+        )
         for name in args.problems
     ]
     print("\nproblem              NSGA-II end HV   hybrid/best  NSGA-II/best  hybrid wall  to NSGA-II end  ratio  met")

@@ -147,6 +147,7 @@ def test_parse_hybrid_checks_its_section():
     with pytest.raises(ConfigError, match="populaton"):
         parse_hybrid("f.yaml", {"populaton": 12})
     assert parse_hybrid("f.yaml", {"jacobian": "reverse", "gradient_share": 0}).jacobian == "reverse"
+    assert parse_hybrid("f.yaml", {"gradient_share": None}).gradient_share is None
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.jacobian: must be one of auto, reverse, differences"):
         parse_hybrid("f.yaml", {"jacobian": "forward"})
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.gradient_share: must lie in \[0, 1\]"):
@@ -167,8 +168,8 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     # Every evaluated design is in the box and archived, with the values batch_function gives.
     assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
     assert (
-        result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 3 * 16
-    )  # start, then steps, children, densified
+        result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 5 * 16
+    )  # start, then per generation: every member's 2 differences, its step, 16 children, 16 densified
     np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
     hv = [c["hypervolume"] for c in result.checkpoints]
     assert np.all(np.diff(hv) >= 0)

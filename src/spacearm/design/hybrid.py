@@ -15,8 +15,9 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    (`spacearm.design.fronts.layer_face_areas`, the exact faces of the exclusive regions,
    in NumPy for 2 and 3 objectives; the autodiff of the exact hypervolume,
    `spacearm.design.hypervolume.layer_hypervolume_gradients`, for 4). ``J_i^T w`` comes
-   from forward differences through the value program for up to 4 variables (d values,
-   no other program to compile), else from one vmapped vector-Jacobian product.
+   from forward differences through the value program for up to 4 variables or
+   closed-form objectives (d values, no other program to compile), else from one
+   vmapped vector-Jacobian product.
    Dominated points follow their layer's gradient towards the front instead of
    freezing; on the front the hypervolume gradient itself spreads the points (a
    hypervolume-maximal set is spread by the front's slope). Each step has its own
@@ -24,7 +25,8 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    test on its layer's hypervolume (linearized at the old point) and halved after one that
    did not (the step is then refused), so steps shrink to the precision the front needs.
    Offspring fill the value batches of the stepped designs (and of the differences):
-   with the default half of the population stepping, a generation of pareto-ur5-arm
+   with half of the population stepping (the default for joint-box averages; all of it
+   for closed-form objectives, whose values are cheap), a generation of pareto-ur5-arm
    costs one batch of values and the vector-Jacobian products of half a batch, and
    reached a higher hypervolume per CPU second than a step for every member (two value
    batches and a full batch of products per generation) or for a quarter of them.
@@ -58,6 +60,7 @@ from .._core.errors import ConfigError
 from .._core.schema import check_keys, integer, number
 from .fronts import hypervolume, layer_face_areas, nondominated_mask, reference_from_population
 from .hypervolume import layer_hypervolume_gradients
+from .objectives import AVERAGE_OBJECTIVES
 from .search import SearchResult, _densify
 
 __all__ = ["HybridSettings", "hybrid_search", "nondominated_ranks", "parse_hybrid", "reference_from_population"]
@@ -81,13 +84,16 @@ class HybridSettings:
             ``population_tolerance`` (relative) over them.
         gradient_share: share of the population that takes a gradient step each
             generation (the front first, at random within a layer); the rest of the
-            evaluations go to offspring.
+            evaluations go to offspring. None: all of it when every objective is a
+            closed form (values cost little next to a generation's bookkeeping), half
+            otherwise (joint-box averages).
         jacobian: how the design-space gradient J^T w is computed: ``"reverse"`` (a
             vmapped vector-Jacobian product, one more compiled program), ``"differences"``
             (forward differences through the value program: d values per design, no
             other program) or ``"auto"`` (differences for at most 4 variables, where they
             cost no more than a vector-Jacobian product, about 4 values, and save its
-            compile; reverse above).
+            compile, or when every objective is a closed form, not a joint-box average,
+            so values are cheap; reverse otherwise).
         initial_step, min_step, max_step: gradient step lengths in the unit box.
         reference_margin: the reference point, when the problem gives none, lies this
             share of the first population's front range below its nadir.
@@ -105,7 +111,7 @@ class HybridSettings:
     tolerance: float = 1e-9
     population_patience: int = 5
     population_tolerance: float = 1e-3
-    gradient_share: float = 0.5
+    gradient_share: float | None = None
     jacobian: str = "auto"
     initial_step: float = 0.05
     min_step: float = 1e-5
@@ -119,8 +125,12 @@ class HybridSettings:
 
 JACOBIANS = ("auto", "reverse", "differences")
 # Forward differences cost d values per gradient; a vector-Jacobian product through the
-# joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program.
+# joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
+# about 2.5 times as long as the values'.
 DIFFERENCES_UP_TO = 4
+# Above DIFFERENCES_UP_TO variables, differences still win when every objective is a
+# closed form (no joint-box average): the product's compile then buys more values than
+# the differences spend in a run (pareto-6var: compile 1.6 s instead of 17.5 s).
 # Forward-difference step in the unit box (the objectives are smooth float64 averages on a
 # fixed rule: truncation ~1e-6 relative, rounding ~1e-10).
 DIFFERENCE_STEP = 1e-6
@@ -149,7 +159,7 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
     changes = {}
     for key, value in section.items():
         where = f"{source}: hybrid.{key}"
-        if value is None and key in ("max_evaluations", "max_seconds"):
+        if value is None and key in ("max_evaluations", "max_seconds", "gradient_share"):
             changes[key] = None
         elif key == "jacobian":
             if value not in JACOBIANS:
@@ -298,9 +308,11 @@ def hybrid_search(
     evaluate = problem.batch_function()
     rng = np.random.default_rng(settings.seed)
     jacobian = settings.jacobian
-    if jacobian == "auto":
-        jacobian = "differences" if d <= DIFFERENCES_UP_TO else "reverse"
-    stepping = min(population, round(settings.gradient_share * population))
+    # Closed-form objectives (no joint-box average) make values cheap: a batch costs
+    # 0.1-0.2 % of the value program's compile, against 3-4 % for the averages.
+    closed_forms = not any(name in AVERAGE_OBJECTIVES for name in problem.objectives)
+    share = settings.gradient_share if settings.gradient_share is not None else (1.0 if closed_forms else 0.5)
+    stepping = min(population, round(share * population))
     densifying = settings.densify and m == 2
 
     # Compile every program once, for the population's shapes, before the timed run:
@@ -311,6 +323,8 @@ def hybrid_search(
     tic = time.perf_counter()
     jax.block_until_ready(evaluate(jnp.asarray(np.tile(problem.lower, (population, 1)))))
     compile_seconds["value"] = time.perf_counter() - tic
+    if jacobian == "auto":
+        jacobian = "differences" if d <= DIFFERENCES_UP_TO or closed_forms else "reverse"
     pulls = None
     if jacobian == "reverse" and stepping > 0:
         pulls = _pull_program(problem)
