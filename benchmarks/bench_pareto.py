@@ -138,6 +138,7 @@ def bench(
         f"{show(row['ratio'], '')}"
     )
     print(
+        f"  hybrid final hypervolume {hybrid_hv:.10g}, best known {best:.10g}\n"
         f"  share of best known: hybrid {row['hybrid_share']:.5%}, NSGA-II {row['nsga2_share']:.5%}; NSGA-II at "
         f"the hybrid's wall time {row['nsga2_at_hybrid_wall'] / best:.5%}; target met: {row['met']}",
         flush=True,
