@@ -27,6 +27,7 @@ from typing import Any, ClassVar
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._core.groups import Group
 
@@ -96,6 +97,11 @@ class RobotFamily:
         """``(m, n)`` Jacobian of the same arm with its base held fixed."""
         raise NotImplementedError
 
+    def moving_joints(self, robot) -> np.ndarray:
+        """``(n,)`` static booleans: the joints a planner may move (all, unless the robot
+        holds some: a focused tree). Held joints have zero columns in every joint-rate map."""
+        return np.ones(self.joint_count(robot), dtype=bool)
+
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 
     def tip_shell(self, robot) -> tuple[float, float]:
@@ -147,7 +153,9 @@ def family_of(robot) -> RobotFamily:
     """The family of a robot pytree (its class attribute ``family``)."""
     family = getattr(type(robot), "family", None)
     if not isinstance(family, RobotFamily):
-        raise TypeError(f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}")
+        raise TypeError(
+            f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}"
+        )
     return family
 
 

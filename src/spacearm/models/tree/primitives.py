@@ -69,6 +69,7 @@ __all__ = [
     "mass_matrix",
     "momentum_map",
     "segments",
+    "straight_path_maps",
     "tip",
     "tip_pose",
     "tree_constants",
@@ -377,6 +378,14 @@ def _base_twist_minor(robot, q):
     return _rows(v, _scale(-1.0, solved))
 
 
+def _straight_maps_minor(robot, q):
+    state = _tree_pass(robot, q)
+    jstar = _jstar_from(robot, state)  # (k, 6, n, *batch)
+    _, solved = _coupling(state)
+    translational = jstar[:, :3].reshape((-1,) + jstar.shape[2:])
+    return jnp.concatenate([translational, _rows(_scale(-1.0, solved))], axis=0)
+
+
 def _mass_from(robot, state):
     """H_m over the tree: joint j and k interact only when one is in the other's subtree."""
     revolute = 1.0 - state.prismatic
@@ -414,6 +423,10 @@ The closed form of the module docstring: one pass over the tree and one 3x3 solv
 
 base_twist_map = batched(_base_twist_minor, 2)
 base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate, bus axes."""
+
+straight_path_maps = batched(_straight_maps_minor, 2)
+straight_path_maps.__doc__ = """``(..., 3k + 3, n)``: rows 3t..3t+2 J*_v of tip t, the last 3 rows C_w (bus angular
+velocity per joint rate), bus axes, from one pass over the tree (what a straight tip path needs)."""
 
 mass_matrix = batched(_mass_minor, 2)
 mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arms with the bus held fixed."""
@@ -457,4 +470,3 @@ def momentum_map(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
     angular = _sub(state.angular, _cross(base_com, state.momentum))
     return _pack(i_s), _rows(state.momentum, angular)
-
