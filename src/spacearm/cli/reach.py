@@ -2,7 +2,11 @@
 
 Planar robots: ``--from PHI0,PHI1,..,PHIn`` (base attitude, joints) and ``--to X,Y``.
 Spatial robots (files with ``arm:``): ``--from Q1,..,Qn`` (joints), ``--to X,Y,Z`` and an
-optional start bus attitude ``--attitude-rpy R,P,Y``.
+optional start bus attitude ``--attitude-rpy R,P,Y``. Several arms on one bus (files with
+``arms:`` or ``system:``): the same, with ``--from`` over all n joints, ``--tip NAME`` (the
+tip that reaches; default the first) and ``--moving ARM,..`` (the arms, tips or joints that
+move; default all, so the other arms move too), through
+`spacearm.models.tree.robot.TreeRobot.focus`.
 """
 
 from __future__ import annotations
@@ -61,7 +65,8 @@ def register(subparsers) -> None:
             "workspace, otherwise a cyclic joint maneuver that turns the base first. Writes reach.png "
             "and reach.npz into --out: the whole history, joints (k, n), tip (k, 2 or 3), phase (k,) and "
             "phi (k, n+1) planar or base_rotation (k, 3, 3) spatial. Exit 2 for a target outside the "
-            "Maximum Reachable space (the radius is named)."
+            "Maximum Reachable space (the radius is named). Several arms on one bus: --tip chooses the "
+            "tip, --moving the arms that move (reach.npz: joints over all arms, tip of the chosen tip)."
         ),
     )
     parser.add_argument("robot", help="robot YAML file, e.g. configs/umetani1990.yaml or configs/ur5-smallsat.yaml")
@@ -90,6 +95,19 @@ def register(subparsers) -> None:
         help="spatial robots: the bus attitude at the start as roll, pitch, yaw (URDF convention), "
         "degrees (radians with --radians); default the identity",
     )
+    parser.add_argument(
+        "--tip",
+        default=None,
+        metavar="NAME",
+        help="several arms on one bus: the tip that reaches the target (default the first tip)",
+    )
+    parser.add_argument(
+        "--moving",
+        default=None,
+        metavar="ARM,..",
+        help="several arms on one bus: the arms (or tips, or joints) that move, comma-separated; the "
+        "others are held where they are (default: every joint moves)",
+    )
     parser.add_argument("--radians", action="store_true", help="read --from in radians")
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
     parser.add_argument("--animate", action="store_true", help="also write reach.gif")
@@ -102,21 +120,46 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..models import load_robot
-    from ..models.spatial import SpatialRobot
+    from ..models.family import family_of
 
     if args.html:  # the 'view' extra is checked before any work (exit 2 naming it)
         from ..figures.views.page import plotly_bundle
 
         plotly_bundle()
     robot = load_robot(args.robot)
-    if not isinstance(robot, SpatialRobot) and args.attitude is not None:
+    family = family_of(robot)
+    spatial = family.rotates_with_base
+    if not spatial and args.attitude is not None:
         raise ConfigError("--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude")
+    several = family.tip_count(robot) is not None
+    if several:
+        robot = _focus(args, robot)
+    else:
+        for option, value in (("--tip", args.tip), ("--moving", args.moving)):
+            if value is not None:
+                raise ConfigError(f"{option}: applies to robots with several arms (files with arms: or system:)")
+    if several and args.html:
+        raise ConfigError("--html: the replay is not available for several arms on one bus yet (reach.npz holds it)")
     out = Path(args.out)
     check_output_folder(out)
     # One writer at a time (a second one is refused naming the holder's PID); the files are
     # written into a staging folder that replaces --out as a whole.
     with lock_folder(out, label=f"--out {out}"):
-        return _run_spatial(args, robot, out) if isinstance(robot, SpatialRobot) else _run_planar(args, robot, out)
+        return _run_spatial(args, robot, out) if spatial else _run_planar(args, robot, out)
+
+
+def _focus(args: argparse.Namespace, robot):
+    """The tree focused on ``--tip`` with ``--moving`` (errors name the option)."""
+    tip = robot.tip_names[0] if args.tip is None else args.tip
+    moving = None if args.moving is None else [name.strip() for name in args.moving.split(",")]
+    try:
+        robot = robot.focus(tip=tip)
+    except ConfigError as error:
+        raise ConfigError(f"--{error}") from None
+    try:
+        return robot.focus(tip=robot.active_tip, moving=moving)
+    except ConfigError as error:
+        raise ConfigError(f"--{error}") from None
 
 
 def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
@@ -193,13 +236,21 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         loop_rotation=plan.loop_rotation,
         target_m=target,
     )
+    tree = getattr(robot, "active_tip", None) is not None
+    if tree:  # several arms: which tip, and which joints moved
+        arrays.update(tip_index=np.asarray(robot.active_tip), moving=robot.moving_mask)
     _check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn})
     with _result_folder(out) as staging:
-        draw_spatial_reach(robot, plan, staging / "reach.png")
+        if not tree:
+            draw_spatial_reach(robot, plan, staging / "reach.png")
         write_npz(staging / "reach.npz", **arrays)
         _write_replay(args, robot, staging)
     loop = f"by {plan.loops} pass(es) of a loop, then" if plan.loops else "along"
-    lines = [
+    lines = [f"tip            {robot.active_tip_name}"] if tree else []
+    if tree and robot.moving is not None:
+        held = [name for name, moves in zip(robot.joint_names, robot.moving_mask, strict=True) if not moves]
+        lines.append(f"held joints    {len(held)} of {robot.n_joints} (kept at --from)")
+    lines += [
         f"mode           {plan.mode}",
         f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
         f"bus rotation   {np.degrees(plan.bus_turn):.6f} deg from start to end ({loop} the straight path)",
@@ -208,7 +259,9 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m",
-        f"figure         {out / 'reach.png'}",
+        f"figure         {out / 'reach.png'}"
+        if not tree
+        else f"history        {out / 'reach.npz'} (no figure for trees yet)",
     ]
     if args.html:
         lines.append(f"replay         {out / 'reach.html'}")
