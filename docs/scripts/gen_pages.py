@@ -96,6 +96,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "the whole-system URDF reader: the bus link, the paths to the tips, lock_others",
     ),
     (
+        "spacearm.models.tree.shell",
+        "Models",
+        "the virtual manipulator's shell of one tip of a tree: radii between which it lies",
+    ),
+    (
         "spacearm.kinematics",
         "Kinematics",
         "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives",

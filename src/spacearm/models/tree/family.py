@@ -147,7 +147,7 @@ class TreeFamily(RobotFamily):
         """J*_v of the active tip and C_w (held joints' columns zero), one pass over the tree."""
         t = _require_tip(robot, "straight tip paths")
         maps = _columns(robot, straight_path_maps(robot, joints))
-        return maps[..., 3 * t : 3 * t + 3, :], maps[..., -3:, :]
+        return maps[..., 6 * t : 6 * t + 3, :], maps[..., -3:, :]
 
     def tip_shell(self, robot: TreeRobot) -> tuple[float, float]:
         """The tree's virtual-manipulator shell of the active tip (`spacearm.models.tree.shell`)."""

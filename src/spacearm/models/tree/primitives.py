@@ -382,8 +382,7 @@ def _straight_maps_minor(robot, q):
     state = _tree_pass(robot, q)
     jstar = _jstar_from(robot, state)  # (k, 6, n, *batch)
     _, solved = _coupling(state)
-    translational = jstar[:, :3].reshape((-1,) + jstar.shape[2:])
-    return jnp.concatenate([translational, _rows(_scale(-1.0, solved))], axis=0)
+    return jnp.concatenate([jstar.reshape((-1,) + jstar.shape[2:]), _rows(_scale(-1.0, solved))], axis=0)
 
 
 def _mass_from(robot, state):
@@ -425,8 +424,8 @@ base_twist_map = batched(_base_twist_minor, 2)
 base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate, bus axes."""
 
 straight_path_maps = batched(_straight_maps_minor, 2)
-straight_path_maps.__doc__ = """``(..., 3k + 3, n)``: rows 3t..3t+2 J*_v of tip t, the last 3 rows C_w (bus angular
-velocity per joint rate), bus axes, from one pass over the tree (what a straight tip path needs)."""
+straight_path_maps.__doc__ = """``(..., 6k + 3, n)``: rows 6t..6t+5 J* [v; w] of tip t, the last 3 rows C_w (bus
+angular velocity per joint rate), bus axes, from one pass over the tree (what straight tip and pose paths need)."""
 
 mass_matrix = batched(_mass_minor, 2)
 mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arms with the bus held fixed."""
