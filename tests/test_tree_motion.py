@@ -33,6 +33,7 @@ from spacearm.models.family import family_of
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.shell import tip_shell as spatial_tip_shell
 from spacearm.models.tree import tree_from_chains
+from spacearm.models.tree.primitives import tip_pose
 from spacearm.models.tree.shell import tip_shell
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
@@ -41,6 +42,7 @@ TREES = ("dual-ur5-servicer", "baxter-system", "tiago-dual-system", "three-arm-s
 Q_DEG = [20.0, -70.0, 90.0, -50.0, 70.0, 20.0] * 2
 Q0 = np.radians(Q_DEG)
 D = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
 
 
 @pytest.fixture(scope="session")
@@ -276,6 +278,30 @@ def test_reorientation_with_one_arm(dual):
     R0 = np.asarray(expm(np.array([0.1, 0.2, -0.3])))
     R_end, _ = sa.integrate_joint_path(dual, Q0, waypoints, base_rotation=R0, steps=16)  # the whole robot
     assert _turn(np.asarray(R_end).T @ (R0 @ target)) < 1e-9
+
+
+@pytest.mark.slow  # compiles the pose path for two focuses of the 12-joint tree
+def test_pose_target_for_a_tree_tip(dual):
+    """A straight pose path of the right tip, the left arm held and free: the end pose read
+    from the whole tree's kernels; the bus attitude against the integrator on the whole tree."""
+    for moving in (("right",), None):
+        robot = dual.focus(tip="right/tool0", moving=moving)
+        p0, T0 = (np.asarray(x) for x in family_of(robot).tip_frame(robot, Q0))
+        target = p0 + np.array([0.03, -0.02, 0.04])
+        T1 = np.asarray(expm(np.array([0.1, -0.05, 0.08]))) @ T0
+        plan = sa.plan_pose_reach(robot, Q0, target, T1)
+        q, R = np.asarray(plan.end_joints), np.asarray(plan.end_rotation)
+        axes = np.asarray(tip_pose(dual, q)[0])[1]
+        np.testing.assert_allclose(R @ axes, T1, atol=1e-12)
+        np.testing.assert_allclose(R @ np.asarray(sa.tip_position(dual, q))[1], target, atol=1e-12)
+        chords, _ = sa.integrate_joint_path(dual, Q0, np.asarray(plan.joints))  # O(chord^2) from the path
+        assert _turn(np.asarray(chords).T @ R) < 1e-8 < 1e-4 < _turn(R)
+        moved = np.max(np.abs(np.asarray(plan.joints)[:, :6] - Q0[:6]))
+        assert moved == 0.0 if moving else moved > 1e-3
+    with pytest.raises(sa.ConfigError, match=r"choose the tip to aim with robot.focus\(tip=...\)"):
+        sa.plan_pose_reach(dual, Q0, target, T1)
+    with pytest.raises(sa.ConfigError, match=r"at least 6 joints .* the arm has 3 moving"):
+        sa.plan_pose_reach(dual.focus(tip=1, moving=[f"right/{j}" for j in JOINTS[:3]]), Q0, target, T1)
 
 
 def test_reach_refuses_an_unknown_tip_or_arm(tmp_path, capsys):

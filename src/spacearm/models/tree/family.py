@@ -39,6 +39,7 @@ from .primitives import (
     momentum_map,
     straight_path_maps,
     tip,
+    tip_pose,
 )
 from .robot import TreeRobot
 from .shell import tip_shell
@@ -148,6 +149,17 @@ class TreeFamily(RobotFamily):
         t = _require_tip(robot, "straight tip paths")
         maps = _columns(robot, straight_path_maps(robot, joints))
         return maps[..., 6 * t : 6 * t + 3, :], maps[..., -3:, :]
+
+    def pose_maps(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """J* ``(6, n)`` of the active tip and C_w ``(3, n)`` (held joints' columns zero), one pass."""
+        t = _require_tip(robot, "pose targets")
+        maps = _columns(robot, straight_path_maps(robot, joints))
+        return maps[..., 6 * t : 6 * t + 6, :], maps[..., -3:, :]
+
+    def tip_frame(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """The active tip's origin about the system centroid ``(3,)`` and axes ``(3, 3)``, bus axes."""
+        t = _require_tip(robot, "pose targets")
+        return _tip(robot, joints), tip_pose(robot, joints)[0][t]
 
     def tip_shell(self, robot: TreeRobot) -> tuple[float, float]:
         """The tree's virtual-manipulator shell of the active tip (`spacearm.models.tree.shell`)."""
