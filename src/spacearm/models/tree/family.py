@@ -7,7 +7,7 @@ joints, w* ``(k,)``; the bus quantities (C, H*, the attitude) have none.
 
 Fast paths (each equals the generic path over the primitives; tests/test_tree_kernels.py):
 the batch-last pass over the tree (`spacearm.models.tree.primitives`), J* by the 3x3
-closed form for all tips at once, w* per tip from its translational rows.
+closed form for all tips at once, w* per tip by Cauchy-Binet inside the same batch-last pass.
 
 A focused tree (`spacearm.models.tree.robot.TreeRobot.focus`) is a single-tip robot:
 every kernel and hook gives the chosen tip's quantities without a tip axis, and every
@@ -35,8 +35,10 @@ from .primitives import (
     fixed_base_jacobian,
     generalized_jacobian,
     jacobians,
+    manipulability,
     mass_matrix,
     momentum_map,
+    posture_quantities,
     straight_path_maps,
     tip,
     tip_pose,
@@ -61,6 +63,10 @@ def _one_tip(robot: TreeRobot, per_tip, core: int):
     return per_tip[(Ellipsis, robot.active_tip) + (slice(None),) * core]
 
 
+def _focused(robot: TreeRobot) -> bool:
+    return robot.active_tip is not None or robot.moving is not None
+
+
 def _tip(robot, posture):
     return _one_tip(robot, tip(robot, posture), 1)
 
@@ -78,7 +84,30 @@ def _fixed_base_jacobian(robot, joints):
 
 
 def _manipulability(robot, posture):
+    if not _focused(robot):
+        return manipulability(robot, posture)  # Cauchy-Binet in the pass, every tip
     return gram_root_determinant(_generalized_jacobian(robot, posture)[..., :3, :])
+
+
+def _locked(robot: TreeRobot, inertia):
+    """H* (or H_m) of the held joints locked: the moving block, identity on the held joints
+    (their rates are zero, so the moving joints see exactly that block)."""
+    if robot.moving is None:
+        return inertia
+    mask = jnp.asarray(robot.moving_mask, inertia.dtype)
+    both = mask[:, None] * mask[None, :]
+    return inertia * both + jnp.diag(1.0 - mask)
+
+
+def _posture_quantities(robot, posture, needs):
+    out = posture_quantities(robot, posture, needs)
+    if "jacobian" in out:
+        out["jacobian"] = _one_tip(robot, _columns(robot, out["jacobian"]), 2)
+    if "base_rate" in out:
+        out["base_rate"] = _columns(robot, out["base_rate"])
+    if "arm_inertia" in out:
+        out["arm_inertia"] = _locked(robot, out["arm_inertia"])
+    return out
 
 
 def _base_rate(robot, posture, joint_rates):
@@ -118,6 +147,7 @@ class TreeFamily(RobotFamily):
         "base_rate_matrix": _base_rate_matrix,
         "fixed_base_jacobian": _fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
+        "posture_quantities": _posture_quantities,
     }
     fields = None  # design fields for trees are not defined yet
     attitude = SO3
@@ -192,12 +222,12 @@ class TreeFamily(RobotFamily):
         return _fixed_base_jacobian(robot, joints)
 
     def mass_matrix(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H_m, all arms with the bus held fixed."""
-        return mass_matrix(robot, joints)
+        """``(n, n)`` H_m, all arms with the bus held fixed (a focused tree: its held joints locked)."""
+        return _locked(robot, mass_matrix(robot, joints))
 
     def arm_inertia(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H*, the inertia of all arms at zero momentum."""
-        return arm_inertia(robot, joints)
+        """``(n, n)`` H*, the inertia of all arms at zero momentum (a focused tree: its held joints locked)."""
+        return _locked(robot, arm_inertia(robot, joints))
 
 
 TREE = TreeFamily()
