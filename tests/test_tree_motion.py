@@ -127,6 +127,22 @@ def test_focus_is_the_chosen_tip_with_held_columns_zero(dual, right_alone):
     assert family_of(left).tip_count(left) is None and family_of(dual).tip_count(dual) == 2
 
 
+def test_focus_locks_the_held_joints_in_the_inertias(dual, right_alone):
+    """H* of the focused tree: the moving block, identity on the held joints (their rates are
+    zero); the metrics' posture quantities are the focused kernels'."""
+    q = np.random.default_rng(4).uniform(-2.0, 2.0, 12)
+    family = family_of(right_alone)
+    full, held = np.asarray(family_of(dual).arm_inertia(dual, q)), np.asarray(family.arm_inertia(right_alone, q))
+    np.testing.assert_allclose(held[6:, 6:], full[6:, 6:], rtol=1e-14)
+    np.testing.assert_array_equal(held[:6, :6], np.eye(6))
+    np.testing.assert_array_equal(held[:6, 6:], 0.0)
+    quantities = jax.jit(lambda r, q: family.fast_paths["posture_quantities"](r, q, ("jacobian", "base_rate")))(
+        right_alone, q
+    )
+    np.testing.assert_allclose(quantities["jacobian"], sa.generalized_jacobian(right_alone, q), atol=1e-15)
+    np.testing.assert_allclose(quantities["base_rate"], sa.base_rate_matrix(right_alone, q), atol=1e-15)
+
+
 def test_focus_names_arms_tips_and_joints(dual):
     by_arm = dual.focus(moving=("right",)).moving
     assert by_arm == (False,) * 6 + (True,) * 6
@@ -302,6 +318,27 @@ def test_pose_target_for_a_tree_tip(dual):
         sa.plan_pose_reach(dual, Q0, target, T1)
     with pytest.raises(sa.ConfigError, match=r"at least 6 joints .* the arm has 3 moving"):
         sa.plan_pose_reach(dual.focus(tip=1, moving=[f"right/{j}" for j in JOINTS[:3]]), Q0, target, T1)
+
+
+# The documented starts of `spacearm reach` for the whole-system files (the first tip, every joint moving).
+SYSTEM_STARTS = {
+    "baxter-system": ([0, -30, 0, 45, 0, 70, 0] * 2, [0.60, 0.88, -0.05]),
+    "tiago-dual-system": ([0.15] + [30, 30, 60, 90, 0, 30, 0] * 2, [0.53, 0.56, 0.30]),
+    "three-arm-servicer": ([20, 40, -60, 10, 30, 0.2, 20, 0.5, 40, 10], [0.72, 0.09, 0.96]),
+}
+
+
+@pytest.mark.slow  # compiles the straight-path lanes of each system (about 15 s of CPU each)
+@pytest.mark.parametrize("name", sorted(SYSTEM_STARTS))
+def test_reach_runs_on_the_shipped_systems(name):
+    robot = sa.load_robot(os.path.join(ROOT, "configs", f"{name}.yaml"))
+    start, target = SYSTEM_STARTS[name]
+    prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
+    q0 = np.where(prismatic, start, np.radians(start))
+    plan = sa.plan_reach(robot.focus(tip=0), q0, np.asarray(target))
+    assert plan.mode == "straight" and plan.error < 1e-9
+    end = np.asarray(sa.tip_position(robot, plan.end_joints, plan.end_rotation))[0]
+    np.testing.assert_allclose(end, target, atol=1e-9)  # read back from the whole tree
 
 
 def test_reach_refuses_an_unknown_tip_or_arm(tmp_path, capsys):
