@@ -108,6 +108,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "named tree design numbers (each arm's mount, mass and length factors, the bus, link masses and lengths)",
     ),
     (
+        "spacearm.models.tree.shell",
+        "Models",
+        "the virtual manipulator's shell of one tip of a tree: radii between which it lies",
+    ),
+    (
         "spacearm.kinematics",
         "Kinematics",
         "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives",
