@@ -28,6 +28,7 @@ Pinocchio's momentum map to 1e-8 rad.
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -402,7 +403,8 @@ class FreeFlyer:
         self.columns = np.array([joint.idx_v - 6 for joint in self.joints])
         self.tips = [model.getFrameId(name) for name in tips]
 
-    def config(self, q, R=np.eye(3)):
+    def config(self, q, R=None):
+        R = np.eye(3) if R is None else R
         config = pin.neutral(self.model)
         root = pin.SE3(R, np.zeros(3)) * self.bus_in_root.inverse()  # puts the bus at (R, 0)
         config[:7] = pin.SE3ToXYZQUAT(root)
@@ -413,7 +415,7 @@ class FreeFlyer:
                 config[joint.idx_q] = value
         return config
 
-    def evaluate(self, q, R=np.eye(3)):
+    def evaluate(self, q, R=None):
         """Tips about the centroid (k, 3), J* and fixed-base J (k, 6, n), C (6, n), inertial axes."""
         model, data = self.model, self.data
         config = self.config(q, R)
@@ -440,7 +442,7 @@ class FreeFlyer:
         """Bus attitude after the joint polyline: RK4 of dR/dt = R [w]x, w = C_w(q) q_dot in bus axes."""
         R = np.array(R0, dtype=float)
         omega = lambda q, rate: self.evaluate(q)["base"][3:] @ rate
-        for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
+        for a, b in itertools.pairwise(waypoints):
             rate, h = b - a, 1.0 / steps
             for s in range(steps):
                 q = a + s * h * rate
