@@ -461,7 +461,8 @@ def _relative(J, p, i, j):
 
 
 def _angle(Ra, Rb):
-    return np.arccos(np.clip((np.trace(Ra.T @ Rb) - 1) / 2, -1.0, 1.0))
+    """The rotation angle between two attitudes, accurate for small angles (arccos of the trace is not)."""
+    return 2 * np.arcsin(min(1.0, np.linalg.norm(np.asarray(Ra) - np.asarray(Rb)) / (2 * np.sqrt(2))))
 
 
 # Robots, each loaded once ------------------------------------------------------------------
