@@ -639,3 +639,18 @@ def test_arms_file_and_system_file_give_the_same_kernels(dual_ur5):
     np.testing.assert_allclose(
         sa.relative_jacobian(arms, q, tips=(0, 1)), sa.relative_jacobian(system, q, tips=(0, 1)), atol=1e-12
     )
+
+
+def test_messages_name_tips_and_joints_of_a_system_file(three_arm):
+    """A ``system:`` file has no arm names (its one root is the bus): an unknown ``moving`` entry
+    lists tips and joints, not the bus as an arm; a start outside a limit names the joint."""
+    robot, _ = three_arm
+    with pytest.raises(sa.ConfigError) as error:
+        robot.focus(tip="c_tcp", moving="arm_c")
+    message = str(error.value)
+    assert "the arms are" not in message
+    assert "the tips are a_tool, b_tool, c_tcp; the joints are a_yaw, a_pitch" in message
+    q = np.zeros(robot.n_joints)
+    q[robot.joint_names.index("c_boom")] = 0.9
+    with pytest.raises(sa.ConfigError, match=r"joint 7 = 0.9 is outside its limits \[0, 0.5\] \(c_boom\)"):
+        sa.plan_reach(robot.focus(tip="c_tcp"), q, [-1.2, -0.45, 0.3])

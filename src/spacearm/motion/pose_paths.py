@@ -367,6 +367,7 @@ def straight_pose_path(
         j = int(np.argmax(outside))
         raise ConfigError(
             f"q_start: joint {j + 1} = {q0[j]:.6g} is outside its limits [{lower[j]:.6g}, {upper[j]:.6g}]"
+            f" ({robot.joint_names[j]})"
         )
     p1 = np.asarray(target_position, float)
     if p1.shape != (3,) or not np.all(np.isfinite(p1)):
