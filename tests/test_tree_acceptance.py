@@ -654,3 +654,32 @@ def test_messages_name_tips_and_joints_of_a_system_file(three_arm):
     q[robot.joint_names.index("c_boom")] = 0.9
     with pytest.raises(sa.ConfigError, match=r"joint 7 = 0.9 is outside its limits \[0, 0.5\] \(c_boom\)"):
         sa.plan_reach(robot.focus(tip="c_tcp"), q, [-1.2, -0.45, 0.3])
+
+
+def test_lock_others_holds_a_mimic_finger_where_its_leader_puts_it(folder):
+    """Lock one finger of the three-arm system's gripper; ``lock_others`` holds the ``<mimic>``
+    finger at multiplier * leader + offset (here 0.02), the camera at its nearest limit: the
+    bus and the hand weigh as with both fingers locked at 0.02 by hand."""
+    common = "name: t\nsystem:\n  urdf: three_arm.urdf\n  base_link: hub\n  tips: [a_tool, b_tool, c_tcp]\n"
+    _write(folder, "three_arm.urdf", THREE_ARM)
+    by_hand = sa.load_robot(
+        _write(
+            folder,
+            "by_hand.yaml",
+            common + "  lock_joints: {c_finger_left_joint: 0.02, c_finger_right_joint: 0.02, camera_pan: 0.2}\n",
+        )
+    )
+    mimic = sa.load_robot(
+        _write(folder, "mimic.yaml", common + "  lock_joints: {c_finger_left_joint: 0.02}\n  lock_others: true\n")
+    )
+    for field in ("base_com", "base_inertia", "link_com", "link_inertia"):
+        np.testing.assert_allclose(getattr(mimic, field), getattr(by_hand, field), atol=1e-15, err_msg=field)
+    # Held at 0 instead, the hand's centroid would be 0.2 * 0.02 / 1.9 = 2.1 mm off in y.
+    far = sa.load_robot(
+        _write(
+            folder,
+            "far.yaml",
+            common + "  lock_joints: {c_finger_left_joint: 0.02, c_finger_right_joint: 0}\n  lock_others: true\n",
+        )
+    )
+    assert abs(far.link_com[-1][1] - by_hand.link_com[-1][1]) > 2e-3
