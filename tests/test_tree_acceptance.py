@@ -565,7 +565,8 @@ def _postures(robot, count, seed):
 
 
 def test_kernels_match_pinocchio(case):
-    """Tips, J*, w*, relative Jacobians, C and the reaction null space at random postures and attitudes."""
+    """Tips, J*, w*, relative Jacobians, C and the reaction null space at random postures and
+    attitudes (a few seconds per robot: each robot's kernels compile once)."""
     name, robot, reference = case
     q = _postures(robot, 4, 1)
     R = np.stack([rpy_matrix(r) for r in np.random.default_rng(2).uniform(-1.2, 1.2, size=(4, 3))])
@@ -575,6 +576,8 @@ def test_kernels_match_pinocchio(case):
     C = np.asarray(sa.base_rate_matrix(robot, q))
     N = np.asarray(reaction_null_space(robot, q))
     k, n = robot.n_tips, robot.n_joints
+    pairs = [(i, j) for i in range(k) for j in range(i + 1, k)] + [(1, 0)]  # each pair compiles anew
+    relative = {pair: np.asarray(sa.relative_jacobian(robot, q, base_rotation=R, tips=pair)) for pair in pairs}
     assert tip.shape == (4, k, 3) and J.shape == (4, k, 6, n) and w.shape == (4, k) and N.shape == (4, n, n - 3)
     for b in range(4):
         at_R, at_bus = reference.evaluate(q[b], R[b]), reference.evaluate(q[b])
@@ -586,14 +589,10 @@ def test_kernels_match_pinocchio(case):
         # The reaction null space: the same subspace as the kernel of Pinocchio's C_w.
         _, _, vt = np.linalg.svd(at_bus["base"][3:])
         np.testing.assert_allclose(N[b] @ N[b].T, vt[3:].T @ vt[3:], atol=1e-10, err_msg=name)
-        for i in range(k):
-            for j in range(k):
-                if i == j:
-                    continue
-                Jr = np.asarray(sa.relative_jacobian(robot, q[b], base_rotation=R[b], tips=(i, j)))
-                np.testing.assert_allclose(Jr, _relative(at_R["jstar"], at_R["tip"], i, j), atol=1e-10)
-                # The bus drops out: the fixed-base relative Jacobian is the same.
-                np.testing.assert_allclose(Jr, _relative(at_R["fixed"], at_R["tip"], i, j), atol=1e-10)
+        for (i, j), Jr in relative.items():
+            np.testing.assert_allclose(Jr[b], _relative(at_R["jstar"], at_R["tip"], i, j), atol=1e-10, err_msg=name)
+            # The bus drops out: the fixed-base relative Jacobian is the same.
+            np.testing.assert_allclose(Jr[b], _relative(at_R["fixed"], at_R["tip"], i, j), atol=1e-10, err_msg=name)
 
 
 def test_loop_of_all_arms_turns_the_bus_as_pinocchio(case):
@@ -614,7 +613,8 @@ def test_loop_of_all_arms_turns_the_bus_as_pinocchio(case):
 
 
 def test_arms_file_and_system_file_give_the_same_kernels(dual_ur5):
-    """Two UR5 on a cube as one URDF (``system:``) and as an ``arms:`` file: same joints, tips and numbers."""
+    """Two UR5 on a cube as one URDF (``system:``) and as an ``arms:`` file: same joints, tips and
+    numbers (several seconds: the ``arms:`` robot's kernels compile once more)."""
     system, _, arms = dual_ur5
     assert [name.replace("/", "_") for name in arms.joint_names] == list(system.joint_names)
     assert [name.replace("/", "_") for name in arms.tip_names] == list(system.tip_names)
