@@ -35,6 +35,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
+from spacearm.cli import main
 from spacearm.models.spatial import locate_package_file
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree.metrics import reaction_null_space
@@ -683,3 +684,34 @@ def test_lock_others_holds_a_mimic_finger_where_its_leader_puts_it(folder):
         )
     )
     assert abs(far.link_com[-1][1] - by_hand.link_com[-1][1]) > 2e-3
+
+
+def test_validate_names_each_system(three_arm, spart_style, folder, capsys):
+    """``spacearm validate`` on the hand-written files: joints and tips counted as loaded."""
+    assert main(["validate", str(folder / "three_arm.yaml")]) == 0
+    assert main(["validate", str(folder / "spart_style.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "valid robot (three-arm, 9 joints, tips a_tool, b_tool, c_tcp)" in out
+    assert "valid robot (spart-style, 6 joints, tips EE_A, EE_B)" in out
+
+
+@pytest.mark.slow  # compiles the straight-path and loop programs of the 9-joint tree (tens of seconds)
+def test_reach_with_a_chosen_tip_lands_where_pinocchio_says(three_arm, folder, capsys):
+    """``spacearm reach --tip c_tcp``: the last posture and bus attitude of reach.npz put Pinocchio's
+    c_tcp on the target (the bus turns first: a reorientation loop, then the straight path)."""
+    _, reference = three_arm
+    out = folder / "reach"
+    start = "--from=10,20,0.1,30,40,-20,0.2,30,10"
+    assert (
+        main(
+            ["reach", str(folder / "three_arm.yaml"), start, "--to=-1.2,-0.45,0.3", "--tip", "c_tcp", "--out", str(out)]
+        )
+        == 0
+    )
+    history = np.load(out / "reach.npz")
+    assert int(history["tip_index"]) == 2
+    at_end = reference.evaluate(history["joints"][-1], history["base_rotation"][-1])
+    np.testing.assert_allclose(at_end["tip"][2], [-1.2, -0.45, 0.3], atol=1e-9)
+    if "loop_waypoints" in history:
+        expected = reference.loop_attitude(history["loop_waypoints"], np.eye(3), steps=40)
+        assert _angle(expected, history["loop_rotation"]) < 1e-8
