@@ -715,3 +715,14 @@ def test_reach_with_a_chosen_tip_lands_where_pinocchio_says(three_arm, folder, c
     if "loop_waypoints" in history:
         expected = reference.loop_attitude(history["loop_waypoints"], np.eye(3), steps=40)
         assert _angle(expected, history["loop_rotation"]) < 1e-8
+
+
+def test_pose_targets_need_six_joints_on_the_tips_own_path(three_arm):
+    """Tip a_tool has 3 joints on its path; the 6 others move it only through the bus (J* has
+    rank 6 over all 9, at impractical rates): a pose target is refused up front, naming why."""
+    robot, _ = three_arm
+    focused = robot.focus(tip="a_tool")
+    q = np.zeros(robot.n_joints)
+    q[robot.joint_names.index("c_boom")] = 0.2
+    with pytest.raises(sa.ConfigError, match=r"the tip's path from the bus has 3 moving \(the other arms"):
+        sa.plan_pose_reach(focused, q, [0.5, 0.1, -0.6], np.eye(3))
