@@ -371,6 +371,33 @@ def _jstar_from(robot, state):
 # Kernels in batch-last form (q (n, *batch)) ----------------------------------------------
 
 
+def _jstar_first(robot, q):
+    """``(batch, k, 6, n)`` J* of every tip for ``q (n, batch)``: `_jstar_from`'s closed form,
+    assembled batch-first.
+
+    The pass runs batch-last (every scalar one contiguous array over postures); the
+    per-joint terms w = revolute a, A, own and shared (12 numbers per joint) and the tips
+    are turned batch-first, and the 6k x n entries of each posture are formed there, so
+    the result is written in its final order (forming them batch-last and transposing
+    the result was slower on XLA's CPU backend: the transposed write is not vectorized).
+    """
+    state = _tree_pass(robot, q)
+    _, solved = _coupling(state)
+    revolute = 1.0 - state.prismatic
+    own = _sub(_scale(state.prismatic, state.axes), _scale(revolute, _cross(state.axes, state.origins)))
+    shared = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(state.centroid, solved))
+    turning = _scale(revolute, state.axes)
+    per_joint = jnp.transpose(jnp.stack([*turning, *solved, *own, *shared]), (2, 0, 1))  # (batch, 12, n)
+    tips = jnp.transpose(jnp.stack(state.tips), (2, 1, 0))  # (batch, k, 3)
+    term = lambda i: tuple(per_joint[:, None, 3 * i + c] for c in range(3))  # (batch, 1, n)
+    turning, solved, own, shared = (term(i) for i in range(4))
+    mask = jnp.asarray(robot.support, q.dtype)  # (k, n)
+    w_star = tuple(mask * t - a for t, a in zip(turning, solved, strict=True))
+    lever = _cross(w_star, tuple(tips[:, :, c, None] for c in range(3)))
+    v_star = tuple(l + mask * o + c for l, o, c in zip(lever, own, shared, strict=True))
+    return jnp.stack([*v_star, *w_star], axis=2)
+
+
 def _tip_minor(robot, q):
     state = _tree_pass(robot, q)
     return jnp.stack(_sub(state.tips, tuple(c[None] for c in state.centroid)), axis=1)
@@ -440,7 +467,7 @@ fixed_base_jacobian = batched(_fixed_minor, 3)
 fixed_base_jacobian.__doc__ = """``(..., k, 6, n)`` tip twists [v; w] per joint rate, bus held fixed, bus axes
 (zero in the columns of joints off each tip's path)."""
 
-generalized_jacobian = batched(_jstar_minor, 3)
+generalized_jacobian = batched(_jstar_first, 0)
 generalized_jacobian.__doc__ = """``(..., k, 6, n)`` J* of every tip over all joints at zero momentum, bus axes.
 
 The closed form of the module docstring: one pass over the tree and one 3x3 solve per posture."""
