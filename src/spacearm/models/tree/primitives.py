@@ -189,7 +189,6 @@ def tree_constants(robot: TreeRobot) -> TreeConstants:
 class _TreePass:
     """One pass over the tree; per-joint 3-tuples of ``(n, *batch)``, per-tip of ``(k, *batch)``."""
 
-    rotations: tuple  # body axes (turned frames), 3x3 tuple of (n, *batch)
     origins: tuple  # joint origins o_j
     axes: tuple  # unit joint axes a_j
     tips: tuple  # tip origins, bus frame, (k, *batch) components
@@ -215,6 +214,12 @@ def _index(nested, i):
     return nested[i]
 
 
+def _lean_forward_step(carry, x):
+    """`_forward_step` without the body axes among its outputs (the carry still has them)."""
+    carry, out = _forward_step(carry, x)
+    return carry, out[1:]
+
+
 def _tree_backward_step(carry, x):
     """`_backward_step` after adding the totals of the segments hanging from this body."""
     (extra_moment, extra_about), rest = x[:2], x[2:]
@@ -234,8 +239,13 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
     cos, sin = jnp.cos(angle), jnp.sin(angle)
     spread = lambda x: jnp.broadcast_to(x, batch)
     segs = segments(robot.parents)
+    # When every body whose frame is needed (tips, branch points) ends a segment, its
+    # frame is that segment's last carry, and the scans need not store every body's axes.
+    ends = {stop - 1: s for s, (_, stop, _) in enumerate(segs)}
+    needed = {int(b) for b in robot.tip_bodies} | {p for _, _, p in segs if p >= 0}
+    lean = needed <= ends.keys()
     where = {}  # body index -> (segment number, local index)
-    outs = []
+    outs, lasts = [], []
     for s, (start, stop, parent) in enumerate(segs):
         if parent < 0:
             r = -1 - parent
@@ -243,6 +253,8 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
                 tuple(tuple(spread(cst.mount_rotation[r, i, c]) for c in range(3)) for i in range(3)),
                 tuple(spread(cst.mount_xyz[r, i]) for i in range(3)),
             )
+        elif lean:
+            carry = lasts[ends[parent]]
         else:
             seg, local = where[parent]
             rot, joint_origin, axis = (_index(outs[seg][i], local) for i in range(3))
@@ -257,21 +269,26 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
             cst.link_com[part],
             cst.link_inertia[part],
         )
-        _, out = jax.lax.scan(_forward_step, carry, xs)
-        outs.append(out)
+        last, out = jax.lax.scan(_lean_forward_step if lean else _forward_step, carry, xs)
+        outs.append((None, *out) if lean else out)
+        lasts.append(last)
         for j in range(start, stop):
             where[j] = (s, j - start)
-    rotations, origins, axes, centroids, inertias = (_cat([o[i] for o in outs]) for i in range(5))
+    origins, axes, centroids, inertias = (_cat([o[i] for o in outs]) for i in range(1, 5))
     bodies = np.asarray(robot.tip_bodies)
-    body_rot = _index(rotations, bodies)
-    body_origin = _add(_index(origins, bodies), _scale(slide[bodies], _index(axes, bodies)))
+    if lean:
+        frames = [lasts[ends[int(b)]] for b in bodies]
+        body_rot = tuple(tuple(jnp.stack([f[0][i][c] for f in frames]) for c in range(3)) for i in range(3))
+        body_origin = tuple(jnp.stack([f[1][i] for f in frames]) for i in range(3))
+    else:
+        body_rot = _index(_cat([o[0] for o in outs]), bodies)
+        body_origin = _add(_index(origins, bodies), _scale(slide[bodies], _index(axes, bodies)))
     offset = tuple(cst.tip_offset[:, i].reshape((-1,) + (1,) * len(batch)) for i in range(3))
     tips = _add(body_origin, _matvec(body_rot, offset))
     tip_rot = tuple(
         tuple(cst.tip_rotation[:, i, c].reshape((-1,) + (1,) * len(batch)) for c in range(3)) for i in range(3)
     )
     state = _TreePass(
-        rotations=rotations,
         origins=origins,
         axes=axes,
         tips=tips,
