@@ -488,9 +488,16 @@ BLOCK = 2048
 def batched(kernel, axes: int):
     """A batch-last kernel as a function of ``(robot, q (..., n))`` -> ``(..., *result)``.
 
-    Large batches run in blocks of `BLOCK` postures with ``lax.map`` (padded to
-    whole blocks), so memory stays bounded and each block's arrays stay in cache.
+    Large batches run in blocks of `BLOCK` postures in a loop that writes each block's
+    result in place into the whole result, so memory stays bounded and each block's arrays
+    stay in cache. The last block is shifted back to end at the last posture (it repeats
+    a few postures, with the same values), so nothing is padded and the result is never
+    copied to slice padding off. ``axes=0`` takes a kernel that already returns
+    ``(batch, *result)``.
     """
+
+    def one(robot, block):
+        return _batch_first(kernel(robot, block.T), axes)
 
     def apply(robot: SpatialRobot, posture: jax.Array) -> jax.Array:
         posture = jnp.asarray(posture)
@@ -498,14 +505,17 @@ def batched(kernel, axes: int):
         flat = posture.reshape((-1, n))
         count = flat.shape[0]
         if count <= BLOCK:
-            out = _batch_first(kernel(robot, flat.T), axes)
+            out = one(robot, flat)
         else:
-            blocks = -(-count // BLOCK)
-            padded = jnp.concatenate([flat, jnp.zeros((blocks * BLOCK - count, n), flat.dtype)])
-            out = jax.lax.map(
-                lambda block: _batch_first(kernel(robot, block.T), axes), padded.reshape(blocks, BLOCK, n)
-            )
-            out = out.reshape((blocks * BLOCK,) + out.shape[2:])[:count]
+            result = jax.eval_shape(one, robot, flat[:BLOCK])
+
+            def step(i, out):
+                start = jnp.minimum(i * BLOCK, count - BLOCK)
+                part = one(robot, jax.lax.dynamic_slice_in_dim(flat, start, BLOCK))
+                return jax.lax.dynamic_update_slice_in_dim(out, part, start, 0)
+
+            empty = jnp.zeros((count,) + result.shape[1:], result.dtype)
+            out = jax.lax.fori_loop(0, -(-count // BLOCK), step, empty)
         return out.reshape(batch + out.shape[1:])
 
     apply.__name__ = kernel.__name__.strip("_").replace("_minor", "")
