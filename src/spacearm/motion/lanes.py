@@ -51,15 +51,29 @@ def lane_count(padded: int, lanes: int | None = None) -> int:
     return int(min(512, max(64, padded // 16), padded))
 
 
-def start_lane(field, y0: jax.Array, max_step, params: dict) -> dict:
-    """The lane state at the start of one path (``params``: the field's per-path parameters)."""
+def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False) -> dict:
+    """The lane state at the start of one path (``params``: the field's per-path parameters;
+    ``rolled``: the field holds a loop, so its two evaluations run in a loop, static)."""
     dtype = y0.dtype
-    f0 = field(y0)
     # The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
     # through the last two steps (a forward difference at the start): cheaper than a jvp
-    # of the field, and exact enough, since the end test is on ds/dsigma itself.
+    # of the field, and exact enough, since the end test is on ds/dsigma itself. The two
+    # evaluations, f0 = field(y0) and field(y0 + probe f0), run as a two-pass loop where
+    # the field holds a loop (``rolled``): one copy of the field in the program (a
+    # spatial field holds a pass over the chain, costly to compile).
     probe = 1e-7
-    slope0 = (field(y0 + probe * f0)[-1] - f0[-1]) / probe
+
+    if rolled:
+
+        def evaluate(k, pair):
+            f = field(jnp.where(k == 0, y0, y0 + probe * pair[0]))
+            return jnp.where(k == 0, f, pair[0]), f
+
+        f0, f1 = jax.lax.fori_loop(0, 2, evaluate, (jnp.zeros_like(y0), jnp.zeros_like(y0)))
+    else:
+        f0 = field(y0)
+        f1 = field(y0 + probe * f0)
+    slope0 = (f1[-1] - f0[-1]) / probe
     return dict(
         params,
         y=y0,
@@ -185,7 +199,10 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``.
     """
     index0 = jnp.arange(width, dtype=jnp.int32)
-    lanes0 = start(index0)
+    # The lanes start inside the loop (every lane at the first pass, then those that
+    # take a new path): one copy of the start, and so of its field evaluations, in the
+    # program.
+    lanes0 = jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), jax.eval_shape(start, index0))
     y0 = lanes0["y"]
     results0 = {
         "y": jnp.zeros((count,) + y0.shape[1:], y0.dtype),
@@ -193,13 +210,21 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         "count": jnp.zeros((count,), jnp.int32),
         "reason": jnp.zeros((count,), jnp.int32),
     }
-    state0 = (lanes0, index0, index0 < real, jnp.int32(width), results0)
+    state0 = (lanes0, index0, index0 < real, jnp.ones((width,), bool), jnp.int32(width), results0)
 
     def cond(state):
         return jnp.any(state[2])
 
     def body(state):
-        lane, index, active, next_index, results = state
+        lane, index, active, fresh, next_index, results = state
+
+        def started():  # the start costs two field evaluations: only when a lane takes a path
+            new = start(index)
+            return jax.tree_util.tree_map(
+                lambda new, old: jnp.where(fresh.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), new, lane
+            )
+
+        lane = jax.lax.cond(jnp.any(fresh), started, lambda: lane)
         lane, finished, reason = step(index, lane)
         finished = finished & active
         target = jnp.where(finished, index, count)  # out of range: dropped
@@ -208,16 +233,8 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         rank = jnp.cumsum(finished.astype(jnp.int32)) - 1
         refill = finished & (next_index + rank < real)
         index = jnp.where(refill, next_index + rank, index)
-
-        def refilled():  # the start costs two field evaluations: only when a lane takes a path
-            fresh = start(index)
-            return jax.tree_util.tree_map(
-                lambda new, old: jnp.where(refill.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), fresh, lane
-            )
-
-        lane = jax.lax.cond(jnp.any(refill), refilled, lambda: lane)
         active = jnp.where(finished, refill, active)
         next_index = next_index + jnp.sum(finished, dtype=jnp.int32)
-        return lane, index, active, next_index, results
+        return lane, index, active, refill, next_index, results
 
     return jax.lax.while_loop(cond, body, state0)[-1]

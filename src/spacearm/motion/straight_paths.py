@@ -224,7 +224,7 @@ def _lane_start(robot, joints, coords, direction, max_step):
     sign0 = _start_sign(robot, joints)
     field = _straight_field(robot, direction, sign0)
     y0 = jnp.concatenate([family.join_state(robot, joints, coords), jnp.zeros((1,), dtype)])
-    return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0})
+    return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0}, rolled=family.straight_field_loops)
 
 
 def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_steps, *, tableau):
