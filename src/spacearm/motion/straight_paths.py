@@ -151,8 +151,9 @@ def _attitude_beside_posture(robot, results, robot_batched):
     def one(robot, y):
         joints, coords = family.split_state(robot, y[:-1])
         R = family.attitude.from_coords(coords)
-        fixed = fixed_base_jacobian(robot, joints)[: family.translational_rows]
-        return joints, R, R @ tip_position(robot, joints), gram_root_determinant(fixed)
+        both = family.fast_paths.get("tip_and_fixed_base_jacobian")  # one chain pass for the two
+        fixed, tip = both(robot, joints) if both else (fixed_base_jacobian(robot, joints), tip_position(robot, joints))
+        return joints, R, R @ tip, gram_root_determinant(fixed[: family.translational_rows])
 
     joints, R, tip, fixed_w = jax.vmap(one, in_axes=(0 if robot_batched else None, 0))(robot, results["y"])
     return SpatialStraightPath(

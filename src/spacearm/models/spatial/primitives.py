@@ -60,6 +60,7 @@ __all__ = [
     "rpy_to_matrix",
     "straight_path_maps",
     "tip",
+    "tip_and_fixed_base_jacobian",
     "tip_and_generalized_jacobian",
     "tip_pose",
 ]
@@ -443,6 +444,13 @@ def _jstar_tip_minor(robot, q):
     return _rows(v_star, _sub(w, solved), tip_rows)
 
 
+def _fixed_tip_minor(robot, q):
+    """Fixed-base J (rows 0-5) and the tip about the centroid (rows 6-8, the same in every column), one chain pass."""
+    state = _chain_pass(robot, q)
+    tip_rows = tuple(jnp.broadcast_to(component, q.shape) for component in _sub(state.tip, state.centroid))
+    return _rows(*_fixed_columns(state), tip_rows)
+
+
 def _base_twist_minor(robot, q):
     state = _chain_pass(robot, q)
     _, solved = _coupling(state)
@@ -557,6 +565,16 @@ def tip_and_generalized_jacobian(robot: SpatialRobot, q: jax.Array) -> tuple[jax
     Equal to `generalized_jacobian` and `tip`; for code that needs both (and their
     derivatives) at the same postures, such as the singular-set search."""
     stacked = _jstar_tip(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:, 0]
+
+
+_fixed_tip = batched(_fixed_tip_minor, 2)
+
+
+def tip_and_fixed_base_jacobian(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``(..., 6, n)`` fixed-base Jacobian and ``(..., 3)`` tip about the system centroid, bus axes,
+    from one chain pass per posture (equal to `fixed_base_jacobian` and `tip`)."""
+    stacked = _fixed_tip(robot, q)
     return stacked[..., :6, :], stacked[..., 6:, 0]
 
 
