@@ -199,10 +199,7 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``.
     """
     index0 = jnp.arange(width, dtype=jnp.int32)
-    # The lanes start inside the loop (every lane at the first pass, then those that
-    # take a new path): one copy of the start, and so of its field evaluations, in the
-    # program.
-    lanes0 = jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), jax.eval_shape(start, index0))
+    lanes0 = start(index0)
     y0 = lanes0["y"]
     results0 = {
         "y": jnp.zeros((count,) + y0.shape[1:], y0.dtype),
@@ -210,21 +207,13 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         "count": jnp.zeros((count,), jnp.int32),
         "reason": jnp.zeros((count,), jnp.int32),
     }
-    state0 = (lanes0, index0, index0 < real, jnp.ones((width,), bool), jnp.int32(width), results0)
+    state0 = (lanes0, index0, index0 < real, jnp.int32(width), results0)
 
     def cond(state):
         return jnp.any(state[2])
 
     def body(state):
-        lane, index, active, fresh, next_index, results = state
-
-        def started():  # the start costs two field evaluations: only when a lane takes a path
-            new = start(index)
-            return jax.tree_util.tree_map(
-                lambda new, old: jnp.where(fresh.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), new, lane
-            )
-
-        lane = jax.lax.cond(jnp.any(fresh), started, lambda: lane)
+        lane, index, active, next_index, results = state
         lane, finished, reason = step(index, lane)
         finished = finished & active
         target = jnp.where(finished, index, count)  # out of range: dropped
@@ -233,8 +222,16 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         rank = jnp.cumsum(finished.astype(jnp.int32)) - 1
         refill = finished & (next_index + rank < real)
         index = jnp.where(refill, next_index + rank, index)
+
+        def refilled():  # the start costs two field evaluations: only when a lane takes a path
+            fresh = start(index)
+            return jax.tree_util.tree_map(
+                lambda new, old: jnp.where(refill.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), fresh, lane
+            )
+
+        lane = jax.lax.cond(jnp.any(refill), refilled, lambda: lane)
         active = jnp.where(finished, refill, active)
         next_index = next_index + jnp.sum(finished, dtype=jnp.int32)
-        return lane, index, active, refill, next_index, results
+        return lane, index, active, next_index, results
 
     return jax.lax.while_loop(cond, body, state0)[-1]
