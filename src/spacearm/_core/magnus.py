@@ -209,9 +209,13 @@ def path_rotation(
 def path_rotation_history(
     omega_map: Callable[[jax.Array], jax.Array], waypoints: jax.Array, steps: int, order=DEFAULT_ORDER
 ) -> jax.Array:
-    """``(..., (k-1) steps + 1, 3, 3)``: the bus rotation after each sub-step (the first is the identity)."""
+    """``(..., (k-1) steps + 1, 3, 3)``: the bus rotation after each sub-step (the first is the identity).
+
+    The running products come from one scan (an associative scan compiled ~0.5 s slower
+    for a loop's history and ran no faster for 3x3 factors).
+    """
     maps = omega_map(step_nodes(waypoints, steps, order))
     factors = expm(step_generators(maps, waypoints, steps, order))
-    partial = jax.lax.associative_scan(jnp.matmul, factors, axis=factors.ndim - 3)
-    eye = jnp.broadcast_to(jnp.eye(3, dtype=partial.dtype), partial.shape[:-3] + (1, 3, 3))
-    return jnp.concatenate([eye, partial], axis=-3)
+    eye = jnp.broadcast_to(jnp.eye(3, dtype=factors.dtype), factors.shape[:-3] + (3, 3))
+    _, partial = jax.lax.scan(lambda P, E: (P @ E, P @ E), eye, jnp.moveaxis(factors, -3, 0))
+    return jnp.concatenate([eye[..., None, :, :], jnp.moveaxis(partial, 0, -3)], axis=-3)
