@@ -15,8 +15,8 @@ R' = R [w]x, whatever the timing.
   scheme on two Gauss nodes and RKMK4 (Munthe-Kaas 1998) are kept for comparisons.
 
 The sub-step rotations of a path are independent once the nodes are known: the rate
-maps of all nodes are evaluated in one batched call, and the ordered product is a
-balanced tree of 3x3 products (depth log2 of the step count).
+maps of all nodes are evaluated in one batched call, and the ordered product of the
+3x3 factors is one scan.
 """
 
 from __future__ import annotations
@@ -177,13 +177,15 @@ def step_generators(maps: jax.Array, waypoints: jax.Array, steps: int, order=DEF
 
 
 def _ordered_product(R: jax.Array) -> jax.Array:
-    """R_1 R_2 ... R_S of ``(..., S, 3, 3)`` by a balanced tree of products (S static)."""
-    while R.shape[-3] > 1:
-        if R.shape[-3] % 2:
-            eye = jnp.broadcast_to(jnp.eye(3, dtype=R.dtype), R.shape[:-3] + (1, 3, 3))
-            R = jnp.concatenate([R, eye], axis=-3)
-        R = R[..., 0::2, :, :] @ R[..., 1::2, :, :]
-    return R[..., 0, :, :]
+    """R_1 R_2 ... R_S of ``(..., S, 3, 3)``, left to right in one scan.
+
+    A scan compiles to one small loop whose reverse-mode adjoint is another: a balanced
+    tree of strided products (depth log2 S) compiled ~0.4 s slower inside the
+    reorientation optimizer's gradient, and ran no faster for these 3x3 factors.
+    """
+    eye = jnp.broadcast_to(jnp.eye(3, dtype=R.dtype), R.shape[:-3] + (3, 3))
+    product, _ = jax.lax.scan(lambda P, E: (P @ E, None), eye, jnp.moveaxis(R, -3, 0))
+    return product
 
 
 def path_rotation(
@@ -207,9 +209,13 @@ def path_rotation(
 def path_rotation_history(
     omega_map: Callable[[jax.Array], jax.Array], waypoints: jax.Array, steps: int, order=DEFAULT_ORDER
 ) -> jax.Array:
-    """``(..., (k-1) steps + 1, 3, 3)``: the bus rotation after each sub-step (the first is the identity)."""
+    """``(..., (k-1) steps + 1, 3, 3)``: the bus rotation after each sub-step (the first is the identity).
+
+    The running products come from one scan (an associative scan compiled ~0.5 s slower
+    for a loop's history and ran no faster for 3x3 factors).
+    """
     maps = omega_map(step_nodes(waypoints, steps, order))
     factors = expm(step_generators(maps, waypoints, steps, order))
-    partial = jax.lax.associative_scan(jnp.matmul, factors, axis=factors.ndim - 3)
-    eye = jnp.broadcast_to(jnp.eye(3, dtype=partial.dtype), partial.shape[:-3] + (1, 3, 3))
-    return jnp.concatenate([eye, partial], axis=-3)
+    eye = jnp.broadcast_to(jnp.eye(3, dtype=factors.dtype), factors.shape[:-3] + (3, 3))
+    _, partial = jax.lax.scan(lambda P, E: (P @ E, P @ E), eye, jnp.moveaxis(factors, -3, 0))
+    return jnp.concatenate([eye[..., None, :, :], jnp.moveaxis(partial, 0, -3)], axis=-3)

@@ -251,7 +251,8 @@ def _search(job: ReachJob, vectors: np.ndarray):
 def _reorient(job: ReachJob, pick) -> SpatialReachPlan:
     """The loop turning the bus by exp(pick), its history, then the straight leg."""
     robot, q0, R0 = job.robot, job.start, job.attitude
-    Q = np.asarray(_rotations(jnp.asarray(pick)))
+    # The search's program (its lane count): no second compile for one vector.
+    Q = np.asarray(_rotations(jnp.asarray(np.broadcast_to(pick, (job.history_samples, 3)))))[0]
     loop = plan_spatial_reorientation_details(robot, q0, Q, job.settings)
     # The loop's history: one pass sampled (a fixed shape), then pass i is pass 0 turned by
     # D^i on the left in bus axes (the attitude ODE does not depend on R).

@@ -49,7 +49,7 @@ from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from ..models.family import family_of
 from ..models.spatial.robot import SpatialRobot
-from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, geodesic_distance, log, path_rotation
+from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, log, path_rotation
 from ..motion.joint_paths import integrate_joint_path
 from ._loop_steps import LoopSteps, plan_loop
 
@@ -167,8 +167,9 @@ def _split(settings: SpatialLoopSettings) -> tuple[_LoopShape, dict]:
 
 
 @functools.partial(jax.jit, static_argnames=("shape",))
-def _optimize(robot, q0, targets, coefficients, lower, upper, options, shape: _LoopShape):
-    """Adam then Gauss-Newton for every candidate: ``targets (c, 3)`` per-loop rotation vectors.
+def _optimize(robot, q0, target, counts, coefficients, lower, upper, options, shape: _LoopShape):
+    """Adam then Gauss-Newton for every candidate: per loop the rotation vector
+    log(target) / N, ``counts (c,)`` the candidates' N.
 
     One loop of ``adam_steps + newton_steps`` iterations, each with one evaluation of the
     residual and its 3-row Jacobian (reverse mode): the Adam steps use the gradient
@@ -177,6 +178,7 @@ def _optimize(robot, q0, targets, coefficients, lower, upper, options, shape: _L
     Step counts, rates and weights are traced (``options``): only ``shape`` is static.
     """
     dtype = q0.dtype
+    targets = log(target)[None, :] / counts[:, None]  # (c, 3)
     basis = jnp.asarray(_basis(shape.segments, shape.harmonics), dtype)
     omega_map = functools.partial(bus_rate_map, robot)
     margin = options["limit_margin"].astype(dtype)
@@ -236,7 +238,15 @@ def compile_spatial_loop_optimizer(robot: SpatialRobot, settings: SpatialLoopSet
     dtype = jnp.result_type(float)
     s = lambda *dims: jax.ShapeDtypeStruct(dims, dtype)
     _optimize.lower(
-        shapes_of(robot), s(n), s(count, 3), s(count, 2 * settings.harmonics, n), s(n), s(n), shapes_of(options), shape
+        shapes_of(robot),
+        s(n),
+        s(3, 3),
+        s(count),
+        s(count, 2 * settings.harmonics, n),
+        s(n),
+        s(n),
+        shapes_of(options),
+        shape,
     ).compile()
 
 
@@ -245,15 +255,13 @@ def _as_rotation(vector):
     return expm(vector)
 
 
-@jax.jit
-def _loop_targets(target, counts):
-    """Per-candidate loop rotation vectors log(target) / N, ``(c, 3)``."""
-    return log(target)[None, :] / counts[:, None]
-
-
-@jax.jit
-def _rotation_errors(target, reached):
-    return geodesic_distance(target, reached)
+def _rotation_errors(target: np.ndarray, reached: np.ndarray) -> np.ndarray:
+    """`geodesic_distance` of concrete rotations, in NumPy on the host (no small program to compile)."""
+    E = target.T @ reached
+    s = 0.5 * np.linalg.norm(
+        np.stack([E[..., 2, 1] - E[..., 1, 2], E[..., 0, 2] - E[..., 2, 0], E[..., 1, 0] - E[..., 0, 1]], -1), axis=-1
+    )
+    return np.arctan2(s, 0.5 * (np.trace(E, axis1=-2, axis2=-1) - 1.0))
 
 
 def _check_inputs(robot: SpatialRobot, q_start, target_rotation):
@@ -329,7 +337,8 @@ def _spatial_candidates(job: dict) -> dict:
     _, loops = _optimize(
         robot,
         jnp.asarray(q0, dtype),
-        _loop_targets(jnp.asarray(target, dtype), jnp.asarray(counts, dtype)),
+        jnp.asarray(target, dtype),
+        jnp.asarray(counts, dtype),
         jnp.asarray(coefficients, dtype),
         jnp.asarray(finite(lower), dtype),
         jnp.asarray(finite(upper), dtype),
@@ -344,7 +353,7 @@ def _spatial_candidates(job: dict) -> dict:
     reached = np.asarray(D)
     for power in range(2, int(counts.max()) + 1):
         reached = np.where((counts >= power)[:, None, None], reached @ np.asarray(D), reached)
-    errors = np.asarray(_rotation_errors(target, reached))
+    errors = _rotation_errors(target, reached)
     inside = np.all((loops >= lower) & (loops <= upper), axis=(1, 2))
     travel = counts * np.sum(np.linalg.norm(np.diff(loops, axis=1), axis=2), axis=1)
     error = np.where(inside, errors, np.inf)
