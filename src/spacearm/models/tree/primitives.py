@@ -63,6 +63,7 @@ __all__ = [
     "TreeConstants",
     "arm_inertia",
     "base_twist_map",
+    "body_frames",
     "fixed_base_jacobian",
     "generalized_jacobian",
     "jacobians",
@@ -429,6 +430,18 @@ def tip_pose(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     return rotation, jnp.stack(state.tips, axis=-1)
 
 
+def body_frames(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Body frames with the bus frame fixed, one posture ``q (n,)``: ``(n, 3, 3)`` axes of
+    each body's URDF link frame (the child frame of joint j) and ``(n, 3)`` its origin, bus
+    frame, m (a prismatic joint's body origin is its joint origin slid by q_j along the axis)."""
+    q = jnp.asarray(q)
+    state = _tree_pass(robot, q, with_momentum=False)
+    frames = jax.vmap(_axis_frame)(jnp.asarray(robot.joint_axis))  # turned body = URDF body @ Q_j
+    turned = jnp.moveaxis(_pack(state.rotations), -1, 0)
+    origins = jnp.stack(state.origins, axis=-1) + (q * state.prismatic)[:, None] * jnp.stack(state.axes, axis=-1)
+    return jnp.einsum("nij,nkj->nik", turned, frames), origins
+
+
 def jacobians(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     """One posture: J_S ``(6k, 6)`` (tip twists per bus twist [v of bus centroid; w]) and
     J_M ``(6k, n)``, tip by tip, bus axes."""
@@ -457,4 +470,3 @@ def momentum_map(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
     angular = _sub(state.angular, _cross(base_com, state.momentum))
     return _pack(i_s), _rows(state.momentum, angular)
-

@@ -1,0 +1,113 @@
+"""Several arms on one bus, drawn: the tree body frames against Pinocchio, and the 3-D figure
+(it renders, each arm has its own colour, the links end at the kernels' body origins)."""
+
+from __future__ import annotations
+
+import os
+
+import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import spacearm as sa
+from spacearm.figures import spatial
+from spacearm.models.spatial.urdf import rpy_matrix
+from spacearm.models.tree import primitives
+
+from .test_tree_files import CONFIGS, UR5, erd, pinocchio_tip_poses
+
+matplotlib.use("Agg")
+
+
+@pytest.fixture(scope="module")
+def dual_ur5():
+    erd(UR5)
+    sa.enable_x64()
+    return sa.load_robot(os.path.join(CONFIGS, "dual-ur5-servicer.yaml"))
+
+
+@pytest.fixture(scope="module")
+def three_arm():
+    sa.enable_x64()
+    return sa.load_robot(os.path.join(CONFIGS, "three-arm-servicer.yaml"))
+
+
+def test_body_frames_agree_with_pinocchio_on_two_ur5(dual_ur5):
+    robot = dual_ur5
+    q = np.random.default_rng(3).uniform(-2.0, 2.0, robot.n_joints)
+    axes, origins = (np.asarray(x) for x in primitives.body_frames(robot, q))
+    for r in range(2):
+        joints = [j for j in range(robot.n_joints) if robot.labels.joint_roots[j] == r]
+        values = {robot.joint_names[j].split("/")[-1]: q[j] for j in joints}
+        links = [robot.labels.body_links[j][0].split("/")[-1] for j in joints]
+        poses, _ = pinocchio_tip_poses(erd(UR5), "base_link", links, values)
+        mount = rpy_matrix(np.asarray(robot.mount_rpy[r])), np.asarray(robot.mount_xyz[r])
+        for j, (rotation, origin) in zip(joints, poses, strict=True):
+            np.testing.assert_allclose(axes[j], mount[0] @ rotation, atol=1e-12)
+            np.testing.assert_allclose(origins[j], mount[1] + mount[0] @ origin, atol=1e-12)
+
+
+def test_body_frames_agree_with_pinocchio_on_a_tree_with_prismatic_joints(three_arm):
+    robot = three_arm
+    assert "prismatic" in robot.joint_kinds
+    q = spatial.THREE_ARM_POSTURE
+    axes, origins = (np.asarray(x) for x in primitives.body_frames(robot, q))
+    path = os.path.join(CONFIGS, "urdf", "three_arm_servicer.urdf")
+    links = [robot.labels.body_links[j][0] for j in range(robot.n_joints)]
+    poses, _ = pinocchio_tip_poses(path, "Servicer_Bus", links, dict(zip(robot.joint_names, q, strict=True)))
+    for j, (rotation, origin) in enumerate(poses):
+        np.testing.assert_allclose(axes[j], rotation, atol=1e-12)
+        np.testing.assert_allclose(origins[j], origin, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["dual_ur5", "three_arm"])
+def test_links_end_at_the_kernels_body_origins_and_tips(name, request):
+    robot = request.getfixturevalue(name)
+    q = spatial.DUAL_UR5_POSTURE if name == "dual_ur5" else spatial.THREE_ARM_POSTURE
+    R = rpy_matrix(np.array([0.3, -0.2, 0.5]))
+    drawing = spatial.robot_drawing(robot, q, R)
+    # the same points from the public kernels: tips about the centroid (inertial axes) fix the centroid
+    tips = np.asarray(sa.tip_position(robot, q, base_rotation=R))
+    _, tips_bus = (np.asarray(x) for x in primitives.tip_pose(robot, q))
+    centroid = tips_bus[0] - R.T @ tips[0]
+    expected = (np.asarray(primitives.body_frames(robot, q)[1]) - centroid) @ R.T
+    np.testing.assert_allclose(drawing.body_origins, expected, atol=1e-12)
+    np.testing.assert_allclose(drawing.tips, tips, atol=1e-12)
+    ends = drawing.segments[:, 1]
+    for j in range(robot.n_joints):  # every body origin ends a segment, and starts its children's
+        assert np.min(np.linalg.norm(ends - expected[j], axis=-1)) < 1e-12
+    for parent in set(robot.parents) - {p for p in robot.parents if p < 0}:
+        assert np.min(np.linalg.norm(drawing.segments[:, 0] - expected[parent], axis=-1)) < 1e-12
+    for t, body in enumerate(robot.tip_bodies):  # body to tip, in that tip's arm
+        row = np.flatnonzero(np.linalg.norm(ends - tips[t], axis=-1) < 1e-12)
+        assert row.size == 1 and drawing.segment_arm[row[0]] == t
+        np.testing.assert_allclose(drawing.segments[row[0], 0], expected[body], atol=1e-12)
+    mounts = (np.asarray(robot.mount_xyz) - centroid) @ R.T
+    np.testing.assert_allclose(drawing.mounts, mounts, atol=1e-12)
+    # the bus box: centred on the bus centroid, 12 edges of the equivalent box
+    np.testing.assert_allclose(drawing.bus_corners.mean(axis=0), drawing.bus, atol=1e-12)
+
+
+def test_each_arm_has_its_own_colour(dual_ur5, three_arm):
+    fig = plt.figure()
+    for i, (robot, q) in enumerate(((dual_ur5, spatial.DUAL_UR5_POSTURE), (three_arm, spatial.THREE_ARM_POSTURE))):
+        ax = fig.add_subplot(1, 2, i + 1, projection="3d")
+        drawing = spatial.draw_robot(ax, robot, q)
+        lines = {line.get_label(): line.get_color() for line in ax.lines if not line.get_label().startswith("_")}
+        arms = [lines[name] for name in drawing.arm_names]
+        assert len(set(arms)) == robot.n_tips  # one colour per arm
+        assert ("shared joints" in lines) == (robot is three_arm)  # the turret moves two tips
+        if "shared joints" in lines:
+            assert lines["shared joints"] not in arms
+    assert drawing.arm_names == ("Left_EE", "Right_EE", "Boom_EE")
+    assert spatial.robot_drawing(dual_ur5, spatial.DUAL_UR5_POSTURE).arm_names == ("left", "right")
+    plt.close(fig)
+
+
+def test_tree_figure_renders(tmp_path):
+    erd(UR5)
+    [path] = spatial.fig_tree_arms(tmp_path)
+    assert path.name == "tree_arms.png" and path.read_bytes()[:4] == b"\x89PNG"
+    image = plt.imread(path)
+    assert image.shape[0] > 500 and image.shape[1] > 1000
