@@ -3,7 +3,9 @@
 
 from __future__ import annotations
 
+import json
 import os
+import re
 
 import matplotlib
 import matplotlib.pyplot as plt
@@ -111,3 +113,80 @@ def test_tree_figure_renders(tmp_path):
     assert path.name == "tree_arms.png" and path.read_bytes()[:4] == b"\x89PNG"
     image = plt.imread(path)
     assert image.shape[0] > 500 and image.shape[1] > 1000
+
+
+# The interactive view (spacearm view) of a tree ---------------------------------------------------
+
+
+def _view_helpers():
+    """tests/test_views.py's node and Chromium helpers (that module skips without plotly)."""
+    pytest.importorskip("plotly", reason="the 'view' extra (plotly) is not installed")
+    from . import test_views
+
+    return test_views
+
+
+@pytest.mark.parametrize("name", ["dual_ur5", "three_arm"])
+def test_view_kinematics_match_the_kernels(name, request, tmp_path):
+    """fk.js on a tree page's model = spacearm.tip_position (every tip) and the drawing's body
+    origins and segments, to 1e-9 m, at random postures and bus attitudes."""
+    helpers = _view_helpers()
+    if helpers.NODE is None:
+        pytest.skip("node is not installed")
+    from spacearm.figures.views import write_arm_view
+
+    robot = request.getfixturevalue(name)
+    page = write_arm_view(robot, tmp_path / "view.html")
+    rng = np.random.default_rng(11)
+    low, high = np.maximum(robot.joint_lower, -np.pi), np.minimum(robot.joint_upper, np.pi)
+    q = rng.uniform(low, high, size=(6, robot.n_joints))
+    R = np.stack([rpy_matrix(r) for r in rng.uniform(-np.pi, np.pi, size=(6, 3))])
+    program = (
+        helpers._page_scripts(page)
+        + """
+    const d = JSON.parse(require("fs").readFileSync(0, "utf8"));
+    const M = window.SPACEARM.model;
+    console.log(JSON.stringify(d.q.map((q, i) => spacearmPose(M, q, d.R[i]))));"""
+    )
+    poses = helpers._node(program, json.dumps(dict(q=q.tolist(), R=R.tolist())))
+    tips = np.asarray(sa.tip_position(robot, q, base_rotation=R))
+    np.testing.assert_allclose([p["tips"] for p in poses], tips, rtol=0, atol=1e-9)
+    for i in range(2):  # eager drawing: two postures
+        drawing = spatial.robot_drawing(robot, q[i], R[i])
+        np.testing.assert_allclose(poses[i]["joints"], drawing.body_origins, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(poses[i]["segments"], drawing.segments, rtol=0, atol=1e-9)
+        assert poses[i]["owner"] == drawing.segment_arm.tolist()
+        np.testing.assert_allclose(poses[i]["corners"], drawing.bus_corners, rtol=0, atol=1e-9)
+    assert np.ptp(tips, axis=0).max() > 0.1
+
+
+def test_view_command_draws_the_dual_ur5(tmp_path, capsys):
+    helpers = _view_helpers()
+    assert helpers.main(["view", os.path.join(CONFIGS, "dual-ur5-servicer.yaml"), "--out", str(tmp_path)]) == 0
+    page = tmp_path / "dual-ur5-servicer.html"
+    assert "MB, self-contained" in capsys.readouterr().out
+    data = json.loads(re.search(r"window\.SPACEARM = (\{.*?\});</script>", page.read_text()).group(1))
+    assert data["model"]["family"] == "tree" and data["model"]["arm_names"] == ["left", "right"]
+    assert data["title"] == "dual-ur5-servicer: 12 joints, 2 arms on a 400 kg bus"
+    # the extent holds every tip: the arms stretched straight out of the faces
+    robot = sa.load_robot(os.path.join(CONFIGS, "dual-ur5-servicer.yaml"))
+    reach = np.abs(np.asarray(sa.tip_position(robot, np.zeros(12)))).max()
+    assert reach < data["extent"] < 4 * reach
+    assert helpers.main(["view", os.path.join(CONFIGS, "dual-ur5-servicer.yaml"), "--posture", "1,2"]) == 2
+    assert "--posture: expected 12" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_tree_view_renders_offline_in_chromium(tmp_path, dual_ur5):
+    """A few seconds: the page draws both arms in their colours and requests nothing from the network."""
+    helpers = _view_helpers()
+    if helpers.CHROMIUM is None:
+        pytest.skip("chromium is not installed")
+    from spacearm.figures.views import write_arm_view
+
+    page = write_arm_view(dual_ur5, tmp_path / "dual.html", spatial.DUAL_UR5_POSTURE)
+    image, requested = helpers._render(page, tmp_path)
+    plot = image[:, : image.shape[1] - 340]
+    assert helpers._pixels_near(plot, (31, 119, 180)) > 200  # left arm, #1f77b4
+    assert helpers._pixels_near(plot, (255, 127, 14)) > 200  # right arm, #ff7f0e
+    assert requested == []
