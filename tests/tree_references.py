@@ -95,7 +95,9 @@ def _random_rotation(rng):
 def _random_inertia(rng, mass):
     """A valid inertia about the centroid (principal moments obeying the triangle inequality), its frame's rpy."""
     half = rng.uniform(0.03, 0.3, size=3)  # box half-sizes
-    principal = mass / 3 * np.array([half[1] ** 2 + half[2] ** 2, half[0] ** 2 + half[2] ** 2, half[0] ** 2 + half[1] ** 2])
+    principal = (
+        mass / 3 * np.array([half[1] ** 2 + half[2] ** 2, half[0] ** 2 + half[2] ** 2, half[0] ** 2 + half[1] ** 2])
+    )
     rpy = rng.uniform(-np.pi, np.pi, size=3) * np.array([1.0, 0.45, 1.0])
     return principal, rpy
 

@@ -113,6 +113,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "the bus attitude on SO(3) along joint paths (Magnus on Gauss nodes), SO(3) helpers",
     ),
     ("spacearm.motion.spatial_paths", "Motion", "straight tip paths of spatial arms, (q, R) integrated together"),
+    (
+        "spacearm.motion.pose_paths",
+        "Motion",
+        "straight pose paths: tip on a line, axes on the SO(3) geodesic, through the whole J*",
+    ),
     ("spacearm.motion.path_ends", "Motion", "why a straight tip path ended: the reason codes"),
     (
         "spacearm.motion.lanes",
@@ -160,6 +165,7 @@ API_MODULES: list[tuple[str, str, str]] = [
         "closed joint loops that turn a spatial bus by a target rotation",
     ),
     ("spacearm.planning.spatial_reach", "Planning", "reaching a point in 3-D: turn the bus, then a straight path"),
+    ("spacearm.planning.pose_reach", "Planning", "reaching a pose: the tip-shell check, then one straight pose path"),
     ("spacearm.design", "Design", "gradient Pareto search over design numbers"),
     ("spacearm.design.problem", "Design", "design problems: variables, objectives, settings, the problem file"),
     (

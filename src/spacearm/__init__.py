@@ -65,8 +65,11 @@ _LAZY = {
     "straight_tip_path_history": "motion",
     "StraightPath": "motion",
     "go_and_back": "motion",
+    "straight_pose_path": "motion",
+    "PosePath": "motion",
     "plan_reorientation": "planning",
     "plan_reach": "planning",
+    "plan_pose_reach": "planning",
     "load_problem": "design",
     "pareto_search": "design",
     "hypervolume_2d": "design",
@@ -119,14 +122,20 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
     from .design import hypervolume_2d as hypervolume_2d, load_problem as load_problem, pareto_search as pareto_search
     from .io import open_results as open_results
     from .motion import (
+        PosePath as PosePath,
         StraightPath as StraightPath,
         go_and_back as go_and_back,
         integrate_joint_path as integrate_joint_path,
         joint_path_history as joint_path_history,
+        straight_pose_path as straight_pose_path,
         straight_tip_path as straight_tip_path,
         straight_tip_path_history as straight_tip_path_history,
     )
-    from .planning import plan_reach as plan_reach, plan_reorientation as plan_reorientation
+    from .planning import (
+        plan_pose_reach as plan_pose_reach,
+        plan_reach as plan_reach,
+        plan_reorientation as plan_reorientation,
+    )
 
 
 def __getattr__(name):

@@ -2,7 +2,9 @@
 
 Planar robots: ``--from PHI0,PHI1,..,PHIn`` (base attitude, joints) and ``--to X,Y``.
 Spatial robots (files with ``arm:``): ``--from Q1,..,Qn`` (joints), ``--to X,Y,Z`` and an
-optional start bus attitude ``--attitude-rpy R,P,Y``.
+optional start bus attitude ``--attitude-rpy R,P,Y``. With ``--to-rpy R,P,Y`` (arms of 6 or
+more joints) the target is a pose: the tip frame's axes as well, reached by one straight
+pose path (`spacearm.planning.plan_pose_reach`).
 """
 
 from __future__ import annotations
@@ -90,7 +92,16 @@ def register(subparsers) -> None:
         help="spatial robots: the bus attitude at the start as roll, pitch, yaw (URDF convention), "
         "degrees (radians with --radians); default the identity",
     )
-    parser.add_argument("--radians", action="store_true", help="read --from in radians")
+    parser.add_argument(
+        "--to-rpy",
+        dest="target_rpy",
+        default=None,
+        metavar="R,P,Y",
+        help="spatial arms of 6 or more joints: also aim the tip frame's axes, as roll, pitch, yaw in inertial "
+        "axes (URDF convention), degrees (radians with --radians); the tip then moves along one straight "
+        "pose path (position on the line, axes on the geodesic) and reach.npz also holds tip_rotation (k, 3, 3)",
+    )
+    parser.add_argument("--radians", action="store_true", help="read --from, --attitude-rpy and --to-rpy in radians")
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
     parser.add_argument("--animate", action="store_true", help="also write reach.gif")
     parser.add_argument(
@@ -103,6 +114,7 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..models import load_robot
     from ..models.spatial import SpatialRobot
+    from ..motion.pose_paths import check_pose_robot
 
     if args.html:  # the 'view' extra is checked before any work (exit 2 naming it)
         from ..figures.views.page import plotly_bundle
@@ -111,11 +123,15 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     if not isinstance(robot, SpatialRobot) and args.attitude is not None:
         raise ConfigError("--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude")
+    if args.target_rpy is not None:
+        check_pose_robot(robot, "--to-rpy")
     out = Path(args.out)
     check_output_folder(out)
     # One writer at a time (a second one is refused naming the holder's PID); the files are
     # written into a staging folder that replaces --out as a whole.
     with lock_folder(out, label=f"--out {out}"):
+        if args.target_rpy is not None:
+            return _run_pose(args, robot, out)
         return _run_spatial(args, robot, out) if isinstance(robot, SpatialRobot) else _run_planar(args, robot, out)
 
 
@@ -168,18 +184,9 @@ def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
 def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
     from ..figures.spatial import draw_spatial_reach
     from ..io import write_npz
-    from ..models.spatial.urdf import rpy_matrix
     from ..planning import plan_reach
 
-    n = robot.n_joints
-    q = comma_numbers(args.start, n, "--from")
-    prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
-    if not args.radians:
-        q = np.where(prismatic, q, np.radians(q))
-    R0 = np.eye(3)
-    if args.attitude is not None:
-        rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
-        R0 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
+    q, R0, prismatic = _spatial_start(args, robot)
     target = comma_numbers(args.target, 3, "--to")
     if args.animate:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
@@ -208,6 +215,75 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m",
+        f"figure         {out / 'reach.png'}",
+    ]
+    if args.html:
+        lines.append(f"replay         {out / 'reach.html'}")
+    print("\n".join(lines))
+    return 0
+
+
+def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(joints, start bus attitude, prismatic mask)`` from --from and --attitude-rpy."""
+    from ..models.spatial.urdf import rpy_matrix
+
+    q = comma_numbers(args.start, robot.n_joints, "--from")
+    prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
+    if not args.radians:
+        q = np.where(prismatic, q, np.radians(q))
+    R0 = np.eye(3)
+    if args.attitude is not None:
+        rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
+        R0 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
+    return q, R0, prismatic
+
+
+def _rpy_of(R: np.ndarray) -> np.ndarray:
+    """URDF roll, pitch, yaw of a rotation matrix R = Rz(y) Ry(p) Rx(r), rad."""
+    pitch = np.arcsin(np.clip(-R[2, 0], -1.0, 1.0))
+    return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
+
+
+def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
+    from ..figures.spatial import draw_spatial_reach
+    from ..io import write_npz
+    from ..models.spatial.urdf import rpy_matrix
+    from ..planning import plan_pose_reach
+
+    q, R0, prismatic = _spatial_start(args, robot)
+    target = comma_numbers(args.target, 3, "--to")
+    rpy = comma_numbers(args.target_rpy, 3, "--to-rpy")
+    T1 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
+    if args.animate:
+        raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
+    plan = plan_pose_reach(robot, q, target, T1, base_rotation=R0)
+    arrays = dict(
+        joints=plan.joints,
+        base_rotation=plan.base_rotation,
+        tip=plan.tips,
+        tip_rotation=plan.tip_rotations,
+        phase=plan.phase,
+        progress=plan.progress,
+        target_m=target,
+        target_rotation=T1,
+    )
+    _check_finite({**arrays, "tip error": plan.error, "tip axes error": plan.rotation_error})
+    with _result_folder(out) as staging:
+        draw_spatial_reach(robot, plan, staging / "reach.png")
+        write_npz(staging / "reach.npz", **arrays)
+        _write_replay(args, robot, staging)
+    lines = [
+        f"mode           {plan.mode} (tip on a straight line, tip axes along the geodesic)",
+        f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
+        "target rpy     " + ", ".join(f"{v:.6f}" for v in np.degrees(_rpy_of(T1))) + " deg",
+        f"bus rotation   {np.degrees(plan.bus_turn):.6f} deg from start to end (along the straight pose path)",
+        "end bus rpy    " + ", ".join(f"{v:.6f}" for v in np.degrees(_rpy_of(plan.end_rotation))) + " deg",
+        f"straight path  {plan.straight_length:.6f} m, tip axes turned {np.degrees(plan.tip_turn):.6f} deg",
+        "end joints     "
+        + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
+        + " (deg; m for prismatic joints)",
+        f"tip error      {plan.error:.3e} m, {plan.rotation_error:.3e} rad",
+        f"sigma_min J*   {plan.min_singular:.6f} (smallest along the path)",
         f"figure         {out / 'reach.png'}",
     ]
     if args.html:

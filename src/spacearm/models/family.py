@@ -10,7 +10,9 @@ family gives, for ONE posture (no batch axes):
 - the base attitude as a group (`spacearm._core.groups`: SO(2) or SO(3)), the
   split/join of an integrator state into joints and attitude coordinates, the
   attitude-rate map (base angular velocity per joint rate at zero momentum), and the
-  maps a straight tip path needs at one posture, in one evaluation.
+  maps a straight tip path needs at one posture, in one evaluation;
+- for pose targets, the whole J* with the attitude-rate map (``pose_maps``) and the
+  tip frame's axes (``tip_frame``).
 
 Everything else (J* = J_M - J_S I_S^-1 I_M, w*, ellipses and ellipsoids, base rates,
 straight-path fields, averages) is written once over these in
@@ -142,12 +144,37 @@ class RobotFamily:
         posture, in one evaluation (a straight tip path's field needs both)."""
         raise NotImplementedError
 
+    # Pose targets (spacearm.motion.pose_paths) ---------------------------------------------
+
+    def pose_maps(self, robot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """``(J* (task_rows, n), attitude_rate_map (attitude.dim, n))`` at one posture, base axes.
+
+        What a straight pose path's field needs per evaluation: the whole J* (tip
+        velocity and angular velocity per joint rate at zero momentum) and the base
+        angular velocity per joint rate. The default goes through the primitives; a
+        family may compute both in one pass.
+        """
+        J_S, J_M = self.jacobians(robot, joints)
+        I_S, I_M = self.momentum_map(robot, joints)
+        return J_M - J_S @ jnp.linalg.solve(I_S, I_M), self.attitude_rate_map(robot, joints)
+
+    def tip_frame(self, robot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """``(position (space,), axes (space, space))``: the tip frame at one posture, base axes.
+
+        The position is about the system centroid (as `tip`); the axes are the tip
+        frame's, expressed in base axes. Families whose tip has an orientation to aim
+        (6-row J*) implement it; pose targets need it.
+        """
+        raise NotImplementedError(f"the {self.name} family gives no tip orientation")
+
 
 def family_of(robot) -> RobotFamily:
     """The family of a robot pytree (its class attribute ``family``)."""
     family = getattr(type(robot), "family", None)
     if not isinstance(family, RobotFamily):
-        raise TypeError(f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}")
+        raise TypeError(
+            f"expected a spacearm robot (PlanarRobot, SpatialRobot or TreeRobot), got {type(robot).__name__}"
+        )
     return family
 
 

@@ -1,4 +1,4 @@
-"""Motion of the free-floating arm: the base attitude along joint paths and straight tip paths."""
+"""Motion of the free-floating arm: the base attitude along joint paths, straight tip paths and pose paths."""
 
 from .attitude import (
     geodesic_distance as geodesic_distance,
@@ -15,6 +15,12 @@ from .path_ends import (
     REASON_MAX_LENGTH as REASON_MAX_LENGTH,
     REASON_SINGULAR as REASON_SINGULAR,
     REASON_STEP_BUDGET as REASON_STEP_BUDGET,
+)
+from .pose_paths import (
+    PoseHistory as PoseHistory,
+    PosePath as PosePath,
+    pose_on_path as pose_on_path,
+    straight_pose_path as straight_pose_path,
 )
 from .spatial_paths import (
     SpatialStraightPath as SpatialStraightPath,
@@ -34,6 +40,8 @@ __all__ = [
     "REASON_MAX_LENGTH",
     "REASON_SINGULAR",
     "REASON_STEP_BUDGET",
+    "PoseHistory",
+    "PosePath",
     "SpatialStraightPath",
     "StraightPath",
     "compile_straight_tip_path_history",
@@ -43,9 +51,11 @@ __all__ = [
     "integrate_spatial_joint_path",
     "joint_path_base_increments",
     "joint_path_history",
+    "pose_on_path",
     "spatial_go_and_back",
     "spatial_joint_path_history",
     "spatial_straight_tip_path",
+    "straight_pose_path",
     "straight_tip_path",
     "straight_tip_path_history",
 ]

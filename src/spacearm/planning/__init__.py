@@ -1,5 +1,6 @@
-"""Planning: cyclic maneuvers that reorient the base, and reaching a point (section 3.2)."""
+"""Planning: cyclic maneuvers that reorient the base, reaching a point (section 3.2), reaching a pose."""
 
+from .pose_reach import MODE_POSE as MODE_POSE, PoseReachPlan as PoseReachPlan, plan_pose_reach as plan_pose_reach
 from .reach import (
     MODE_REORIENT as MODE_REORIENT,
     MODE_REPOSITION as MODE_REPOSITION,
@@ -27,6 +28,7 @@ from .spatial_reorientation import (
 )
 
 __all__ = [
+    "MODE_POSE",
     "MODE_REORIENT",
     "MODE_REPOSITION",
     "MODE_STRAIGHT",
@@ -34,11 +36,13 @@ __all__ = [
     "PHASE_REPOSITION",
     "PHASE_STRAIGHT",
     "LoopSettings",
+    "PoseReachPlan",
     "ReachPlan",
     "ReorientationLoop",
     "SpatialLoopSettings",
     "SpatialReachPlan",
     "SpatialReorientation",
+    "plan_pose_reach",
     "plan_reach",
     "plan_reorientation",
     "plan_reorientation_details",

@@ -70,6 +70,7 @@ __all__ = [
     "PHASE_REPOSITION",
     "PHASE_STRAIGHT",
     "ReachPlan",
+    "check_in_shell",
     "plan_reach",
     "reachable_bounds",
 ]
@@ -350,19 +351,7 @@ def _check_request(
         expected = ", ".join(repr(m) for m in steps.modes)
         raise ConfigError(f"modes: expected some of {expected} for a {family.name} robot, got {modes!r}")
     start, attitude, target, options = steps.check(robot, start, target, dict(family_options, given_grid=given_grid))
-    inner, outer = family.tip_shell(robot)
-    distance = float(np.linalg.norm(target))
-    if distance > outer * (1.0 - 1e-12) or distance < inner * (1.0 + 1e-12):
-        where = (
-            f"beyond the Maximum Reachable radius {outer:.6g} m"
-            if distance > outer * (1.0 - 1e-12)
-            else f"inside the unreachable hole of radius {inner:.6g} m"
-        )
-        point = ", ".join(f"{x:.6g}" for x in target)
-        raise ConfigError(
-            f"target: ({point}) m is {distance:.6g} m from the system centroid, {where} (from the link "
-            "coefficients: no posture or base attitude gets past it); no motion of this robot can reach it"
-        )
+    check_in_shell(robot, target)
     return ReachJob(
         robot=robot,
         family=family,
@@ -376,6 +365,28 @@ def _check_request(
         modes=modes,
         options=options,
     )
+
+
+def check_in_shell(robot, target, what: str = "target") -> None:
+    """Refuse a target outside the family's tip shell (`spacearm.models.family.RobotFamily.tip_shell`)
+    before any integration.
+
+    Raises:
+        ConfigError: naming the target, its distance from the system centroid and the radius it passes.
+    """
+    inner, outer = family_of(robot).tip_shell(robot)
+    distance = float(np.linalg.norm(target))
+    if distance > outer * (1.0 - 1e-12) or distance < inner * (1.0 + 1e-12):
+        where = (
+            f"beyond the Maximum Reachable radius {outer:.6g} m"
+            if distance > outer * (1.0 - 1e-12)
+            else f"inside the unreachable hole of radius {inner:.6g} m"
+        )
+        point = ", ".join(f"{x:.6g}" for x in target)
+        raise ConfigError(
+            f"{what}: ({point}) m is {distance:.6g} m from the system centroid, {where} (from the link "
+            "coefficients: no posture or base attitude gets past it); no motion of this robot can reach it"
+        )
 
 
 def _candidates(group, job: ReachJob) -> np.ndarray:

@@ -39,6 +39,7 @@ from .primitives import (
     posture_quantities,
     straight_path_maps,
     tip,
+    tip_pose,
 )
 from .robot import SpatialRobot
 from .shell import tip_shell
@@ -111,6 +112,15 @@ class SpatialFamily(RobotFamily):
 
     def tip(self, robot: SpatialRobot, posture: jax.Array) -> jax.Array:
         return tip(robot, posture)
+
+    def pose_maps(self, robot: SpatialRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """J* ``(6, n)`` and C_w ``(3, n)``, bus axes, from one chain pass."""
+        maps = posture_quantities(robot, joints, ("jacobian", "base_rate"))
+        return maps["jacobian"], maps["base_rate"][3:]
+
+    def tip_frame(self, robot: SpatialRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """Tip origin about the system centroid ``(3,)`` and tip axes ``(3, 3)``, bus axes."""
+        return tip(robot, joints), tip_pose(robot, joints)[0]
 
     def jacobians(self, robot: SpatialRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
         return jacobians(robot, posture)

@@ -7,7 +7,6 @@
 """
 
 from .family import TREE as TREE, TreeFamily as TreeFamily
-
 from .robot import (
     TreeLabels as TreeLabels,
     TreeRobot as TreeRobot,
