@@ -444,6 +444,7 @@ def fig_tree_arms(out_dir: Path) -> list[Path]:
         dual,
         DUAL_UR5_POSTURE,
         f"{dual.name}: {dual.n_joints} joints, {dual.n_tips} tips, {float(dual.base_mass):g} kg bus",
+        view=(15.0, 10.0),  # along the bus x axis: the arms on the +y and -y faces
     )
     three = _tree_robot("three-arm-servicer")
     draw_tree_panel(
