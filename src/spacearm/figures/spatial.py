@@ -363,9 +363,9 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
 
 
 def _drawn_points(robot, q, R) -> np.ndarray:
-    """Every point drawn for one posture: joint origins, tip and the bus cube's corners."""
-    chain, bus = arm_points(robot, q, R)
-    return np.vstack([chain, bus_corners(bus, R)])
+    """Every point drawn for one posture (spatial or tree robot): links, tips and the bus cube's corners."""
+    drawing = robot_drawing(robot, q, R)
+    return np.vstack([drawn_points(drawing), bus_corners(drawing.bus, R)])
 
 
 def draw_spatial_reach(robot, plan, path) -> Path:
