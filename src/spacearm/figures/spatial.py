@@ -34,7 +34,7 @@ from ..motion.attitude import log, spatial_joint_path_history
 from ..motion.spatial_paths import spatial_straight_tip_path
 from ..planning.spatial_reach import PHASE_LOOP, PHASE_STRAIGHT
 from . import figure
-from .views.model import bus_box
+from .views.model import arm_names, bus_box, joint_owners
 
 CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 CONFIG = CONFIGS / "ur5-smallsat.yaml"
@@ -84,7 +84,8 @@ class RobotDrawing:
         bus_corners: ``(8, 3)`` corners of the bus's equivalent uniform box (same mass and
             principal moments; `spacearm.figures.views.model.bus_box`).
         mounts: ``(r, 3)`` root (arm mount) origins.  mount_axes: ``(r, 3, 3)`` their axes as columns.
-        body_origins: ``(n, 3)`` body frame origins (joint origins, slid along prismatic axes).
+        body_origins: ``(n, 3)`` body frame origins (joint origins, slid along prismatic axes;
+            for a single spatial arm, the joint origins).
         segments: ``(s, 2, 3)`` links as segments joint to joint: parent body (or mount) to
             joint origin, joint origin to body origin where a prismatic joint slid, and body to tip.
         segment_arm: ``(s,)`` the arm (tip index) each segment belongs to, -1 when several share it.
@@ -114,10 +115,8 @@ def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
         centroid = tips[0] - np.asarray(tree_primitives.tip(robot, q)[0], float)
         mounts = np.asarray(robot.mount_xyz, float)
         mount_axes = np.stack([rpy_matrix(np.asarray(rpy, float)) for rpy in robot.mount_rpy])
-        joint_origins = origins.copy()
         segments, arm = [], []
-        owners = robot.support  # (k, n)
-        owner = [int(np.flatnonzero(owners[:, j])[0]) if owners[:, j].sum() == 1 else -1 for j in range(robot.n_joints)]
+        owner = joint_owners(robot)
         for j, parent in enumerate(robot.parents):
             if parent < 0:
                 start, start_axes = mounts[-1 - parent], mount_axes[-1 - parent]
@@ -125,20 +124,16 @@ def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
             else:
                 start = origins[parent]
                 offset = axes[parent] @ np.asarray(robot.joint_translation[j], float)
-            joint_origins[j] = start + offset
-            segments.append((start, joint_origins[j]))
+            joint = start + offset
+            segments.append((start, joint))
             arm.append(owner[j])
             if robot.joint_kinds[j] == "prismatic":
-                segments.append((joint_origins[j], origins[j]))
+                segments.append((joint, origins[j]))
                 arm.append(owner[j])
         for t, body in enumerate(robot.tip_bodies):
             segments.append((origins[body], tips[t]))
             arm.append(t)
-        roots = robot.labels.joint_roots
-        if robot.n_roots > 1 and robot.labels.root_names and roots:
-            names = tuple(robot.labels.root_names[roots[body]] for body in robot.tip_bodies)
-        else:
-            names = tuple(robot.tip_names) or tuple(f"tip {t + 1}" for t in range(robot.n_tips))
+        names = tuple(arm_names(robot))
     elif isinstance(robot, SpatialRobot):
         state = primitives._chain_pass(robot, jnp.asarray(q))  # one posture: (n,) batch-last
         centroid = np.array([float(x) for x in state.centroid])

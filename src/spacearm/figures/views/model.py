@@ -27,7 +27,7 @@ from ...models.spatial import SpatialRobot
 from ...models.spatial.urdf import rpy_matrix
 from ...models.tree import TreeRobot
 
-__all__ = ["FK_SCRIPT", "arm_names", "bus_box", "chain_model", "scene_extent"]
+__all__ = ["FK_SCRIPT", "arm_names", "bus_box", "chain_model", "joint_owners", "scene_extent"]
 
 # The forward kinematics in JavaScript (the same file every page inlines).
 FK_SCRIPT = Path(__file__).with_name("fk.js")
@@ -125,6 +125,12 @@ def arm_names(robot: TreeRobot) -> list[str]:
     return list(robot.tip_names) or [f"tip {t + 1}" for t in range(robot.n_tips)]
 
 
+def joint_owners(robot: TreeRobot) -> list[int]:
+    """``n``: the tip each joint moves (the arm it is drawn in), -1 for a joint several tips share."""
+    support = robot.support
+    return [int(np.flatnonzero(support[:, j])[0]) if support[:, j].sum() == 1 else -1 for j in range(robot.n_joints)]
+
+
 def _tree_model(robot: TreeRobot, corners, limits) -> dict:
     """`chain_model` of a tree: the spatial keys per root and per joint, with ``parents``
     (body index, or ``-1 - r`` for root r), ``tip_bodies``, ``tip_translation (k, 3)``,
@@ -132,8 +138,6 @@ def _tree_model(robot: TreeRobot, corners, limits) -> dict:
     if robot.batch_shape:
         raise ValueError(f"chain_model: one design, got a batch of shape {robot.batch_shape}")
     axis = np.asarray(robot.joint_axis, float)
-    support = robot.support
-    owner = [int(np.flatnonzero(support[:, j])[0]) if support[:, j].sum() == 1 else -1 for j in range(robot.n_joints)]
     return dict(
         family="tree",
         name=robot.name,
@@ -146,7 +150,7 @@ def _tree_model(robot: TreeRobot, corners, limits) -> dict:
         mount_xyz=np.asarray(robot.mount_xyz, float).tolist(),
         parents=list(robot.parents),
         tip_bodies=list(robot.tip_bodies),
-        owner=owner,
+        owner=joint_owners(robot),
         arm_names=arm_names(robot),
         joint_rotation=np.asarray(robot.joint_rotation, float).tolist(),
         joint_translation=np.asarray(robot.joint_translation, float).tolist(),
