@@ -190,3 +190,55 @@ def test_tree_view_renders_offline_in_chromium(tmp_path, dual_ur5):
     assert helpers._pixels_near(plot, (31, 119, 180)) > 200  # left arm, #1f77b4
     assert helpers._pixels_near(plot, (255, 127, 14)) > 200  # right arm, #ff7f0e
     assert requested == []
+
+
+_READ_TIPS = """
+document.body.dataset.result = JSON.stringify((function () {
+  var d = document.getElementById("plot").data.filter(function (t) { return t.name === "tips"; })[0];
+  return d.x.map(function (x, i) { return [x, d.y[i], d.z[i]]; }); })());"""
+
+
+@pytest.mark.slow
+def test_tree_sliders_and_replay_in_chromium(tmp_path, three_arm):
+    """A few seconds: the sliders of a tree page (ten joints, then the bus roll, pitch, yaw) put the
+    drawn tips where spacearm.tip_position puts them; a replay of a tree joint path, dragged to
+    frame k, draws the tips of frame k (1e-9 m)."""
+    helpers = _view_helpers()
+    if helpers.CHROMIUM is None:
+        pytest.skip("chromium is not installed")
+    from spacearm.figures.views import write_arm_view, write_replay_view
+
+    robot = three_arm
+    values = [20.0, -35.0, 50.0, 15.0, 30.0, 0.3, -25.0, 0.6, 40.0, 70.0, 10.0, -20.0, 30.0]  # deg; m for prismatic
+    script = (
+        f"""
+    var inputs = document.querySelectorAll("#controls input[type=range]");
+    {json.dumps(values)}.forEach(function (v, i) {{ inputs[i].value = v; inputs[i].dispatchEvent(new Event("input")); }});
+    document.body.dataset.values = JSON.stringify(Array.from(inputs).map(function (x) {{ return Number(x.value); }}));
+    """
+        + _READ_TIPS
+    )
+    state = helpers._drive(write_arm_view(robot, tmp_path / "three.html"), tmp_path, script)
+    assert state.get("spacearm") == "ready" and "error" not in state
+    taken = json.loads(state["values"])  # a slider snaps to its steps from its lower limit
+    np.testing.assert_allclose(taken, values, atol=0.3)
+    values = taken
+    prismatic = np.array([k == "prismatic" for k in robot.joint_kinds])
+    q = np.where(prismatic, values[:10], np.radians(values[:10]))
+    R = rpy_matrix(np.radians(values[10:]))
+    expected = np.asarray(sa.tip_position(robot, q, base_rotation=R))
+    np.testing.assert_allclose(json.loads(state["result"]), expected, rtol=0, atol=1e-9)
+
+    path = np.linspace(np.zeros(robot.n_joints), spatial.THREE_ARM_POSTURE, 9)
+    turns = np.stack([rpy_matrix(np.array([0.0, 0.0, 0.05 * k])) for k in range(9)])
+    tips = np.asarray(sa.tip_position(robot, path, base_rotation=turns))
+    page = write_replay_view(robot, tmp_path / "replay.html", joints=path, base_rotation=turns, tip=tips[:, 1])
+    script = (
+        """
+    var frame = document.querySelectorAll("#controls input[type=range]")[0];
+    frame.value = 6; frame.dispatchEvent(new Event("input"));"""
+        + _READ_TIPS
+    )
+    state = helpers._drive(page, tmp_path, script)
+    assert state.get("spacearm") == "ready" and "error" not in state
+    np.testing.assert_allclose(json.loads(state["result"]), tips[6], rtol=0, atol=1e-9)

@@ -232,6 +232,8 @@
       extra.push({type: "scatter3d", mode: "markers", x: [g[0]], y: [g[1]], z: [g.length > 2 ? g[2] : 0],
         marker: {size: 6, color: "#2ca02c", symbol: "circle-open"}, name: "target", hoverinfo: "name+x+y+z"});
     }
+    var firstTraces = poseTraces(poseAt(0));
+    MOVING = firstTraces.map(function (t, i) { return i; });  // a tree has more traces than one arm
     var TRACE = MOVING.length + 2;
     var show = function (k) {
       frame = k; var p = poseAt(k), t = trace(k);
@@ -240,7 +242,7 @@
       readout.textContent = "frame " + (k + 1) + " of " + count + (F.phase ? " (" + F.phase[k] + ")" : "") +
         "\nbus turned " + turn(k).toFixed(3) + " deg from the start\n" + tipText(p);
     };
-    Plotly.newPlot(plot, poseTraces(poseAt(0)).concat(fixedTraces(), extra), layout, CONFIG);
+    Plotly.newPlot(plot, firstTraces.concat(fixedTraces(), extra), layout, CONFIG);
     var play = document.createElement("button"); play.textContent = "play"; controls.appendChild(play);
     var scrub = slider("frame", 0, count - 1, 1, 0, "", function (v) { stop(); show(v); });
     var stop = function () { if (timer) { clearInterval(timer); timer = null; play.textContent = "play"; } };
