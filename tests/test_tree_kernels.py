@@ -10,15 +10,19 @@ over all joints, w*, the relative Jacobian, C_w and the reaction null space agre
 
 from __future__ import annotations
 
+import itertools
+
+import jax
 import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.kinematics import generic_generalized_jacobian, generic_manipulability, generic_tip_position
+from spacearm.kinematics import generic_generalized_jacobian, generic_tip_position
+from spacearm.models import tree
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.urdf import rpy_matrix
-from spacearm.models.tree import TREE, tree_from_chains
-from spacearm.models.tree.primitives import segments
+from spacearm.models.tree import TREE, stack_tree_robots, tree_from_chains
+from spacearm.models.tree.primitives import POSTURE_QUANTITIES, segments
 
 from .tree_references import PinocchioTree, random_tree, relative, system_urdf
 
@@ -30,7 +34,7 @@ MOUNT_RPY = [[-np.pi / 2, 0.0, 0.0], [np.pi / 2, 0.0, 0.0]]
 BUS_MASS = 400.0
 BUS_COM = np.array([0.01, -0.02, 0.03])
 BUS_INERTIA = BUS_MASS * (2 * 0.4726) ** 2 / 6 * np.eye(3) + np.array([[0, 1, 0], [1, 0, -2], [0, -2, 3.0]])
-SEEDS = (0, 1, 2, 3)
+SEEDS = (0, 1, 2)
 
 
 def _rotation(rng):
@@ -58,7 +62,10 @@ def dual():
         base_mass=BUS_MASS,
         base_com=BUS_COM,
         base_inertia=BUS_INERTIA,
-        arms=[(f"{arm}/", text, "base_link", x, r) for arm, x, r in zip(("left", "right"), MOUNT_XYZ, MOUNT_RPY)],
+        arms=[
+            (f"{arm}/", text, "base_link", x, r)
+            for arm, x, r in zip(("left", "right"), MOUNT_XYZ, MOUNT_RPY, strict=True)
+        ],
     )
     return robot, urdf
 
@@ -90,6 +97,7 @@ def _check_against(robot, reference, q, R):
     assert tips.shape == (len(q), k, 3) and J.shape == (len(q), k, 6, n)
     assert w.shape == (len(q), k) and C.shape == (len(q), 6, n) and fixed.shape == (len(q), k, 6, n)
     pairs = [(i, j) for i in range(k) for j in range(k) if i != j][:3]
+    relatives = {pair: np.asarray(sa.relative_jacobian(robot, q, base_rotation=R, tips=pair)) for pair in pairs}
     for b in range(len(q)):
         ref = reference.evaluate(q[b])
         np.testing.assert_allclose(tips[b], ref["tip"] @ R[b].T, atol=1e-10)
@@ -105,7 +113,7 @@ def _check_against(robot, reference, q, R):
         assert null.shape == (n, n - 3)
         np.testing.assert_allclose(ref["base"][3:] @ null, 0.0, atol=1e-10)
         for i, j in pairs:
-            J_rel = np.asarray(sa.relative_jacobian(robot, q[b], base_rotation=R[b], tips=(i, j)))
+            J_rel = relatives[i, j][b]
             expected = _blkdiag(R[b], relative(ref["jstar"], ref["tip"], i, j))
             np.testing.assert_allclose(J_rel, expected, atol=1e-10)
             # The bus drops out: the same from the fixed-base Jacobians.
@@ -139,7 +147,9 @@ def test_other_arm_columns_are_not_zero(dual, dual_pin, dual_postures, capsys):
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_random_tree_against_pinocchio(seed):
-    """A random tree (shared torso, revolute/continuous/prismatic joints, three tips) against Pinocchio."""
+    """A random tree (shared torso, revolute/continuous/prismatic joints, three tips) against Pinocchio.
+
+    Each seed draws other joint kinds, a new static structure: its kernels compile anew (a few s each)."""
     urdf, robot = random_tree(seed)
     assert min(robot.support[:, 0]) and len(set(robot.labels.urdf_types)) >= 2
     reference = PinocchioTree(urdf, robot.joint_names, robot.tip_names)
@@ -154,8 +164,66 @@ def test_random_tree_against_pinocchio(seed):
     cols = np.array([j.idx_v for j in reference.joints])
     H_m = M[np.ix_(cols, cols)]
     H_star = H_m - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
-    np.testing.assert_allclose(TREE.mass_matrix(robot, q[0]), H_m, atol=1e-10)
-    np.testing.assert_allclose(TREE.arm_inertia(robot, q[0]), H_star, atol=1e-10)
+    np.testing.assert_allclose(tree.mass_matrix(robot, q[0]), H_m, atol=1e-10)
+    np.testing.assert_allclose(tree.arm_inertia(robot, q[0]), H_star, atol=1e-10)
+
+
+def test_tree_metrics_against_pinocchio(dual, dual_pin, dual_postures):
+    """C in inertial axes, the reaction null space, w*_w and w_d per tip from Pinocchio's M and J*."""
+    robot, _ = dual
+    q, R = dual_postures
+    C = np.asarray(tree.base_twist_map(robot, q, base_rotation=R))
+    N = np.asarray(tree.reaction_null_space(robot, q))
+    w_rot = np.asarray(tree.rotational_manipulability(robot, q))
+    w_d = np.asarray(tree.dynamic_manipulability(robot, q))
+    assert N.shape == (len(q), 12, 9) and w_d.shape == (len(q), 2)
+    model, data = dual_pin.model, dual_pin.data
+    cols = np.array([j.idx_v for j in dual_pin.joints])
+    for b in range(len(q)):
+        ref = dual_pin.evaluate(q[b])
+        np.testing.assert_allclose(C[b, 3:], R[b] @ ref["base"][3:], atol=1e-10)
+        np.testing.assert_allclose(N[b].T @ N[b], np.eye(9), atol=1e-12)
+        np.testing.assert_allclose(ref["base"][3:] @ N[b], 0.0, atol=1e-10)
+        Jw = ref["jstar"][:, 3:]
+        np.testing.assert_allclose(w_rot[b], np.sqrt(np.linalg.det(Jw @ np.swapaxes(Jw, 1, 2))), rtol=1e-9)
+        M = pin.crba(model, data, dual_pin.config(q[b]))
+        M = np.triu(M) + np.triu(M, 1).T
+        H = M[np.ix_(cols, cols)] - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
+        K = ref["jstar"][:, :3] @ np.linalg.inv(H)
+        np.testing.assert_allclose(w_d[b], np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9)
+    with pytest.raises(TypeError, match="tree arms only"):
+        tree.mass_matrix(sa.umetani1990(), np.zeros(2))
+
+
+def test_posture_quantities_in_one_pass(dual):
+    """J*, C and H* from one pass over the tree equal their own kernels."""
+    robot, _ = dual
+    q = np.random.default_rng(9).uniform(-2, 2, size=(2, 3, 12))
+    got = jax.jit(lambda r, x: TREE.fast_paths["posture_quantities"](r, x, POSTURE_QUANTITIES))(robot, q)
+    assert got["jacobian"].shape == (2, 3, 2, 6, 12) and got["arm_inertia"].shape == (2, 3, 12, 12)
+    np.testing.assert_allclose(got["jacobian"], sa.generalized_jacobian(robot, q), atol=1e-13)
+    np.testing.assert_allclose(got["base_rate"], sa.base_rate_matrix(robot, q), atol=1e-13)
+    np.testing.assert_allclose(got["arm_inertia"], tree.arm_inertia(robot, q), atol=1e-12)
+
+
+def test_second_mount_moves_first_w_star(dual):
+    """d w*_1 / d mount_xyz of arm 2 is not zero and matches central differences.
+
+    Compiles the reverse-mode program of the tree pass (~10 s CPU), and a design vmap."""
+    robot, _ = dual
+    q = np.random.default_rng(4).uniform(-2, 2, size=12)
+    w_first = lambda r: sa.manipulability(r, q)[0]
+    grad = np.asarray(jax.grad(w_first)(robot).mount_xyz)
+    h, moved = 1e-6, []
+    for sign in (1.0, -1.0):
+        xyz = np.array(robot.mount_xyz)
+        xyz[1, 1] += sign * h
+        moved.append(float(w_first(robot.replace(mount_xyz=xyz))))
+    assert abs(grad[1, 1]) > 1e-5
+    np.testing.assert_allclose(grad[1, 1], (moved[0] - moved[1]) / (2 * h), rtol=1e-5)
+    designs = stack_tree_robots([robot, robot.replace(mount_xyz=np.array(robot.mount_xyz) + 0.1)])
+    J = jax.vmap(sa.generalized_jacobian, in_axes=(0, None))(designs, q)
+    np.testing.assert_allclose(J[1], sa.generalized_jacobian(jax.tree.map(lambda x: x[1], designs), q), atol=1e-14)
 
 
 def test_segments_of_a_tree():
@@ -167,10 +235,13 @@ def test_generic_path_equals_fast_path(dual):
     """J_M - J_S I_S^-1 I_M from the stacked primitives equals the closed form, per tip."""
     robot, _ = dual
     q = np.random.default_rng(3).uniform(-2, 2, size=(3, 12))
-    np.testing.assert_allclose(generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-12)
-    np.testing.assert_allclose(generic_tip_position(robot, q), sa.tip_position(robot, q), atol=1e-14)
-    np.testing.assert_allclose(generic_manipulability(robot, q), sa.manipulability(robot, q), rtol=1e-10)
-    I_S, I_M = TREE.momentum_map(robot, q[0])
+    generic = jax.jit(lambda r, x: (generic_generalized_jacobian(r, x), generic_tip_position(r, x)))(robot, q)
+    np.testing.assert_allclose(generic[0], sa.generalized_jacobian(robot, q), atol=1e-12)
+    np.testing.assert_allclose(generic[1], sa.tip_position(robot, q), atol=1e-14)
+    Jv = np.asarray(generic[0])[..., :3, :]
+    w = np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, -1, -2)))
+    np.testing.assert_allclose(w, sa.manipulability(robot, q), rtol=1e-10)
+    I_S, I_M = jax.jit(TREE.momentum_map)(robot, q[0])
     np.testing.assert_allclose(-np.linalg.solve(I_S, I_M), sa.base_rate_matrix(robot, q[0]), atol=1e-12)
 
 
@@ -195,6 +266,10 @@ def test_relative_jacobian_refuses():
         sa.relative_jacobian(robot, np.zeros(robot.n_joints), tips=("tip0", "nope"))
     with pytest.raises(ValueError, match="out of range"):
         sa.relative_jacobian(robot, np.zeros(robot.n_joints), tips=(0, 5))
+    with pytest.raises(TypeError, match="several tips, got a PlanarRobot"):
+        sa.relative_jacobian(sa.umetani1990(), np.zeros(3))
+    with pytest.raises(TypeError, match="straight tip paths are not available for trees"):
+        TREE.straight_maps(robot, np.zeros(robot.n_joints))
 
 
 def _pinocchio_loop(reference, waypoints, steps):
@@ -207,7 +282,7 @@ def _pinocchio_loop(reference, waypoints, steps):
         return np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
 
     R = np.eye(3)
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         rate, h = b - a, 1.0 / steps
         for i in range(steps):
             t = i * h
@@ -220,7 +295,7 @@ def _pinocchio_loop(reference, waypoints, steps):
     return R
 
 
-def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin):
+def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin, capsys):
     """A closed joint loop of both arms turns the bus; Magnus over the tree = RK4 over Pinocchio (1e-8 rad)."""
     robot, _ = dual
     rng = np.random.default_rng(11)
@@ -233,6 +308,8 @@ def test_bus_attitude_after_a_loop_of_both_arms(dual, dual_pin):
     turned = np.linalg.norm(_log(reference))
     assert turned > 1e-3, turned
     assert angle < 1e-8, angle
+    with capsys.disabled():
+        print(f"\n  dual UR5 loop: bus turned {turned:.4f} rad, Magnus vs Pinocchio RK4 {angle:.1e} rad")
 
 
 def _log(R):

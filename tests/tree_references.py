@@ -28,7 +28,9 @@ def _inertial(parent, mass, com, inertia, rpy=(0.0, 0.0, 0.0)):
     ET.SubElement(inertial, "origin", xyz=_fmt(com), rpy=_fmt(rpy))
     ET.SubElement(inertial, "mass", value=repr(float(mass)))
     I = np.asarray(inertia, dtype=float)
-    pairs = zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"), ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
+    pairs = zip(
+        ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"), ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)), strict=True
+    )
     ET.SubElement(inertial, "inertia", **{k: repr(float(I[i, j])) for k, (i, j) in pairs})
 
 

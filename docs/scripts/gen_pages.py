@@ -95,6 +95,13 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Models",
         "the whole-system URDF reader: the bus link, the paths to the tips, lock_others",
     ),
+    ("spacearm.models.tree.primitives", "Models", "the pass over the tree: k tips, one pass per posture"),
+    ("spacearm.models.tree.family", "Models", "the tree family and its fast paths"),
+    (
+        "spacearm.models.tree.metrics",
+        "Models",
+        "tree-only kernels: C(q), reaction null space, H_m, H*, w_d per tip",
+    ),
     (
         "spacearm.models.tree.primitives",
         "Models",

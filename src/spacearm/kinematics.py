@@ -19,8 +19,6 @@ per-tip result: tips ``(..., k, 3)``, J* ``(..., k, 6, n)``, w* ``(..., k)``.
 
 from __future__ import annotations
 
-import functools
-
 import jax
 import jax.numpy as jnp
 
@@ -278,7 +276,6 @@ def _tip_index(robot, tip) -> int:
     return index % count
 
 
-@functools.partial(jax.jit, static_argnames=("tips",))
 def relative_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None = None, *, tips=(0, 1)):
     """Twist of tip j seen from a frame moving with tip i, per joint rate, inertial axes.
 
@@ -291,7 +288,7 @@ def relative_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None
         robot: a robot with several tips (a tree of arms).
         posture: ``(..., n)`` joint positions.
         base_rotation: ``(..., 3, 3)`` bus attitude (default identity).
-        tips: ``(i, j)`` tip indices or tip names (static).
+        tips: ``(i, j)`` tip indices or tip names (one compiled program serves every pair).
 
     Returns:
         ``(..., 6, n)``.
@@ -300,10 +297,17 @@ def relative_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None
     if family.tip_count(robot) is None:
         raise TypeError(f"relative_jacobian: needs a robot with several tips, got a {type(robot).__name__}")
     i, j = (_tip_index(robot, t) for t in tips)
+    return _relative_jacobian(robot, posture, base_rotation, jnp.asarray(i), jnp.asarray(j))
+
+
+@jax.jit
+def _relative_jacobian(robot, posture, base_rotation, i, j):
     J = generalized_jacobian(robot, posture, base_rotation)
     p = tip_position(robot, posture, base_rotation)
-    d = p[..., j, :] - p[..., i, :]
-    w_i = J[..., i, 3:, :]
+    take = lambda x, index, axis: jnp.take(x, index, axis=axis)
+    J_i, J_j = take(J, i, -3), take(J, j, -3)
+    d = take(p, j, -2) - take(p, i, -2)
+    w_i = J_i[..., 3:, :]
     lever = jnp.cross(d[..., :, None], w_i, axisa=-2, axisb=-2, axisc=-2)
-    top = J[..., j, :3, :] - J[..., i, :3, :] + lever
-    return jnp.concatenate([top, J[..., j, 3:, :] - w_i], axis=-2)
+    top = J_j[..., :3, :] - J_i[..., :3, :] + lever
+    return jnp.concatenate([top, J_j[..., 3:, :] - w_i], axis=-2)

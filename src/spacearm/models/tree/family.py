@@ -7,7 +7,7 @@ joints, w* ``(k,)``; the bus quantities (C, H*, the attitude) have none.
 
 Fast paths (each equals the generic path over the primitives; tests/test_tree_kernels.py):
 the batch-last pass over the tree (`spacearm.models.tree.primitives`), J* by the 3x3
-closed form for all tips at once, w* per tip from its translational rows.
+closed form for all tips at once, w* per tip by Cauchy-Binet inside the same batch-last pass.
 """
 
 from __future__ import annotations
@@ -29,17 +29,15 @@ from .primitives import (
     fixed_base_jacobian,
     generalized_jacobian,
     jacobians,
+    manipulability,
     mass_matrix,
     momentum_map,
+    posture_quantities,
     tip,
 )
 from .robot import TreeRobot
 
 __all__ = ["TREE", "TreeFamily"]
-
-
-def _manipulability(robot, posture):
-    return gram_root_determinant(generalized_jacobian(robot, posture)[..., :3, :])
 
 
 def _base_rate(robot, posture, joint_rates):
@@ -65,11 +63,12 @@ class TreeFamily(RobotFamily):
     fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
         "tip_position": tip,
         "generalized_jacobian": generalized_jacobian,
-        "manipulability": _manipulability,
+        "manipulability": manipulability,
         "base_rate": _base_rate,
         "base_rate_matrix": base_twist_map,
         "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
+        "posture_quantities": posture_quantities,
     }
     fields = None  # design fields for trees are not defined yet
     attitude = SO3
@@ -112,6 +111,17 @@ class TreeFamily(RobotFamily):
     def arm_inertia(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H*, the inertia of all arms at zero momentum."""
         return arm_inertia(robot, joints)
+
+    # Not defined for trees yet: a straight path or a shell needs a chosen tip.
+
+    def straight_maps(self, robot: TreeRobot, joints: jax.Array):
+        raise TypeError(
+            "straight tip paths are not available for trees of arms yet (a path needs a chosen tip); "
+            "use integrate_joint_path for joint paths of all arms"
+        )
+
+    def tip_shell(self, robot: TreeRobot):
+        raise TypeError("the reach shell is not available for trees of arms yet (it needs a chosen tip)")
 
 
 TREE = TreeFamily()

@@ -40,6 +40,7 @@ from ..spatial.primitives import (
     _backward_step,
     _coupling,
     _cross,
+    _dot,
     _forward_step,
     _matmul,
     _matvec,
@@ -60,6 +61,7 @@ from ..spatial.primitives import (
 from .robot import TreeRobot
 
 __all__ = [
+    "POSTURE_QUANTITIES",
     "TreeConstants",
     "arm_inertia",
     "base_twist_map",
@@ -67,8 +69,10 @@ __all__ = [
     "fixed_base_jacobian",
     "generalized_jacobian",
     "jacobians",
+    "manipulability",
     "mass_matrix",
     "momentum_map",
+    "posture_quantities",
     "segments",
     "tip",
     "tip_pose",
@@ -345,13 +349,24 @@ def _tip_rows(*vectors):
 
 
 def _jstar_from(robot, state):
+    """``(k, 6, n, *batch)`` J* of every tip, the module docstring's closed form regrouped.
+
+    With w*_t = S_t a - A (S_t the support mask; a zero for prismatic joints) and
+    r_t = tip_t - G: J*_v,t = w*_t x tip_t + S_t (prismatic a - revolute a x o) - P/M - G x A,
+    so the per-tip work is one cross product per column (the rest is shared by the tips).
+    """
     _, solved = _coupling(state)
-    v, w = _fixed_columns(robot, state)
-    solved_k = tuple(a[None] for a in solved)
-    r_t = tuple(t[:, None] for t in _sub(state.tips, state.centroid))
-    momentum = tuple(p[None] for p in state.momentum)
-    v_star = _add(_sub(v, _scale(1.0 / state.mass, momentum)), _cross(r_t, solved_k))
-    return _tip_rows(v_star, _sub(w, solved_k))
+    batch_ndim = state.prismatic.ndim - 1
+    mask = jnp.asarray(_expand(robot.support, batch_ndim), state.prismatic.dtype)  # (k, n, 1..)
+    revolute = 1.0 - state.prismatic
+    own = _sub(_scale(state.prismatic, state.axes), _scale(revolute, _cross(state.axes, state.origins)))
+    shared = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(state.centroid, solved))
+    turning = _scale(revolute, state.axes)
+    w_star = tuple(mask * x[None] - y[None] for x, y in zip(turning, solved, strict=True))
+    tips = tuple(t[:, None] for t in state.tips)
+    lever = _cross(w_star, tips)
+    v_star = tuple(l + mask * o[None] + c[None] for l, o, c in zip(lever, own, shared, strict=True))
+    return _tip_rows(v_star, w_star)
 
 
 # Kernels in batch-last form (q (n, *batch)) ----------------------------------------------
@@ -368,6 +383,24 @@ def _fixed_minor(robot, q):
 
 def _jstar_minor(robot, q):
     return _jstar_from(robot, _tree_pass(robot, q))
+
+
+def _wstar_minor(robot, q):
+    """``(k, *batch)`` translational w* of every tip: sqrt of the sum of squared 3x3 minors
+    of J*_v (Cauchy-Binet; no cancellation near rank loss). Minor (i, j, l), i < j < l, is
+    (c_i x c_j) . c_l: one step per middle column j over contiguous slices (no gathers)."""
+    J = _jstar_minor(robot, q)[:, :3]  # (k, 3, n, *batch)
+    n = robot.n_joints
+    cols = tuple(J[:, c] for c in range(3))  # (k, n, *batch)
+    squares = jnp.zeros((J.shape[0],) + J.shape[3:], J.dtype)
+    for j in range(1, n - 1):
+        middle = tuple(c[:, j : j + 1] for c in cols)  # (k, 1, *batch)
+        cross = _cross(tuple(c[:, :j] for c in cols), middle)  # (k, j, *batch): c_i x c_j, i < j
+        after = tuple(c[:, None, j + 1 :] for c in cols)  # (k, 1, n-j-1, *batch)
+        minors = _dot(tuple(x[:, :, None] for x in cross), after)  # (k, j, n-j-1, *batch)
+        squares = squares + jnp.sum(minors * minors, axis=(1, 2))
+    positive = squares > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, squares, 1.0)), 0.0)
 
 
 def _base_twist_minor(robot, q):
@@ -413,6 +446,9 @@ generalized_jacobian.__doc__ = """``(..., k, 6, n)`` J* of every tip over all jo
 
 The closed form of the module docstring: one pass over the tree and one 3x3 solve per posture."""
 
+manipulability = batched(_wstar_minor, 1)
+manipulability.__doc__ = """``(..., k)`` translational w* = sqrt det(J*_v J*_v^T) of every tip, m^3."""
+
 base_twist_map = batched(_base_twist_minor, 2)
 base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate, bus axes."""
 
@@ -421,6 +457,50 @@ mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arm
 
 arm_inertia = batched(_arm_inertia_minor, 2)
 arm_inertia.__doc__ = """``(..., n, n)`` H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q, the inertia at zero momentum."""
+
+
+POSTURE_QUANTITIES = ("jacobian", "base_rate", "arm_inertia")
+
+
+def _posture_quantities_minor(robot, q, needs):
+    """J* rows of all tips (6k), C (6) and H* (n) stacked by rows ``(rows, n, *batch)`` from ONE pass."""
+    state = _tree_pass(robot, q)
+    coupling, solved = _coupling(state)
+    parts = []
+    if "jacobian" in needs:
+        J = _jstar_from(robot, state)
+        parts.append(J.reshape((-1,) + J.shape[2:]))
+    if "base_rate" in needs:
+        r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
+        v_bus = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(r_g, solved))
+        parts.append(_rows(v_bus, _scale(-1.0, solved)))
+    if "arm_inertia" in needs:
+        H = _mass_from(robot, state) - _outer(state.momentum, state.momentum) / state.mass
+        parts.append(H - _outer(coupling, solved))
+    return jnp.concatenate(parts, axis=0)
+
+
+def posture_quantities(robot: TreeRobot, q: jax.Array, needs: tuple[str, ...]) -> dict[str, jax.Array]:
+    """The per-posture matrices posture metrics need, from one pass over the tree per posture.
+
+    Args:
+        robot: one design.
+        q: ``(..., n)`` joint positions.
+        needs: a subset of `POSTURE_QUANTITIES` (static): ``"jacobian"`` J* ``(..., k, 6, n)``,
+            ``"base_rate"`` C ``(..., 6, n)``, ``"arm_inertia"`` H* ``(..., n, n)``; bus axes,
+            each equal to its own kernel above.
+    """
+    wanted = tuple(name for name in POSTURE_QUANTITIES if name in needs)
+    stacked = batched(lambda r, x: _posture_quantities_minor(r, x, wanted), 2)(robot, q)
+    k, n = robot.n_tips, robot.n_joints
+    rows = {"jacobian": 6 * k, "base_rate": 6, "arm_inertia": n}
+    out, start = {}, 0
+    for name in wanted:
+        out[name] = stacked[..., start : start + rows[name], :]
+        start += rows[name]
+    if "jacobian" in out:
+        out["jacobian"] = out["jacobian"].reshape(out["jacobian"].shape[:-2] + (k, 6, n))
+    return out
 
 
 def tip_pose(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
