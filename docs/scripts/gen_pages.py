@@ -103,12 +103,6 @@ API_MODULES: list[tuple[str, str, str]] = [
         "tree-only kernels: C(q), reaction null space, H_m, H*, w_d per tip",
     ),
     (
-        "spacearm.models.tree.primitives",
-        "Models",
-        "the pass over the tree: k tips, J* of every tip over all joints, body frames, the momentum map",
-    ),
-    ("spacearm.models.tree.family", "Models", "`TREE`, the tree family on the seam, and its fast paths"),
-    (
         "spacearm.kinematics",
         "Kinematics",
         "J*, w*, ellipsoids, base rates, straight-path rates: written once over the primitives",
