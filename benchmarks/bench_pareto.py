@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
+import resource
 import time
 from pathlib import Path
 
@@ -32,7 +34,7 @@ jax.config.update("jax_enable_x64", True)
 from spacearm._core.schema import read_yaml
 from spacearm.design.baselines import nsga2_search
 from spacearm.design.fronts import hypervolume
-from spacearm.design.hybrid import hybrid_search, parse_hybrid
+from spacearm.design.hybrid import JACOBIANS, hybrid_search, parse_hybrid
 from spacearm.design.spatial_problem import load_design_problem
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,12 +46,24 @@ def wall_to(result, level):
     return None if seconds is None else result.compile_seconds + seconds
 
 
+def cpu_seconds():
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def show(value, unit=" s"):
     return "never" if value is None else f"{value:.3g}{unit}"
 
 
 def bench(
-    name: str, max_seconds: float | None, population: int | None, factor: float, tolerance: float | None = None
+    name: str,
+    max_seconds: float | None,
+    population: int | None,
+    factor: float,
+    tolerance: float | None = None,
+    generations: int | None = None,
+    jacobian: str | None = None,
+    gradient_share: float | None = None,
 ) -> dict:
     path = ROOT / "sweeps" / f"{name}.yaml"
     config = read_yaml(path, what="design problem file")
@@ -61,18 +75,28 @@ def bench(
         settings = dataclasses.replace(settings, population=population)
     if tolerance is not None:
         settings = dataclasses.replace(settings, tolerance=tolerance)
+    if generations is not None:
+        settings = dataclasses.replace(settings, generations=generations)
+    if jacobian is not None:
+        settings = dataclasses.replace(settings, jacobian=jacobian)
+    if gradient_share is not None:
+        settings = dataclasses.replace(settings, gradient_share=gradient_share)
     print(f"== {name}: {len(problem.variables)} variables, objectives {', '.join(problem.objectives)}", flush=True)
+    print(f"  load average {' '.join(f'{v:.1f}' for v in os.getloadavg())}", flush=True)
+    cpu = cpu_seconds()
     hybrid = hybrid_search(problem, settings)
+    hybrid_cpu = cpu_seconds() - cpu
     reference = hybrid.extra["reference_point"]
     hybrid_wall = hybrid.compile_seconds + hybrid.run_seconds
     print(
         f"  hybrid: compile {hybrid.compile_seconds:.1f} s, run {hybrid.run_seconds:.1f} s, "
-        f"{hybrid.evaluations} evaluations, {hybrid.extra['generations']} generations ({hybrid.extra['stop_reason']})",
+        f"{hybrid.evaluations} evaluations, {hybrid.extra['generations']} generations, {hybrid.extra['jacobian']} J ({hybrid.extra['stop_reason']}), "
+        f"{hybrid_cpu:.1f} CPU s",
         flush=True,
     )
     nsga_population = int((problem.nsga2 or {}).get("population", settings.population))
     charged = hybrid.extra["compile_seconds_by_program"]["value"] if nsga_population == settings.population else 0.0
-    tic = time.perf_counter()
+    tic, cpu = time.perf_counter(), cpu_seconds()
     nsga = nsga2_search(
         problem,
         population=nsga_population,
@@ -84,7 +108,7 @@ def bench(
     nsga.compile_seconds = max(nsga.compile_seconds, charged)
     print(
         f"  nsga2: compile {nsga.compile_seconds:.1f} s, run {nsga.run_seconds:.1f} s, {nsga.evaluations} "
-        f"evaluations ({time.perf_counter() - tic:.1f} s)",
+        f"evaluations ({time.perf_counter() - tic:.1f} s, {cpu_seconds() - cpu:.1f} CPU s)",
         flush=True,
     )
     best = hypervolume(np.concatenate([hybrid.objectives, nsga.objectives]), reference)
@@ -114,6 +138,7 @@ def bench(
         f"{show(row['ratio'], '')}"
     )
     print(
+        f"  hybrid final hypervolume {hybrid_hv:.10g}, best known {best:.10g}\n"
         f"  share of best known: hybrid {row['hybrid_share']:.5%}, NSGA-II {row['nsga2_share']:.5%}; NSGA-II at "
         f"the hybrid's wall time {row['nsga2_at_hybrid_wall'] / best:.5%}; target met: {row['met']}",
         flush=True,
@@ -127,9 +152,24 @@ def main() -> None:
     parser.add_argument("--max-seconds", type=float, default=None, help="cap the hybrid's run time (s)")
     parser.add_argument("--population", type=int, default=None, help="the hybrid's population (default: the file's)")
     parser.add_argument("--tolerance", type=float, default=None, help="the hybrid's stopping tolerance")
+    parser.add_argument("--generations", type=int, default=None, help="the hybrid's most generations")
+    parser.add_argument("--jacobian", choices=JACOBIANS, default=None, help="the hybrid's design-space gradients")
+    parser.add_argument("--gradient-share", type=float, default=None, help="the hybrid's stepping share")
     parser.add_argument("--factor", type=float, default=3.0, help="NSGA-II's wall time / the hybrid's (default 3)")
     args = parser.parse_args()
-    rows = [bench(name, args.max_seconds, args.population, args.factor, args.tolerance) for name in args.problems]
+    rows = [
+        bench(
+            name,
+            args.max_seconds,
+            args.population,
+            args.factor,
+            args.tolerance,
+            args.generations,
+            args.jacobian,
+            args.gradient_share,
+        )
+        for name in args.problems
+    ]
     print("\nproblem              NSGA-II end HV   hybrid/best  NSGA-II/best  hybrid wall  to NSGA-II end  ratio  met")
     for row in rows:
         print(

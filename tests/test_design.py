@@ -362,7 +362,9 @@ def test_optimize_command_writes_front_summary_and_figures(tmp_path):
     np.testing.assert_allclose(summary["hypervolume"], design.hypervolume_2d(front[:, 2:]), rtol=1e-12)
     assert set(summary["methods"]) == {"hybrid", "grid", "nsga2"}  # the hybrid search is the default
     assert summary["methods"]["grid"]["evaluations"] == 45
-    assert summary["methods"]["hybrid"]["value_and_gradient_evaluations"] > 0
+    hybrid = summary["methods"]["hybrid"]  # closed forms: every member steps, by differences
+    assert hybrid["jacobian"] == "differences" and hybrid["gradient_steps_per_generation"] == 8
+    assert hybrid["accepted_gradient_steps"] > 0 and hybrid["value_and_gradient_evaluations"] == 0
     assert "value-and-gradient" in summary["evaluation_counting"]
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["config"] == config and manifest["float64"] is True

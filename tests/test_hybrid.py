@@ -146,6 +146,12 @@ def test_parse_hybrid_checks_its_section():
         parse_hybrid("f.yaml", {"population": 2})
     with pytest.raises(ConfigError, match="populaton"):
         parse_hybrid("f.yaml", {"populaton": 12})
+    assert parse_hybrid("f.yaml", {"jacobian": "reverse", "gradient_share": 0}).jacobian == "reverse"
+    assert parse_hybrid("f.yaml", {"gradient_share": None}).gradient_share is None
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.jacobian: must be one of auto, reverse, differences"):
+        parse_hybrid("f.yaml", {"jacobian": "forward"})
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.gradient_share: must lie in \[0, 1\]"):
+        parse_hybrid("f.yaml", {"gradient_share": 1.5})
 
 
 @pytest.fixture(scope="module")
@@ -162,8 +168,8 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     # Every evaluated design is in the box and archived, with the values batch_function gives.
     assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
     assert (
-        result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 3 * 16
-    )  # start, then steps, children, densified
+        result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 5 * 16
+    )  # start, then per generation: every member's 2 differences, its step, 16 children, 16 densified
     np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
     hv = [c["hypervolume"] for c in result.checkpoints]
     assert np.all(np.diff(hv) >= 0)
@@ -172,6 +178,41 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     # Each heavy program compiled once: the value program and the gradient (VJP) program.
     heavy = {name: count for name, count in compiles.items() if "evaluate" in name or "pull" in name}
     assert heavy and max(heavy.values()) == 1, compiles
+
+
+def test_hybrid_reverse_jacobian_steps_like_the_differences():
+    """The vector-Jacobian product (one more program) and the forward differences through
+    the value program give the same design-space gradients, so the same run to a few
+    digits; the population rule stops a run without densification once the population's
+    own hypervolume rose no higher for ``population_patience`` generations and the
+    archive's gained less than ``population_tolerance``."""
+    problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR))
+    runs = {}
+    for jacobian in ("reverse", "differences"):
+        settings = HybridSettings(
+            population=16,
+            generations=40,
+            seed=3,
+            jacobian=jacobian,
+            densify=False,
+            population_patience=3,
+            population_tolerance=1e-2,
+        )
+        with count_compiles() as compiles:
+            runs[jacobian] = hybrid_search(problem, settings)
+        pulls = [count for name, count in compiles.items() if "pull" in name]
+        assert pulls == ([1] if jacobian == "reverse" else []), dict(compiles)
+    reverse, differences = runs["reverse"], runs["differences"]
+    assert reverse.extra["jacobian"] == "reverse" and differences.extra["jacobian"] == "differences"
+    first = len(reverse.checkpoints[1:3])  # the first two generations, before paths can part
+    for a, b in zip(reverse.checkpoints[1 : 1 + first], differences.checkpoints[1 : 1 + first], strict=True):
+        assert a["population_hypervolume"] == pytest.approx(b["population_hypervolume"], rel=1e-6)
+    for run in runs.values():
+        assert run.extra["stop_reason"].startswith("converged: the population") and run.extra["generations"] < 40
+        population_hv = [c["population_hypervolume"] for c in run.checkpoints]
+        assert max(population_hv[-3:]) <= max(population_hv[:-3]) * (1 + 1e-9)
+        archive_hv = [c["hypervolume"] for c in run.checkpoints]
+        assert archive_hv[-1] - archive_hv[-4] <= 1e-2 * archive_hv[-1]
 
 
 def test_hybrid_gradient_steps_raise_the_hypervolume_of_a_population(planar_hybrid):

@@ -1,4 +1,4 @@
-"""Reaction-free motion of redundant spatial arms and the bus-disturbance map.
+"""Reaction-free motion of redundant spatial arms and trees of arms, and the bus-disturbance map.
 
 The bus angular velocity at zero momentum is omega_B = C_w(q) q_dot (bus axes; C_w the
 angular rows of C(q) = -I_S^-1 I_M). Joint rates in ker C_w turn the bus not at all:
@@ -19,6 +19,15 @@ n > 3 joints where C_w has full rank.
   is measured independently by running the sampled joint path through the SO(3)
   integrator (`spacearm.motion.integrate_joint_path`).
 
+Written over the robot-family seam (``attitude_rate_map``, ``straight_maps``, ``tip``,
+``moving_joints``), so it serves a spatial arm and a tree of arms focused on one tip
+(`spacearm.models.tree.robot.TreeRobot.focus`). On a tree whose every joint moves, the
+reaction-free path of one tip is the "balance arm" (Huang, Xu & Liang, IJARS 2005;
+Nenchev 2013): the minimum-norm rates of [C_w; J*_v] use the other arms to cancel the
+bus rotation. Held joints of a focused tree take no part: their columns are zero, their
+rates exactly zero, and the null space and disturbance extremes are over the moving
+joints only.
+
 Everything is batched over leading axes and written for one posture under ``vmap``.
 """
 
@@ -34,8 +43,7 @@ import numpy as np
 
 from .._core.batching import bucket_size, pad_leading
 from .._core.errors import ConfigError
-from ..models.spatial import primitives
-from ..models.spatial.robot import SpatialRobot
+from ..models.family import family_of
 from ..motion import dop853
 
 __all__ = [
@@ -49,34 +57,50 @@ __all__ = [
 ]
 
 
-def _bus_rate_map(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    return primitives.base_twist_map(robot, q)[..., 3:, :]
+def _bus_rate_map(robot, q: jax.Array) -> jax.Array:
+    """``(..., 3, n_moving)`` C_w over the moving joints."""
+    return family_of(robot).attitude_rate_map(robot, q)[..., _moving(robot)]
+
+
+def _moving(robot) -> np.ndarray:
+    """Indices of the joints that move (static)."""
+    return np.flatnonzero(family_of(robot).moving_joints(robot))
+
+
+def _embed(robot, rates: jax.Array) -> jax.Array:
+    """``(..., n_moving)`` -> ``(..., n)`` with zeros at the held joints."""
+    n = family_of(robot).joint_count(robot)
+    out = jnp.zeros(rates.shape[:-1] + (n,), rates.dtype)
+    return out.at[..., _moving(robot)].set(rates)
 
 
 @jax.jit
-def reaction_null_space(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """``(..., n, n - 3)`` orthonormal basis of ker C_w(q) (joint rates that do not turn the bus).
+def reaction_null_space(robot, q: jax.Array) -> jax.Array:
+    """``(..., n, m - 3)`` orthonormal basis of ker C_w(q) (joint rates that do not turn the bus).
+
+    m is the number of moving joints (all n, except in a focused tree); the rows of held
+    joints are zero.
 
     Args:
-        q: ``(..., n)`` joints, n > 3.
+        q: ``(..., n)`` joints, m > 3.
     """
-    n = robot.n_joints
-    if n <= 3:
-        raise ConfigError(f"the reaction null space needs more than 3 joints, the arm has {n}")
+    m = _moving(robot).size
+    if m <= 3:
+        raise ConfigError(f"the reaction null space needs more than 3 moving joints, the robot has {m}")
     C = _bus_rate_map(robot, q)
     _, _, vt = jnp.linalg.svd(C, full_matrices=True)
-    return jnp.swapaxes(vt[..., 3:, :], -1, -2)
+    return jnp.swapaxes(_embed(robot, vt[..., 3:, :]), -1, -2)
 
 
 @jax.jit
-def disturbance(robot: SpatialRobot, q: jax.Array, joint_rates: jax.Array) -> jax.Array:
+def disturbance(robot, q: jax.Array, joint_rates: jax.Array) -> jax.Array:
     """``(...)`` ||C_w(q) u|| / ||u||: bus angular speed per unit joint speed, rad/rad.
 
     Args:
         q: ``(..., n)`` joints; joint_rates: ``(..., n)`` directions u (any nonzero scale).
     """
     u = jnp.asarray(joint_rates)
-    w = jnp.einsum("...ij,...j->...i", _bus_rate_map(robot, q), u)
+    w = jnp.einsum("...ij,...j->...i", family_of(robot).attitude_rate_map(robot, q), u)
     return jnp.linalg.norm(w, axis=-1) / jnp.linalg.norm(u, axis=-1)
 
 
@@ -102,36 +126,36 @@ class DisturbanceMap:
 
 
 @jax.jit
-def disturbance_map(robot: SpatialRobot, q: jax.Array) -> DisturbanceMap:
+def disturbance_map(robot, q: jax.Array) -> DisturbanceMap:
     """Extremes of ||C_w(q) u|| over unit joint rates u (Dubowsky & Torres 1991), ``q (..., n)``.
 
     Over a joint grid (e.g. `numpy.meshgrid` of two joints, the others fixed) this is
     the disturbance map; the least-disturbing direction is the right singular vector of
     the smallest singular value of C_w.
     """
-    n = robot.n_joints
+    m = _moving(robot).size
     C = _bus_rate_map(robot, q)
     _, s, vt = jnp.linalg.svd(C, full_matrices=True)
-    smallest = s[..., -1] if n <= 3 else jnp.zeros_like(s[..., -1])
+    smallest = s[..., -1] if m <= 3 else jnp.zeros_like(s[..., -1])
     return DisturbanceMap(
         largest=s[..., 0],
         smallest=smallest,
         singular_values=s,
-        least_disturbing=vt[..., -1, :],
-        most_disturbing=vt[..., 0, :],
+        least_disturbing=_embed(robot, vt[..., -1, :]),
+        most_disturbing=_embed(robot, vt[..., 0, :]),
     )
 
 
-def reaction_free_rates(robot: SpatialRobot, q: jax.Array, tip_direction_bus: jax.Array):
+def reaction_free_rates(robot, q: jax.Array, tip_direction_bus: jax.Array):
     """Joint rates moving the tip at unit speed along a bus-frame direction without turning the bus.
 
-    Solves [C_w; J*_v] q' = [0; d] (one posture) in the least-squares, minimum-norm sense.
+    Solves [C_w; J*_v] q' = [0; d] (one posture) in the least-squares, minimum-norm sense
+    (held joints of a focused tree have zero columns, hence zero rates).
 
     Returns:
         ``(q' (n,), tip residual ||J*_v q' - d|| (), bus rate ||C_w q'|| ())``.
     """
-    maps = primitives.straight_path_maps(robot, q)  # [J*_v; C_w], one pass over the chain
-    J, C = maps[:3], maps[3:]
+    J, C = family_of(robot).straight_maps(robot, q)  # one pass over the chain or tree
     A = jnp.concatenate([C, J], axis=0)
     b = jnp.concatenate([jnp.zeros(3, q.dtype), tip_direction_bus])
     rates = jnp.linalg.pinv(A, rtol=1e-12) @ b
@@ -163,6 +187,8 @@ class ReactionFreePath:
 @functools.partial(jax.jit, static_argnames=("steps",))
 def _reaction_free_flat(robot, q0, R0, direction, length, steps):
     """A padded batch of reaction-free paths (the padding rows are copies of a real one)."""
+    family = family_of(robot)
+    moving = _moving(robot)
 
     def one(q0, R0, d, length):
         d_bus = R0.T @ (d / jnp.linalg.norm(d))
@@ -181,16 +207,16 @@ def _reaction_free_flat(robot, q0, R0, direction, length, steps):
         _, qs = jax.lax.scan(step, q0, None, length=steps)
         joints = jnp.concatenate([q0[None], qs], axis=0)
         _, residual, bus = jax.vmap(lambda q: reaction_free_rates(robot, q, d_bus))(joints)
-        maps = primitives.straight_path_maps(robot, joints)  # (steps + 1, 6, n): [J*_v; C_w]
-        sv = jnp.linalg.svd(maps, compute_uv=False)[:, -1]
-        tip = jnp.einsum("ij,sj->si", R0, primitives.tip(robot, joints))
+        maps = jax.vmap(lambda q: jnp.concatenate(family.straight_maps(robot, q))[:, moving])(joints)
+        sv = jnp.linalg.svd(maps, compute_uv=False)[:, -1]  # (steps + 1,) of [J*_v; C_w] (moving joints)
+        tip = jnp.einsum("ij,sj->si", R0, jax.vmap(lambda q: family.tip(robot, q))(joints))
         return ReactionFreePath(joints, tip, jnp.max(residual), jnp.max(bus), jnp.min(sv))
 
     return jax.vmap(one)(q0, R0, direction, length)
 
 
 def reaction_free_tip_path(
-    robot: SpatialRobot,
+    robot,
     q_start: jax.Array,
     direction: jax.Array,
     length: jax.Array | float,
@@ -200,8 +226,12 @@ def reaction_free_tip_path(
 ) -> ReactionFreePath:
     """Translate the tip along an inertial direction with joint rates in the reaction null space.
 
+    On a tree of arms focused on one tip with every joint moving
+    (``robot.focus(tip="left/tool0")``) this is the balance arm: the other arms cancel
+    the bus rotation the tip's arm causes.
+
     Args:
-        robot: one spatial design with n >= 4 joints.
+        robot: one spatial design, or a tree focused on one tip, with at least 4 moving joints.
         q_start: ``(..., n)`` joints at the start.
         direction: ``(..., 3)`` inertial direction of the tip motion.
         length: ``(...)`` tip distance, m.
@@ -211,9 +241,12 @@ def reaction_free_tip_path(
     Returns:
         `ReactionFreePath` with the broadcast batch shape.
     """
-    n = robot.n_joints
-    if n < 4:
-        raise ConfigError(f"reaction-free tip motion needs at least 4 joints (a reaction null space), the arm has {n}")
+    n = family_of(robot).joint_count(robot)
+    m = _moving(robot).size
+    if m < 4:
+        raise ConfigError(
+            f"reaction-free tip motion needs at least 4 moving joints (a reaction null space), the robot has {m}"
+        )
     if robot.batch_shape:
         raise ConfigError("reaction_free_tip_path: one design at a time")
     dtype = jnp.result_type(float)

@@ -4,7 +4,11 @@ Planar robots: ``--from PHI0,PHI1,..,PHIn`` (base attitude, joints) and ``--to X
 Spatial robots (files with ``arm:``): ``--from Q1,..,Qn`` (joints), ``--to X,Y,Z`` and an
 optional start bus attitude ``--attitude-rpy R,P,Y``. With ``--to-rpy R,P,Y`` (arms of 6 or
 more joints) the target is a pose: the tip frame's axes as well, reached by one straight
-pose path (`spacearm.planning.plan_pose_reach`).
+pose path (`spacearm.planning.plan_pose_reach`). Several arms on one bus (files with
+``arms:`` or ``system:``): the same, with ``--from`` over all n joints, ``--tip NAME`` (the
+tip that reaches; default the first) and ``--moving ARM,..`` (the arms, tips or joints that
+move; default all, so the other arms move too), through
+`spacearm.models.tree.robot.TreeRobot.focus`.
 """
 
 from __future__ import annotations
@@ -63,7 +67,8 @@ def register(subparsers) -> None:
             "workspace, otherwise a cyclic joint maneuver that turns the base first. Writes reach.png "
             "and reach.npz into --out: the whole history, joints (k, n), tip (k, 2 or 3), phase (k,) and "
             "phi (k, n+1) planar or base_rotation (k, 3, 3) spatial. Exit 2 for a target outside the "
-            "Maximum Reachable space (the radius is named)."
+            "Maximum Reachable space (the radius is named). Several arms on one bus: --tip chooses the "
+            "tip, --moving the arms that move (reach.npz: joints over all arms, tip of the chosen tip)."
         ),
     )
     parser.add_argument("robot", help="robot YAML file, e.g. configs/umetani1990.yaml or configs/ur5-smallsat.yaml")
@@ -101,6 +106,19 @@ def register(subparsers) -> None:
         "axes (URDF convention), degrees (radians with --radians); the tip then moves along one straight "
         "pose path (position on the line, axes on the geodesic) and reach.npz also holds tip_rotation (k, 3, 3)",
     )
+    parser.add_argument(
+        "--tip",
+        default=None,
+        metavar="NAME",
+        help="several arms on one bus: the tip that reaches the target (default the first tip)",
+    )
+    parser.add_argument(
+        "--moving",
+        default=None,
+        metavar="ARM,..",
+        help="several arms on one bus: the arms (or tips, or joints) that move, comma-separated; the "
+        "others are held where they are (default: every joint moves)",
+    )
     parser.add_argument("--radians", action="store_true", help="read --from, --attitude-rpy and --to-rpy in radians")
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
     parser.add_argument("--animate", action="store_true", help="also write reach.gif")
@@ -113,7 +131,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..models import load_robot
-    from ..models.spatial import SpatialRobot
+    from ..models.family import family_of
     from ..motion.pose_paths import check_pose_robot
 
     if args.html:  # the 'view' extra is checked before any work (exit 2 naming it)
@@ -121,8 +139,19 @@ def run(args: argparse.Namespace) -> int:
 
         plotly_bundle()
     robot = load_robot(args.robot)
-    if not isinstance(robot, SpatialRobot) and args.attitude is not None:
+    family = family_of(robot)
+    spatial = family.rotates_with_base
+    if not spatial and args.attitude is not None:
         raise ConfigError("--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude")
+    several = family.tip_count(robot) is not None
+    if several:
+        robot = _focus(args, robot)
+    else:
+        for option, value in (("--tip", args.tip), ("--moving", args.moving)):
+            if value is not None:
+                raise ConfigError(f"{option}: applies to robots with several arms (files with arms: or system:)")
+    if several and args.html:
+        raise ConfigError("--html: the replay is not available for several arms on one bus yet (reach.npz holds it)")
     if args.target_rpy is not None:
         check_pose_robot(robot, "--to-rpy")
     out = Path(args.out)
@@ -132,7 +161,21 @@ def run(args: argparse.Namespace) -> int:
     with lock_folder(out, label=f"--out {out}"):
         if args.target_rpy is not None:
             return _run_pose(args, robot, out)
-        return _run_spatial(args, robot, out) if isinstance(robot, SpatialRobot) else _run_planar(args, robot, out)
+        return _run_spatial(args, robot, out) if spatial else _run_planar(args, robot, out)
+
+
+def _focus(args: argparse.Namespace, robot):
+    """The tree focused on ``--tip`` with ``--moving`` (errors name the option)."""
+    tip = robot.tip_names[0] if args.tip is None else args.tip
+    moving = None if args.moving is None else [name.strip() for name in args.moving.split(",")]
+    try:
+        robot = robot.focus(tip=tip)
+    except ConfigError as error:
+        raise ConfigError(f"--{error}") from None
+    try:
+        return robot.focus(tip=robot.active_tip, moving=moving)
+    except ConfigError as error:
+        raise ConfigError(f"--{error}") from None
 
 
 def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
@@ -200,13 +243,15 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         loop_rotation=plan.loop_rotation,
         target_m=target,
     )
+    tree = _tree_record(robot, arrays)
     _check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn})
     with _result_folder(out) as staging:
-        draw_spatial_reach(robot, plan, staging / "reach.png")
+        if not tree:
+            draw_spatial_reach(robot, plan, staging / "reach.png")
         write_npz(staging / "reach.npz", **arrays)
         _write_replay(args, robot, staging)
     loop = f"by {plan.loops} pass(es) of a loop, then" if plan.loops else "along"
-    lines = [
+    lines = tree + [
         f"mode           {plan.mode}",
         f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
         f"bus rotation   {np.degrees(plan.bus_turn):.6f} deg from start to end ({loop} the straight path)",
@@ -215,12 +260,30 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m",
-        f"figure         {out / 'reach.png'}",
+        _figure_line(out, tree),
     ]
     if args.html:
         lines.append(f"replay         {out / 'reach.html'}")
     print("\n".join(lines))
     return 0
+
+
+def _tree_record(robot, arrays: dict) -> list[str]:
+    """Several arms on one bus: add the chosen tip and the moving mask to reach.npz's arrays;
+    the summary's lines naming them (none for a robot with one arm)."""
+    if getattr(robot, "active_tip", None) is None:
+        return []
+    arrays.update(tip_index=np.asarray(robot.active_tip), moving=robot.moving_mask)
+    lines = [f"tip            {robot.active_tip_name}"]
+    if robot.moving is not None:
+        lines.append(f"held joints    {int(np.sum(~robot.moving_mask))} of {robot.n_joints} (kept at --from)")
+    return lines
+
+
+def _figure_line(out: Path, tree: list[str]) -> str:
+    if tree:
+        return f"history        {out / 'reach.npz'} (no figure for several arms yet)"
+    return f"figure         {out / 'reach.png'}"
 
 
 def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -267,12 +330,14 @@ def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
         target_m=target,
         target_rotation=T1,
     )
+    tree = _tree_record(robot, arrays)
     _check_finite({**arrays, "tip error": plan.error, "tip axes error": plan.rotation_error})
     with _result_folder(out) as staging:
-        draw_spatial_reach(robot, plan, staging / "reach.png")
+        if not tree:
+            draw_spatial_reach(robot, plan, staging / "reach.png")
         write_npz(staging / "reach.npz", **arrays)
         _write_replay(args, robot, staging)
-    lines = [
+    lines = tree + [
         f"mode           {plan.mode} (tip on a straight line, tip axes along the geodesic)",
         f"target         ({target[0]:.6f}, {target[1]:.6f}, {target[2]:.6f}) m",
         "target rpy     " + ", ".join(f"{v:.6f}" for v in np.degrees(_rpy_of(T1))) + " deg",
@@ -284,7 +349,7 @@ def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m, {plan.rotation_error:.3e} rad",
         f"sigma_min J*   {plan.min_singular:.6f} (smallest along the path)",
-        f"figure         {out / 'reach.png'}",
+        _figure_line(out, tree),
     ]
     if args.html:
         lines.append(f"replay         {out / 'reach.html'}")

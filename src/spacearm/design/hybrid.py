@@ -9,24 +9,40 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    populations' worth), then every generation an NSGA-II offspring batch (binary
    tournament on rank and crowding, simulated binary crossover, polynomial mutation;
    Deb et al., IEEE TEC 6(2), 2002) merged by non-dominated sorting and crowding.
-2. **Refinement.** Every generation, each member of the population takes a step along
-   the design-space gradient of the hypervolume of its own non-dominated layer:
-   ``g_i = J_i^T dHV/df_i`` (`spacearm.design.hypervolume.layer_hypervolume_gradients`,
-   the exact sort-based hypervolume by autodiff, one vector-Jacobian product per design,
-   vmapped). Dominated points follow their layer's gradient towards the front instead of
+2. **Refinement.** Every generation, a share of the population (``gradient_share``, the
+   front first, at random within a layer) takes a step along the design-space gradient
+   of the hypervolume of its own non-dominated layer: ``g_i = J_i^T dHV/df_i``
+   (`spacearm.design.fronts.layer_face_areas`, the exact faces of the exclusive regions,
+   in NumPy for 2 and 3 objectives; the autodiff of the exact hypervolume,
+   `spacearm.design.hypervolume.layer_hypervolume_gradients`, for 4). ``J_i^T w`` comes
+   from forward differences through the value program for up to 4 variables or
+   closed-form objectives (d values, no other program to compile), else from one
+   vmapped vector-Jacobian product.
+   Dominated points follow their layer's gradient towards the front instead of
    freezing; on the front the hypervolume gradient itself spreads the points (a
    hypervolume-maximal set is spread by the front's slope). Each step has its own
    length in the unit box, doubled after a step that passed Armijo's sufficient-increase
    test on its layer's hypervolume (linearized at the old point) and halved after one that
    did not (the step is then refused), so steps shrink to the precision the front needs.
+   Offspring fill the value batches of the stepped designs (and of the differences):
+   with half of the population stepping (the default for joint-box averages; all of it
+   for closed-form objectives, whose values are cheap), a generation of pareto-ur5-arm
+   costs one batch of values and the vector-Jacobian products of half a batch, and
+   reached a higher hypervolume per CPU second than a step for every member (two value
+   batches and a full batch of products per generation) or for a quarter of them.
 3. **Stopping** from the front's own convergence: the archive's hypervolume gained less
-   than ``tolerance`` (relative) over the last ``patience`` generations, or a budget of
-   generations, evaluations or seconds ran out.
+   than ``tolerance`` (relative) over the last ``patience`` generations; or, without the
+   two-objective densification, the population's own hypervolume rose no higher in the
+   last ``population_patience`` generations while the archive's gained less than
+   ``population_tolerance``; or a budget of generations, evaluations or
+   seconds ran out.
 
-Every design is evaluated by the problem's own ``batch_function()`` (values) or a vmapped
-VJP of ``objective_function()`` (gradient steps; their values are not archived, the
-designs being archived already), each compiled once for the population's shape before
-the timed run; compile seconds are reported apart and counted in every comparison.
+Every design is evaluated by the problem's own ``batch_function()`` in batches of the
+population (compiled once; the differences and the offspring are archived, being designs
+evaluated like any other) and, for more than 4 variables and joint-box averages, a
+vmapped VJP of ``objective_function()`` (compiled once for the stepping share); the
+hypervolume gradients of 4 objectives compile one more program; compile seconds are
+reported apart and counted in every comparison.
 """
 
 from __future__ import annotations
@@ -43,8 +59,9 @@ from scipy.stats import qmc
 
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, integer, number
-from .fronts import hypervolume, nondominated_mask, reference_from_population
+from .fronts import hypervolume, layer_face_areas, nondominated_mask, reference_from_population
 from .hypervolume import layer_hypervolume_gradients
+from .objectives import AVERAGE_OBJECTIVES
 from .search import SearchResult, _densify
 
 __all__ = ["HybridSettings", "hybrid_search", "nondominated_ranks", "parse_hybrid", "reference_from_population"]
@@ -61,6 +78,23 @@ class HybridSettings:
         max_seconds: stop past this run time, s (None: no limit).
         patience, tolerance: stop when the archive hypervolume gained less than
             ``tolerance`` (relative) over ``patience`` generations.
+        population_patience: without densification (three or more objectives, or
+            ``densify: false``), also stop when the population's own hypervolume has not
+            risen above its best by more than ``tolerance`` (relative) for this many
+            generations (0: never) while the archive's hypervolume gained less than
+            ``population_tolerance`` (relative) over them.
+        gradient_share: share of the population that takes a gradient step each
+            generation (the front first, at random within a layer); the rest of the
+            evaluations go to offspring. None: all of it when every objective is a
+            closed form (values cost little next to a generation's bookkeeping), half
+            otherwise (joint-box averages).
+        jacobian: how the design-space gradient J^T w is computed: ``"reverse"`` (a
+            vmapped vector-Jacobian product, one more compiled program), ``"differences"``
+            (forward differences through the value program: d values per design, no
+            other program) or ``"auto"`` (differences for at most 4 variables, where they
+            cost no more than a vector-Jacobian product, about 4 values, and save its
+            compile, or when every objective is a closed form, not a joint-box average,
+            so values are cheap; reverse otherwise).
         initial_step, min_step, max_step: gradient step lengths in the unit box.
         reference_margin: the reference point, when the problem gives none, lies this
             share of the first population's front range below its nadir.
@@ -76,6 +110,10 @@ class HybridSettings:
     max_seconds: float | None = None
     patience: int = 10
     tolerance: float = 1e-9
+    population_patience: int = 5
+    population_tolerance: float = 1e-3
+    gradient_share: float | None = None
+    jacobian: str = "auto"
     initial_step: float = 0.05
     min_step: float = 1e-5
     max_step: float = 0.3
@@ -86,7 +124,26 @@ class HybridSettings:
     seed: int = 0
 
 
-_INTEGER_KEYS = {"population": 4, "generations": 1, "max_evaluations": 1, "patience": 1, "seed": 0}
+JACOBIANS = ("auto", "reverse", "differences")
+# Forward differences cost d values per gradient; a vector-Jacobian product through the
+# joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
+# about 2.5 times as long as the values'.
+DIFFERENCES_UP_TO = 4
+# Above DIFFERENCES_UP_TO variables, differences still win when every objective is a
+# closed form (no joint-box average): the product's compile then buys more values than
+# the differences spend in a run (pareto-6var: compile 1.6 s instead of 17.5 s).
+# Forward-difference step in the unit box (the objectives are smooth float64 averages on a
+# fixed rule: truncation ~1e-6 relative, rounding ~1e-10).
+DIFFERENCE_STEP = 1e-6
+
+_INTEGER_KEYS = {
+    "population": 4,
+    "generations": 1,
+    "max_evaluations": 1,
+    "patience": 1,
+    "population_patience": 0,
+    "seed": 0,
+}
 
 
 def parse_hybrid(source: str, section: Any) -> HybridSettings:
@@ -103,8 +160,12 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
     changes = {}
     for key, value in section.items():
         where = f"{source}: hybrid.{key}"
-        if value is None and key in ("max_evaluations", "max_seconds"):
+        if value is None and key in ("max_evaluations", "max_seconds", "gradient_share"):
             changes[key] = None
+        elif key == "jacobian":
+            if value not in JACOBIANS:
+                raise ConfigError(f"{where}: must be one of {', '.join(JACOBIANS)}, got {value!r}")
+            changes[key] = value
         elif key == "densify":
             if not isinstance(value, bool):
                 raise ConfigError(f"{where}: must be true or false, got {value!r}")
@@ -113,8 +174,10 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
             changes[key] = integer(where, value, least=_INTEGER_KEYS[key])
         else:
             changes[key] = number(where, value)
-            if changes[key] < 0 or (changes[key] == 0 and key != "tolerance"):
+            if changes[key] < 0 or (changes[key] == 0 and key not in ("tolerance", "gradient_share")):
                 raise ConfigError(f"{where}: must be positive, got {value}")
+            if key == "gradient_share" and changes[key] > 1:
+                raise ConfigError(f"{where}: must lie in [0, 1], got {value}")
     return dataclasses.replace(settings, **changes)
 
 
@@ -191,8 +254,8 @@ def _variation(rng: np.random.Generator, z: np.ndarray, f: np.ndarray, settings:
     return np.clip(children + np.where(mutate, delta, 0.0), 0.0, 1.0)
 
 
-def _programs(problem, population: int, m: int):
-    """The compiled programs of one problem and population size."""
+def _pull_program(problem):
+    """The vmapped vector-Jacobian product: ``(z, w) -> J(z)^T w`` per design, unit box."""
     objective = problem.objective_function()
     lower = jnp.asarray(problem.lower)
     width = jnp.asarray(problem.upper - problem.lower)
@@ -202,13 +265,20 @@ def _programs(problem, population: int, m: int):
         _, vjp = jax.vjp(lambda zz: objective(lower + width * zz), z)
         return vjp(weight)[0]
 
-    pulls = jax.jit(jax.vmap(pull))
+    return jax.jit(jax.vmap(pull))
 
-    @jax.jit
-    def layer_gradients(f, reference, ranks):
-        return layer_hypervolume_gradients(f, reference, ranks)
 
-    return pulls, layer_gradients
+@jax.jit
+def _layer_gradients_jax(f, reference, ranks):
+    return layer_hypervolume_gradients(f, reference, ranks)
+
+
+def _layer_gradients(f: np.ndarray, reference: np.ndarray, ranks: np.ndarray) -> np.ndarray:
+    """Each point's hypervolume gradient in its own layer: NumPy for 2 and 3 objectives
+    (no compiled program), the autodiff of the exact hypervolume for 4."""
+    if f.shape[1] <= 3:
+        return layer_face_areas(f, reference, ranks)
+    return np.array(_layer_gradients_jax(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
 
 
 def hybrid_search(
@@ -238,21 +308,35 @@ def hybrid_search(
     lower, width = problem.lower, problem.upper - problem.lower
     evaluate = problem.batch_function()
     rng = np.random.default_rng(settings.seed)
+    jacobian = settings.jacobian
+    # Closed-form objectives (no joint-box average) make values cheap: a batch costs
+    # 0.1-0.2 % of the value program's compile, against 3-4 % for the averages.
+    closed_forms = not any(name in AVERAGE_OBJECTIVES for name in problem.objectives)
+    share = settings.gradient_share if settings.gradient_share is not None else (1.0 if closed_forms else 0.5)
+    stepping = min(population, round(share * population))
+    densifying = settings.densify and m == 2
 
-    # Compile every program once, for the population's shapes, before the timed run.
+    # Compile every program once, for the population's shapes, before the timed run:
+    # the value program (every evaluation goes through it in batches of the population),
+    # the vector-Jacobian product of `stepping` designs (reverse Jacobians only) and, for
+    # four objectives, the layer hypervolume gradients.
     compile_seconds = {}
     tic = time.perf_counter()
     jax.block_until_ready(evaluate(jnp.asarray(np.tile(problem.lower, (population, 1)))))
     compile_seconds["value"] = time.perf_counter() - tic
-    pulls, layer_gradients = _programs(problem, population, m)
-    tic = time.perf_counter()
-    jax.block_until_ready(pulls(jnp.asarray(np.full((population, d), 0.5)), jnp.asarray(np.ones((population, m)))))
-    compile_seconds["gradient"] = time.perf_counter() - tic
-    tic = time.perf_counter()
-    dummy_f, dummy_r = jnp.asarray(np.ones((population, m))), jnp.asarray(np.zeros(m))
-    dummy_k = jnp.asarray(np.zeros(population, dtype=np.int64))
-    jax.block_until_ready(layer_gradients(dummy_f, dummy_r, dummy_k))
-    compile_seconds["hypervolume"] = time.perf_counter() - tic
+    if jacobian == "auto":
+        jacobian = "differences" if d <= DIFFERENCES_UP_TO or closed_forms else "reverse"
+    pulls = None
+    if jacobian == "reverse" and stepping > 0:
+        pulls = _pull_program(problem)
+        tic = time.perf_counter()
+        jax.block_until_ready(pulls(jnp.asarray(np.full((stepping, d), 0.5)), jnp.asarray(np.ones((stepping, m)))))
+        compile_seconds["gradient"] = time.perf_counter() - tic
+    if m == 4:
+        tic = time.perf_counter()
+        dummy_k = jnp.asarray(np.zeros(population, dtype=np.int64))
+        jax.block_until_ready(_layer_gradients_jax(jnp.ones((population, m)), jnp.zeros(m), dummy_k))
+        compile_seconds["hypervolume"] = time.perf_counter() - tic
 
     start = time.perf_counter()
     designs, values, checkpoints = [], [], []
@@ -260,17 +344,23 @@ def hybrid_search(
     counts = dict(value=0, value_and_gradient=0)
 
     def value_of(z):
+        """Values of any number of unit-box designs, in batches of the compiled size (the
+        last one padded with copies, which are not archived)."""
+        rows = z.shape[0]
+        padded = np.concatenate([z, np.repeat(z[-1:], -rows % population, axis=0)]) if rows else z
+        x = lower + width * padded
+        f = np.concatenate(
+            [np.asarray(evaluate(jnp.asarray(x[i : i + population]))) for i in range(0, x.shape[0], population)]
+        )[:rows]
         unit_designs.append(z)
-        x = lower + width * z
-        f = np.asarray(evaluate(jnp.asarray(x)))
-        designs.append(x)
+        designs.append(x[:rows])
         values.append(f)
-        counts["value"] += z.shape[0]
+        counts["value"] += padded.shape[0]
         return f
 
     # 1. Space-filling start: two populations of a Latin hypercube sample.
     start_designs = qmc.LatinHypercube(d, seed=settings.seed).random(2 * population)
-    f_start = np.concatenate([value_of(start_designs[:population]), value_of(start_designs[population:])])
+    f_start = value_of(start_designs)
     if reference is None:
         reference = reference_from_population(f_start, settings.reference_margin)
         reference_from = (
@@ -299,48 +389,83 @@ def hybrid_search(
                 evaluations=counts["value"] + counts["value_and_gradient"],
                 seconds=time.perf_counter() - start,
                 hypervolume=hypervolume(front_f, reference),
+                population_hypervolume=hypervolume(f, reference),
             )
         )
+
+    def offspring(count):
+        """``count`` NSGA-II offspring of the current population."""
+        batches = [_variation(rng, z, f, settings) for _ in range(-(-count // population))]
+        return np.concatenate(batches)[:count] if batches else np.zeros((0, d))
+
+    def filled(count, least=0):
+        """Offspring that fill a batch of ``count`` designs up to a multiple of the
+        population, at least ``least`` of them."""
+        return offspring(-(count + least) % population + least)
 
     record()
     accepted_total, generation = 0, 0
     stop_reason = "generations"
     for generation in range(1, settings.generations + 1):  # noqa: B007 (the count is reported after the loop)
-        # 2a. Refinement: one hypervolume-gradient step per member, its own layer's gradient.
+        new_z, new_f = [], []
         ranks = nondominated_ranks(f)
-        weights = np.array(layer_gradients(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
-        weights = np.nan_to_num(weights, nan=0.0, posinf=0.0, neginf=0.0)
+        # 2a. Refinement: a hypervolume-gradient step for `stepping` members (the front
+        # first, at random within a layer), each along its own layer's gradient.
+        chosen = np.lexsort((rng.random(population), ranks))[:stepping]
+        weights = np.nan_to_num(_layer_gradients(f, reference, ranks)[chosen], nan=0.0, posinf=0.0, neginf=0.0)
         flat = ~np.any(weights != 0, axis=1)
         if flat.any():
             # Below the reference or a duplicate: climb every objective, each by its spread.
             spread = np.ptp(f, axis=0)
             weights[flat] = 1.0 / np.where(spread > 0, spread, 1.0)
-        grad = np.nan_to_num(np.asarray(pulls(jnp.asarray(z), jnp.asarray(weights))), nan=0.0, posinf=0.0, neginf=0.0)
-        counts["value_and_gradient"] += population
-        grad = np.where(((z <= 0.0) & (grad < 0)) | ((z >= 1.0) & (grad > 0)), 0.0, grad)  # projected
+        z_step = z[chosen]
+        if stepping == 0:
+            grad = np.zeros((0, d))
+        elif jacobian == "reverse":
+            grad = np.asarray(pulls(jnp.asarray(z_step), jnp.asarray(weights)))
+            counts["value_and_gradient"] += stepping
+        else:
+            # Forward differences, inward at the upper bound, evaluated with offspring
+            # filling the batch (they join the union below).
+            h = np.where(z_step > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (stepping, d)
+            shifted = z_step[:, None, :] + h[:, :, None] * np.eye(d)[None]  # (stepping, d, d)
+            children = filled(stepping * d)
+            f_both = value_of(np.concatenate([shifted.reshape(-1, d), children]))
+            f_shifted = f_both[: stepping * d].reshape(stepping, d, m)
+            new_z.append(children)
+            new_f.append(f_both[stepping * d :])
+            jac = (f_shifted - f[chosen][:, None, :]) / h[:, :, None]  # (stepping, d, m): dF_j/dz_k
+            grad = np.einsum("skj,sj->sk", jac, weights)
+        grad = np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
+        grad = np.where(((z_step <= 0.0) & (grad < 0)) | ((z_step >= 1.0) & (grad > 0)), 0.0, grad)  # projected
         norm = np.linalg.norm(grad, axis=1, keepdims=True)
         direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
-        z_new = np.clip(z + steps[:, None] * direction, 0.0, 1.0)
-        f_new = value_of(z_new)
+        z_stepped = np.clip(z_step + steps[chosen][:, None] * direction, 0.0, 1.0)
+        # 2b. Exploration: NSGA-II offspring fill the stepped designs' batch.
+        children = filled(stepping, least=population // 2)
+        f_both = value_of(np.concatenate([z_stepped, children]))
+        f_stepped = f_both[:stepping]
+        new_z.append(children)
+        new_f.append(f_both[stepping:])
         # Armijo's test on the layer hypervolume, linearized at the old point: the step's
         # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
-        gain = np.sum(weights * (f_new - f), axis=1)
-        better = (gain >= 0.1 * steps * norm[:, 0]) & (norm[:, 0] > 0) & np.all(np.isfinite(f_new), axis=1)
-        z, f = np.where(better[:, None], z_new, z), np.where(better[:, None], f_new, f)
-        steps = np.clip(np.where(better, 2.0 * steps, 0.5 * steps), settings.min_step, settings.max_step)
+        gain = np.sum(weights * (f_stepped - f[chosen]), axis=1)
+        better = (gain >= 0.1 * steps[chosen] * norm[:, 0]) & (norm[:, 0] > 0) & np.all(np.isfinite(f_stepped), axis=1)
+        z[chosen] = np.where(better[:, None], z_stepped, z_step)
+        f[chosen] = np.where(better[:, None], f_stepped, f[chosen])
+        steps[chosen] = np.clip(
+            np.where(better, 2.0 * steps[chosen], 0.5 * steps[chosen]), settings.min_step, settings.max_step
+        )
         accepted_total += int(better.sum())
-        # 2b. Exploration: NSGA-II offspring, merged by non-dominated sorting and crowding.
-        z_child = _variation(rng, z, f, settings)
-        f_child = value_of(z_child)
-        z_all, f_all = np.concatenate([z, z_child]), np.concatenate([f, f_child])
-        if settings.densify and m == 2 and front_f.shape[0] >= 2:
+        if densifying and front_f.shape[0] >= 2:
             # 2c. Two objectives: designs interpolated between neighbouring archive-front
             # designs, where the gaps lose the most hypervolume (the Pareto set is a curve).
             order = np.argsort(front_f[:, 0])
             z_dense = np.clip(_densify(front_f[order], front_z[order], population), 0.0, 1.0)
             z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
-            f_dense = value_of(z_dense)
-            z_all, f_all = np.concatenate([z_all, z_dense]), np.concatenate([f_all, f_dense])
+            new_z.append(z_dense)
+            new_f.append(value_of(z_dense))
+        z_all, f_all = np.concatenate([z, *new_z]), np.concatenate([f, *new_f])
         steps_all = np.concatenate([steps, np.full(z_all.shape[0] - population, settings.initial_step)])
         keep = _survivors(np.where(np.isfinite(f_all), f_all, -np.inf), population)
         z, f, steps = z_all[keep], f_all[keep], steps_all[keep]
@@ -350,6 +475,23 @@ def hybrid_search(
         if len(hv) > settings.patience and hv[-1] - hv[-1 - settings.patience] <= settings.tolerance * abs(hv[-1]):
             stop_reason = f"converged: hypervolume gained < {settings.tolerance:g} in {settings.patience} generations"
             break
+        # Without densification the population is the front the search refines: once its
+        # own hypervolume stops rising (a set near the hypervolume-optimal distribution of
+        # its size; what remains are crowding fluctuations) and the archive barely gains,
+        # later generations only add designs near the same front. (The population alone
+        # settles early on pareto-ur5-arm, at 98.9 % of the best known, while its archive
+        # still gained 6e-3 in 5 generations; on pareto-mount-ur5, 5e-4.)
+        population_hv = [c["population_hypervolume"] for c in checkpoints]
+        wait = settings.population_patience
+        if not densifying and wait and len(population_hv) > wait:
+            best_before = max(population_hv[:-wait])
+            settled = max(population_hv[-wait:]) <= best_before + settings.tolerance * abs(best_before)
+            if settled and hv[-1] - hv[-1 - wait] <= settings.population_tolerance * abs(hv[-1]):
+                stop_reason = (
+                    f"converged: the population's hypervolume rose no higher in {wait} generations, "
+                    f"the archive's by less than {settings.population_tolerance:g}"
+                )
+                break
         evaluations = counts["value"] + counts["value_and_gradient"]
         if settings.max_evaluations is not None and evaluations >= settings.max_evaluations:
             stop_reason = "max_evaluations"
@@ -372,6 +514,8 @@ def hybrid_search(
             population=population,
             generations=generation,
             stop_reason=stop_reason,
+            jacobian=jacobian,
+            gradient_steps_per_generation=stepping,
             value_evaluations=counts["value"],
             value_and_gradient_evaluations=counts["value_and_gradient"],
             accepted_gradient_steps=accepted_total,

@@ -334,9 +334,10 @@ def _run_locked(
             for name, r in results.items()
         },
         evaluation_counting=(
-            "one evaluation = the objective vector of one design. A value-and-gradient (the hybrid's gradient "
-            "steps, the scalarized search's steps) counts as one evaluation; the hybrid reports value_evaluations "
-            "and value_and_gradient_evaluations apart, the scalarized search its measured value_and_gradient_cost_"
+            "one evaluation = the objective vector of one design. A value-and-gradient (the hybrid's "
+            "vector-Jacobian products, the scalarized search's steps) counts as one evaluation; the hybrid reports "
+            "value_evaluations (its forward differences included: each is a design's values) and "
+            "value_and_gradient_evaluations apart, the scalarized search its measured value_and_gradient_cost_"
             "ratio. Grid and NSGA-II evaluate values only."
         ),
         timing=(

@@ -29,6 +29,7 @@ from typing import Any, ClassVar
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._core.groups import Group
 
@@ -97,6 +98,11 @@ class RobotFamily:
     def fixed_base_jacobian(self, robot, joints: jax.Array) -> jax.Array:
         """``(m, n)`` Jacobian of the same arm with its base held fixed."""
         raise NotImplementedError
+
+    def moving_joints(self, robot) -> np.ndarray:
+        """``(n,)`` static booleans: the joints a planner may move (all, unless the robot
+        holds some: a focused tree). Held joints have zero columns in every joint-rate map."""
+        return np.ones(self.joint_count(robot), dtype=bool)
 
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 

@@ -144,11 +144,15 @@ def check_pose_robot(robot, what: str = "straight_pose_path") -> None:
             f"a {family.name} robot's tip has {family.translational_rows} translational rows and no orientation "
             "to aim; give a target point only"
         )
-    n = family.joint_count(robot)
+    if family.tip_count(robot) is not None:
+        raise ConfigError(
+            f"{what}: a robot with {family.tip_count(robot)} tips; choose the tip to aim with robot.focus(tip=...)"
+        )
+    n = int(np.sum(family.moving_joints(robot)))  # a focused tree's held joints do not count
     if n < 6:
         raise ConfigError(
             f"{what}: pose targets need at least 6 joints to set the tip's position and orientation; "
-            f"the arm has {n}; give a target point only"
+            f"the arm has {n}{' moving' if n < family.joint_count(robot) else ''}; give a target point only"
         )
 
 

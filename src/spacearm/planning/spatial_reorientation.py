@@ -13,7 +13,8 @@ The planner, for candidate repetition counts N (all candidates in one batch, one
 
 1. parametrizes a loop through q0 by Fourier coefficients, q(s) = q0 + sum_h
    a_h (cos 2 pi h s - 1) + b_h sin 2 pi h s, sampled at ``segments + 1`` waypoints
-   (straight joint segments between them);
+   (straight joint segments between them); joints the robot holds (the family's
+   ``moving_joints``: a tree focused on some arms) have no coefficients and stay at q0;
 2. minimizes with optax Adam, through the integrator, the squared rotation error
    |log(D_N^T D(loop))|^2 (D_N = exp([phi/N]x)) plus a small joint-travel term and
    soft penalties keeping every waypoint inside the joint limits less a margin (the
@@ -46,6 +47,7 @@ import optax
 
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
+from ..models.family import family_of
 from ..models.spatial.robot import SpatialRobot
 from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, geodesic_distance, log, path_rotation
 from ..motion.joint_paths import integrate_joint_path
@@ -183,9 +185,11 @@ def _optimize(robot, q0, targets, coefficients, lower, upper, options, shape: _L
     optimizer = optax.adam(options["learning_rate"].astype(dtype))
     shape_c = coefficients.shape[1:]
     eye = jnp.eye(3, dtype=dtype)
+    # Held joints (a focused tree) have no coefficients that act: they stay at q0 exactly.
+    moving = jnp.asarray(family_of(robot).moving_joints(robot), dtype)
 
     def points(c):
-        return q0 + basis @ c.reshape(shape_c)  # (segments + 1, n)
+        return q0 + basis @ (c.reshape(shape_c) * moving)  # (segments + 1, n)
 
     def penalty(c):
         p = points(c)
@@ -319,6 +323,7 @@ def _spatial_candidates(job: dict) -> dict:
     counts = np.repeat(np.asarray(settings.loop_counts), settings.seeds)
     rng = np.random.default_rng(settings.seed)
     coefficients = settings.initial_size * rng.normal(size=(len(counts), 2 * settings.harmonics, n))
+    coefficients = coefficients * family_of(robot).moving_joints(robot)  # held joints stay at q0
     finite = lambda x: np.where(np.isfinite(x), x, np.sign(x) * 1e3)
     shape, options = _split(settings)
     _, loops = _optimize(

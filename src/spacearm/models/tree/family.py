@@ -8,6 +8,11 @@ joints, w* ``(k,)``; the bus quantities (C, H*, the attitude) have none.
 Fast paths (each equals the generic path over the primitives; tests/test_tree_kernels.py):
 the batch-last pass over the tree (`spacearm.models.tree.primitives`), J* by the 3x3
 closed form for all tips at once, w* per tip by Cauchy-Binet inside the same batch-last pass.
+
+A focused tree (`spacearm.models.tree.robot.TreeRobot.focus`) is a single-tip robot:
+every kernel and hook gives the chosen tip's quantities without a tip axis, and every
+joint-rate map has zero columns for the held joints, so the generic straight-path,
+reach, reorientation and reaction-free planners serve it unchanged.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from typing import Any, ClassVar
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
@@ -33,19 +39,92 @@ from .primitives import (
     mass_matrix,
     momentum_map,
     posture_quantities,
+    straight_path_maps,
     tip,
+    tip_pose,
 )
 from .robot import TreeRobot
+from .shell import tip_shell
 
 __all__ = ["TREE", "TreeFamily"]
 
 
+def _columns(robot: TreeRobot, matrix):
+    """Zero the columns (last axis) of the held joints of a focused tree."""
+    if robot.moving is None:
+        return matrix
+    return matrix * jnp.asarray(robot.moving_mask, matrix.dtype)
+
+
+def _one_tip(robot: TreeRobot, per_tip, core: int):
+    """The active tip's slice of a per-tip result ``(..., k, *core)`` (all tips without a focus on one)."""
+    if robot.active_tip is None:
+        return per_tip
+    return per_tip[(Ellipsis, robot.active_tip) + (slice(None),) * core]
+
+
+def _focused(robot: TreeRobot) -> bool:
+    return robot.active_tip is not None or robot.moving is not None
+
+
+def _tip(robot, posture):
+    return _one_tip(robot, tip(robot, posture), 1)
+
+
+def _generalized_jacobian(robot, posture):
+    return _one_tip(robot, _columns(robot, generalized_jacobian(robot, posture)), 2)
+
+
+def _base_rate_matrix(robot, posture):
+    return _columns(robot, base_twist_map(robot, posture))
+
+
+def _fixed_base_jacobian(robot, joints):
+    return _one_tip(robot, _columns(robot, fixed_base_jacobian(robot, joints)), 2)
+
+
+def _manipulability(robot, posture):
+    if not _focused(robot):
+        return manipulability(robot, posture)  # Cauchy-Binet in the pass, every tip
+    return gram_root_determinant(_generalized_jacobian(robot, posture)[..., :3, :])
+
+
+def _locked(robot: TreeRobot, inertia):
+    """H* (or H_m) of the held joints locked: the moving block, identity on the held joints
+    (their rates are zero, so the moving joints see exactly that block)."""
+    if robot.moving is None:
+        return inertia
+    mask = jnp.asarray(robot.moving_mask, inertia.dtype)
+    both = mask[:, None] * mask[None, :]
+    return inertia * both + jnp.diag(1.0 - mask)
+
+
+def _posture_quantities(robot, posture, needs):
+    out = posture_quantities(robot, posture, needs)
+    if "jacobian" in out:
+        out["jacobian"] = _one_tip(robot, _columns(robot, out["jacobian"]), 2)
+    if "base_rate" in out:
+        out["base_rate"] = _columns(robot, out["base_rate"])
+    if "arm_inertia" in out:
+        out["arm_inertia"] = _locked(robot, out["arm_inertia"])
+    return out
+
+
 def _base_rate(robot, posture, joint_rates):
-    return jnp.einsum("...ij,...j->...i", base_twist_map(robot, posture), joint_rates)
+    return jnp.einsum("...ij,...j->...i", _base_rate_matrix(robot, posture), joint_rates)
 
 
 def _fixed_base_manipulability(robot, joints):
-    return gram_root_determinant(fixed_base_jacobian(robot, joints)[..., :3, :])
+    return gram_root_determinant(_fixed_base_jacobian(robot, joints)[..., :3, :])
+
+
+def _require_tip(robot: TreeRobot, what: str) -> int:
+    if robot.active_tip is None:
+        raise TypeError(
+            f"{what}: a tree robot with {robot.n_tips} tips; choose one with robot.focus(tip=...) "
+            f"(the tips are {', '.join(robot.tip_names)})"
+        )
+    return robot.active_tip
 
 
 class TreeFamily(RobotFamily):
@@ -61,28 +140,60 @@ class TreeFamily(RobotFamily):
     posture_offset = 0
     rotates_with_base = True
     fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
-        "tip_position": tip,
-        "generalized_jacobian": generalized_jacobian,
-        "manipulability": manipulability,
+        "tip_position": _tip,
+        "generalized_jacobian": _generalized_jacobian,
+        "manipulability": _manipulability,
         "base_rate": _base_rate,
-        "base_rate_matrix": base_twist_map,
-        "fixed_base_jacobian": fixed_base_jacobian,
+        "base_rate_matrix": _base_rate_matrix,
+        "fixed_base_jacobian": _fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
-        "posture_quantities": posture_quantities,
+        "posture_quantities": _posture_quantities,
     }
     fields = None  # design fields for trees are not defined yet
     attitude = SO3
     straight_field_loops = True
+    straight_defaults: ClassVar[Mapping[str, Any]] = {
+        "max_step": 0.1,
+        "tol": 1e-11,
+        "rtol": 1e-12,
+        "sing_rate": 1e-6,
+        "max_steps": 4000,
+    }
 
     def joint_count(self, robot: TreeRobot) -> int:
         return robot.n_joints
 
     def tip_count(self, robot: TreeRobot) -> int | None:
-        return robot.n_tips
+        """k, or ``None`` for a tree focused on one tip (a single-tip robot)."""
+        return robot.n_tips if robot.active_tip is None else None
+
+    def moving_joints(self, robot: TreeRobot) -> np.ndarray:
+        return robot.moving_mask
 
     def attitude_rate_map(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(..., 3, n)`` bus angular velocity per joint rate (all arms), bus axes."""
-        return base_twist_map(robot, joints)[..., 3:, :]
+        """``(..., 3, n)`` bus angular velocity per joint rate (all arms; zero columns for held joints), bus axes."""
+        return _base_rate_matrix(robot, joints)[..., 3:, :]
+
+    def straight_maps(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """J*_v of the active tip and C_w (held joints' columns zero), one pass over the tree."""
+        t = _require_tip(robot, "straight tip paths")
+        maps = _columns(robot, straight_path_maps(robot, joints))
+        return maps[..., 6 * t : 6 * t + 3, :], maps[..., -3:, :]
+
+    def pose_maps(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """J* ``(6, n)`` of the active tip and C_w ``(3, n)`` (held joints' columns zero), one pass."""
+        t = _require_tip(robot, "pose targets")
+        maps = _columns(robot, straight_path_maps(robot, joints))
+        return maps[..., 6 * t : 6 * t + 6, :], maps[..., -3:, :]
+
+    def tip_frame(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """The active tip's origin about the system centroid ``(3,)`` and axes ``(3, 3)``, bus axes."""
+        t = _require_tip(robot, "pose targets")
+        return _tip(robot, joints), tip_pose(robot, joints)[0][t]
+
+    def tip_shell(self, robot: TreeRobot) -> tuple[float, float]:
+        """The tree's virtual-manipulator shell of the active tip (`spacearm.models.tree.shell`)."""
+        return tip_shell(robot, _require_tip(robot, "the tip shell"))
 
     def loop_holonomy(
         self, robot: TreeRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS, order=DEFAULT_ORDER
@@ -91,37 +202,32 @@ class TreeFamily(RobotFamily):
         return path_rotation(functools.partial(self.attitude_rate_map, robot), waypoints, steps, order)
 
     def tip(self, robot: TreeRobot, posture: jax.Array) -> jax.Array:
-        """``(k, 3)`` tips about the system centroid, bus axes."""
-        return tip(robot, posture)
+        """``(k, 3)`` tips about the system centroid, bus axes (``(3,)`` for a focused tree)."""
+        return _tip(robot, posture)
 
     def jacobians(self, robot: TreeRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return jacobians(robot, posture)
+        J_S, J_M = jacobians(robot, posture)
+        J_M = _columns(robot, J_M)
+        if robot.active_tip is None:
+            return J_S, J_M
+        rows = slice(6 * robot.active_tip, 6 * robot.active_tip + 6)
+        return J_S[rows], J_M[rows]
 
     def momentum_map(self, robot: TreeRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return momentum_map(robot, posture)
+        I_S, I_M = momentum_map(robot, posture)
+        return I_S, _columns(robot, I_M)
 
     def fixed_base_jacobian(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(k, 6, n)`` fixed-base Jacobians of the tips, bus axes."""
-        return fixed_base_jacobian(robot, joints)
+        """``(k, 6, n)`` fixed-base Jacobians of the tips, bus axes (``(6, n)`` for a focused tree)."""
+        return _fixed_base_jacobian(robot, joints)
 
     def mass_matrix(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H_m, all arms with the bus held fixed."""
-        return mass_matrix(robot, joints)
+        """``(n, n)`` H_m, all arms with the bus held fixed (a focused tree: its held joints locked)."""
+        return _locked(robot, mass_matrix(robot, joints))
 
     def arm_inertia(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H*, the inertia of all arms at zero momentum."""
-        return arm_inertia(robot, joints)
-
-    # Not defined for trees yet: a straight path or a shell needs a chosen tip.
-
-    def straight_maps(self, robot: TreeRobot, joints: jax.Array):
-        raise TypeError(
-            "straight tip paths are not available for trees of arms yet (a path needs a chosen tip); "
-            "use integrate_joint_path for joint paths of all arms"
-        )
-
-    def tip_shell(self, robot: TreeRobot):
-        raise TypeError("the reach shell is not available for trees of arms yet (it needs a chosen tip)")
+        """``(n, n)`` H*, the inertia of all arms at zero momentum (a focused tree: its held joints locked)."""
+        return _locked(robot, arm_inertia(robot, joints))
 
 
 TREE = TreeFamily()

@@ -74,6 +74,7 @@ __all__ = [
     "momentum_map",
     "posture_quantities",
     "segments",
+    "straight_path_maps",
     "tip",
     "tip_pose",
     "tree_constants",
@@ -411,6 +412,13 @@ def _base_twist_minor(robot, q):
     return _rows(v, _scale(-1.0, solved))
 
 
+def _straight_maps_minor(robot, q):
+    state = _tree_pass(robot, q)
+    jstar = _jstar_from(robot, state)  # (k, 6, n, *batch)
+    _, solved = _coupling(state)
+    return jnp.concatenate([jstar.reshape((-1,) + jstar.shape[2:]), _rows(_scale(-1.0, solved))], axis=0)
+
+
 def _mass_from(robot, state):
     """H_m over the tree: joint j and k interact only when one is in the other's subtree."""
     revolute = 1.0 - state.prismatic
@@ -451,6 +459,10 @@ manipulability.__doc__ = """``(..., k)`` translational w* = sqrt det(J*_v J*_v^T
 
 base_twist_map = batched(_base_twist_minor, 2)
 base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; w] per joint rate, bus axes."""
+
+straight_path_maps = batched(_straight_maps_minor, 2)
+straight_path_maps.__doc__ = """``(..., 6k + 3, n)``: rows 6t..6t+5 J* [v; w] of tip t, the last 3 rows C_w (bus
+angular velocity per joint rate), bus axes, from one pass over the tree (what straight tip and pose paths need)."""
 
 mass_matrix = batched(_mass_minor, 2)
 mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arms with the bus held fixed."""

@@ -32,6 +32,7 @@ import jax
 import numpy as np
 
 from ..._core.errors import ConfigError
+from ..._core.schema import did_you_mean
 from ..spatial.urdf import ArmChain, check_inertia, rpy_matrix
 
 __all__ = ["TreeLabels", "TreeRobot", "stack_tree_robots", "support_mask", "tree_from_chains"]
@@ -86,18 +87,20 @@ class TreeLabels:
 
 
 class _Structure:
-    """The tree structure's auxiliary data: the topology compares, the labels do not."""
+    """The tree structure's auxiliary data: the topology and the focus compare, the labels do not."""
 
-    __slots__ = ("joint_kinds", "labels", "parents", "tip_bodies")
+    __slots__ = ("active_tip", "joint_kinds", "labels", "moving", "parents", "tip_bodies")
 
-    def __init__(self, joint_kinds, parents, tip_bodies, labels):
+    def __init__(self, joint_kinds, parents, tip_bodies, labels, active_tip=None, moving=None):
         self.joint_kinds = joint_kinds
         self.parents = parents
         self.tip_bodies = tip_bodies
         self.labels = labels
+        self.active_tip = active_tip
+        self.moving = moving
 
     def _key(self):
-        return (self.joint_kinds, self.parents, self.tip_bodies)
+        return (self.joint_kinds, self.parents, self.tip_bodies, self.active_tip, self.moving)
 
     def __eq__(self, other):
         return isinstance(other, _Structure) and self._key() == other._key()
@@ -106,7 +109,10 @@ class _Structure:
         return hash(("TreeRobot", *self._key()))
 
     def __repr__(self):
-        return f"TreeRobot(kinds={self.joint_kinds}, parents={self.parents}, tips={self.tip_bodies})"
+        focus = (
+            "" if self.active_tip is None and self.moving is None else f", tip={self.active_tip}, moving={self.moving}"
+        )
+        return f"TreeRobot(kinds={self.joint_kinds}, parents={self.parents}, tips={self.tip_bodies}{focus})"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -137,6 +143,10 @@ class TreeRobot:
             ``-1 - r`` root r.
         tip_bodies: static, ``k`` body index (``>= 0``) carrying each tip.
         labels: names (not compared; renaming does not recompile).
+        active_tip: static, the focused tip (`focus`) or ``None``: with one, the tree
+            acts as a single-tip robot (tip ``(..., 3)``, J* ``(..., 6, n)``).
+        moving: static, ``n`` booleans of the joints that move (`focus`) or ``None``
+            (all): every joint-rate map has zero columns for the held joints.
     """
 
     base_mass: Any
@@ -161,9 +171,15 @@ class TreeRobot:
     parents: tuple[int, ...] = ()
     tip_bodies: tuple[int, ...] = ()
     labels: TreeLabels = TreeLabels()
+    active_tip: int | None = None
+    moving: tuple[bool, ...] | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "joint_kinds", tuple(self.joint_kinds))
+        if self.active_tip is not None:
+            object.__setattr__(self, "active_tip", int(self.active_tip))
+        if self.moving is not None:
+            object.__setattr__(self, "moving", tuple(bool(m) for m in self.moving))
         object.__setattr__(self, "parents", tuple(int(p) for p in self.parents))
         object.__setattr__(self, "tip_bodies", tuple(int(b) for b in self.tip_bodies))
         _check_topology(self)
@@ -208,6 +224,57 @@ class TreeRobot:
         """Leading design-batch shape (``()`` for a single design)."""
         return tuple(np.shape(self.base_mass))
 
+    @property
+    def moving_mask(self) -> np.ndarray:
+        """``(n,)`` static booleans: the joints that move (all unless `focus` held some)."""
+        if self.moving is None:
+            return np.ones(self.n_joints, dtype=bool)
+        return np.asarray(self.moving, dtype=bool)
+
+    @property
+    def active_tip_name(self) -> str | None:
+        """The focused tip's name, or ``None`` without a focus on one tip."""
+        if self.active_tip is None:
+            return None
+        names = self.labels.tip_names
+        return names[self.active_tip] if self.active_tip < len(names) else f"tips[{self.active_tip}]"
+
+    def focus(self, tip=None, moving=None) -> TreeRobot:
+        """The same design acting on one tip with some joints held: the single-tip view of the tree.
+
+        The generic motion and planning stack (straight tip paths, reach, reorientation,
+        reaction-free paths) serves robots with one tip; a focused tree is one. Its tip,
+        J*, w*, fixed-base Jacobian and straight-path maps are those of the chosen tip
+        (no tip axis), and every joint-rate map (J*, C, C_w, J_M, I_M) has zero columns
+        for the held joints, which is exact physics for joints locked where they stand
+        (a locked joint has zero rate): the rates the planners compute for held joints
+        are exactly zero, and the reorientation loops leave them where they are.
+
+        The leaves are shared (no copy, no validation); the focus is static (part of the
+        compile key, as the topology).
+
+        Args:
+            tip: a tip name (``"left/tool0"``) or index; ``None`` keeps every tip (a
+                focus on the moving joints only, e.g. for reorientation).
+            moving: the joints that move, ``None`` for all: names of arms (the roots of
+                an ``arms:`` file, ``"left"``), of tips (the joints on that tip's path
+                from the bus) or of joints, or ``n`` booleans.
+
+        Raises:
+            ConfigError: an unknown tip, arm or joint (with a did-you-mean hint), or no
+                moving joint.
+        """
+        index = None if tip is None else _tip_index(self, tip)
+        mask = None if moving is None else _moving_mask(self, moving)
+        if mask is not None and not any(mask):
+            raise ConfigError("moving: no joint moves; name at least one arm, tip or joint")
+        if mask is not None and all(mask):
+            mask = None
+        children, structure = _flatten(self)
+        structure = _Structure(structure.joint_kinds, structure.parents, structure.tip_bodies, structure.labels)
+        structure.active_tip, structure.moving = index, mask
+        return _unflatten(structure, [value for _, value in children])
+
     def replace(self, **changes) -> TreeRobot:
         """A copy with some fields changed (validated again when concrete)."""
         return dataclasses.replace(self, **changes)
@@ -227,9 +294,56 @@ def support_mask(parents: tuple[int, ...], tip_bodies: tuple[int, ...]) -> np.nd
     return mask
 
 
+def _tip_index(robot: TreeRobot, tip) -> int:
+    names = tuple(robot.labels.tip_names)
+    if isinstance(tip, str):
+        if tip not in names:
+            raise ConfigError(f"tip: unknown tip {tip!r}{did_you_mean(tip, names)}; the tips are {', '.join(names)}")
+        return names.index(tip)
+    index = int(tip)
+    if not -robot.n_tips <= index < robot.n_tips:
+        raise ConfigError(f"tip: index {index} is out of range for {robot.n_tips} tips")
+    return index % robot.n_tips
+
+
+def _moving_mask(robot: TreeRobot, moving) -> tuple[bool, ...]:
+    """``n`` booleans from arm, tip or joint names (or booleans)."""
+    n = robot.n_joints
+    if isinstance(moving, str):
+        moving = (moving,)
+    entries = list(moving)
+    if entries and all(isinstance(m, (bool, np.bool_)) for m in entries):
+        if len(entries) != n:
+            raise ConfigError(f"moving: expected {n} booleans (one per joint), got {len(entries)}")
+        return tuple(bool(m) for m in entries)
+    labels = robot.labels
+    arms = tuple(labels.root_names)
+    tips = tuple(labels.tip_names)
+    joints = tuple(labels.joint_names)
+    support = robot.support
+    mask = np.zeros(n, dtype=bool)
+    for entry in entries:
+        name = str(entry)
+        if name in arms and len(labels.joint_roots) == n:
+            mask |= np.asarray(labels.joint_roots) == arms.index(name)
+        elif name in tips:
+            mask |= support[tips.index(name)]
+        elif name in joints:
+            mask[joints.index(name)] = True
+        else:
+            known = arms + tips + joints
+            raise ConfigError(
+                f"moving: unknown arm, tip or joint {name!r}{did_you_mean(name, known)}; "
+                f"the arms are {', '.join(arms)}; the tips are {', '.join(tips)}"
+            )
+    return tuple(bool(m) for m in mask)
+
+
 def _flatten(robot: TreeRobot):
     children = [(jax.tree_util.GetAttrKey(k), getattr(robot, k)) for k in _LEAF_FIELDS]
-    return children, _Structure(robot.joint_kinds, robot.parents, robot.tip_bodies, robot.labels)
+    structure = _Structure(robot.joint_kinds, robot.parents, robot.tip_bodies, robot.labels)
+    structure.active_tip, structure.moving = robot.active_tip, robot.moving
+    return children, structure
 
 
 def _unflatten(structure: _Structure, children) -> TreeRobot:
@@ -242,6 +356,8 @@ def _unflatten(structure: _Structure, children) -> TreeRobot:
     object.__setattr__(robot, "parents", structure.parents)
     object.__setattr__(robot, "tip_bodies", structure.tip_bodies)
     object.__setattr__(robot, "labels", structure.labels)
+    object.__setattr__(robot, "active_tip", structure.active_tip)
+    object.__setattr__(robot, "moving", structure.moving)
     return robot
 
 
