@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import types
 
 import matplotlib
 import matplotlib.pyplot as plt
@@ -16,6 +17,7 @@ import spacearm as sa
 from spacearm.figures import spatial
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import primitives
+from spacearm.planning.spatial_reach import PHASE_STRAIGHT
 
 from .test_tree_files import CONFIGS, UR5, erd, pinocchio_tip_poses
 
@@ -242,3 +244,33 @@ def test_tree_sliders_and_replay_in_chromium(tmp_path, three_arm):
     state = helpers._drive(page, tmp_path, script)
     assert state.get("spacearm") == "ready" and "error" not in state
     np.testing.assert_allclose(json.loads(state["result"]), tips[6], rtol=0, atol=1e-9)
+
+
+def test_reach_figure_draws_every_arm_of_a_tree(tmp_path, dual_ur5):
+    """``spacearm reach`` on a tree writes reach.png: draw_spatial_reach takes a focused tree
+    (the plan's history of the chosen tip) and draws every arm at the start and the end."""
+    robot = dual_ur5.focus(tip="right/tool0", moving=("right",))
+    joints = np.linspace(spatial.DUAL_UR5_POSTURE, spatial.DUAL_UR5_POSTURE + np.r_[np.zeros(6), 0.1 * np.ones(6)], 5)
+    rotations = np.broadcast_to(np.eye(3), (5, 3, 3))
+    tips = np.asarray(sa.tip_position(dual_ur5, joints))[:, 1]
+    plan = types.SimpleNamespace(
+        joints=joints,
+        base_rotation=rotations,
+        tips=tips,
+        phase=np.full(5, PHASE_STRAIGHT),
+        loops=0,
+        target=tips[-1],
+        mode="straight",
+        bus_turn=0.0,
+        error=0.0,
+    )
+    path = spatial.draw_spatial_reach(robot, plan, tmp_path / "reach.png")
+    assert path.read_bytes()[:4] == b"\x89PNG"
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    spatial._draw(ax, robot, joints[-1], rotations[-1], "C3")
+    drawn = np.concatenate([np.stack(line.get_data_3d(), axis=-1) for line in ax.lines])
+    for tip in np.asarray(sa.tip_position(dual_ur5, joints[-1])):  # both arms drawn, in one colour
+        assert np.nanmin(np.linalg.norm(drawn - tip, axis=-1)) < 1e-12  # NaN: breaks between segments
+    assert {line.get_color() for line in ax.lines} == {"C3"}
+    plt.close(fig)
