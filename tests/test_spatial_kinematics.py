@@ -140,6 +140,12 @@ def test_fast_paths_equal_the_generic_path(name):
         kinematics.generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-13
     )
     np.testing.assert_allclose(kinematics.generic_tip_position(robot, q), sa.tip_position(robot, q), atol=1e-13)
+    J, tip = primitives.tip_and_generalized_jacobian(robot, q)  # one chain pass for both
+    fixed, tip_too = primitives.tip_and_fixed_base_jacobian(robot, q)
+    np.testing.assert_allclose(tip_too, tip, atol=1e-13)
+    np.testing.assert_allclose(fixed, sa.fixed_base_jacobian(robot, q), atol=1e-13)
+    np.testing.assert_allclose(kinematics.generic_generalized_jacobian(robot, q), J, atol=1e-13)
+    np.testing.assert_allclose(kinematics.generic_tip_position(robot, q), tip, atol=1e-13)
     np.testing.assert_allclose(kinematics.generic_manipulability(robot, q), sa.manipulability(robot, q), atol=1e-12)
     rates = rng.normal(size=q.shape)
     np.testing.assert_allclose(

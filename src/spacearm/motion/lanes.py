@@ -51,15 +51,29 @@ def lane_count(padded: int, lanes: int | None = None) -> int:
     return int(min(512, max(64, padded // 16), padded))
 
 
-def start_lane(field, y0: jax.Array, max_step, params: dict) -> dict:
-    """The lane state at the start of one path (``params``: the field's per-path parameters)."""
+def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False) -> dict:
+    """The lane state at the start of one path (``params``: the field's per-path parameters;
+    ``rolled``: the field holds a loop, so its two evaluations run in a loop, static)."""
     dtype = y0.dtype
-    f0 = field(y0)
     # The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
     # through the last two steps (a forward difference at the start): cheaper than a jvp
-    # of the field, and exact enough, since the end test is on ds/dsigma itself.
+    # of the field, and exact enough, since the end test is on ds/dsigma itself. The two
+    # evaluations, f0 = field(y0) and field(y0 + probe f0), run as a two-pass loop where
+    # the field holds a loop (``rolled``): one copy of the field in the program (a
+    # spatial field holds a pass over the chain, costly to compile).
     probe = 1e-7
-    slope0 = (field(y0 + probe * f0)[-1] - f0[-1]) / probe
+
+    if rolled:
+
+        def evaluate(k, pair):
+            f = field(jnp.where(k == 0, y0, y0 + probe * pair[0]))
+            return jnp.where(k == 0, f, pair[0]), f
+
+        f0, f1 = jax.lax.fori_loop(0, 2, evaluate, (jnp.zeros_like(y0), jnp.zeros_like(y0)))
+    else:
+        f0 = field(y0)
+        f1 = field(y0 + probe * f0)
+    slope0 = (f1[-1] - f0[-1]) / probe
     return dict(
         params,
         y=y0,

@@ -151,8 +151,9 @@ def _attitude_beside_posture(robot, results, robot_batched):
     def one(robot, y):
         joints, coords = family.split_state(robot, y[:-1])
         R = family.attitude.from_coords(coords)
-        fixed = fixed_base_jacobian(robot, joints)[: family.translational_rows]
-        return joints, R, R @ tip_position(robot, joints), gram_root_determinant(fixed)
+        both = family.fast_paths.get("tip_and_fixed_base_jacobian")  # one chain pass for the two
+        fixed, tip = both(robot, joints) if both else (fixed_base_jacobian(robot, joints), tip_position(robot, joints))
+        return joints, R, R @ tip, gram_root_determinant(fixed[: family.translational_rows])
 
     joints, R, tip, fixed_w = jax.vmap(one, in_axes=(0 if robot_batched else None, 0))(robot, results["y"])
     return SpatialStraightPath(
@@ -224,7 +225,7 @@ def _lane_start(robot, joints, coords, direction, max_step):
     sign0 = _start_sign(robot, joints)
     field = _straight_field(robot, direction, sign0)
     y0 = jnp.concatenate([family.join_state(robot, joints, coords), jnp.zeros((1,), dtype)])
-    return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0})
+    return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0}, rolled=family.straight_field_loops)
 
 
 def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_steps, *, tableau):

@@ -35,7 +35,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from ..kinematics import tip_position
-from ..motion.attitude import expm, geodesic_distance, spatial_joint_path_history
+from ..motion.attitude import expm, spatial_joint_path_history
 from ..motion.path_ends import REASON_MAX_LENGTH
 from ..motion.spatial_paths import spatial_straight_tip_path
 from ._reach_steps import (
@@ -99,9 +99,11 @@ def _rotations(vectors):
     return expm(vectors)
 
 
-@jax.jit
-def _turn(R_start, R_end):
-    return geodesic_distance(R_start, R_end)
+def _turn(R_start, R_end) -> float:
+    """`geodesic_distance` of two concrete rotations, in NumPy on the host (no small program to compile)."""
+    E = np.asarray(R_start).T @ np.asarray(R_end)
+    s = 0.5 * np.linalg.norm([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+    return float(np.arctan2(s, 0.5 * (np.trace(E) - 1.0)))
 
 
 def _lanes(robot, q, R, target, fractions, tolerance):

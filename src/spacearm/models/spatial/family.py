@@ -39,6 +39,8 @@ from .primitives import (
     posture_quantities,
     straight_path_maps,
     tip,
+    tip_and_fixed_base_jacobian,
+    tip_and_generalized_jacobian,
     tip_pose,
 )
 from .robot import SpatialRobot
@@ -81,6 +83,8 @@ class SpatialFamily(RobotFamily):
         "fixed_base_jacobian": fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
         "posture_quantities": posture_quantities,
+        "tip_and_generalized_jacobian": tip_and_generalized_jacobian,
+        "tip_and_fixed_base_jacobian": tip_and_fixed_base_jacobian,
     }
     fields = spatial_fields
 

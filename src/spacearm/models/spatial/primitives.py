@@ -60,6 +60,8 @@ __all__ = [
     "rpy_to_matrix",
     "straight_path_maps",
     "tip",
+    "tip_and_fixed_base_jacobian",
+    "tip_and_generalized_jacobian",
     "tip_pose",
 ]
 
@@ -431,6 +433,24 @@ def _jstar_minor(robot, q):
     return _rows(v_star, _sub(w, solved))
 
 
+def _jstar_tip_minor(robot, q):
+    """J* (rows 0-5) and the tip about the centroid (rows 6-8, the same in every column) from ONE chain pass."""
+    state = _chain_pass(robot, q)
+    _, solved = _coupling(state)
+    v, w = _fixed_columns(state)
+    r_t = _sub(state.tip, state.centroid)
+    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    tip_rows = tuple(jnp.broadcast_to(component, q.shape) for component in r_t)
+    return _rows(v_star, _sub(w, solved), tip_rows)
+
+
+def _fixed_tip_minor(robot, q):
+    """Fixed-base J (rows 0-5) and the tip about the centroid (rows 6-8, the same in every column), one chain pass."""
+    state = _chain_pass(robot, q)
+    tip_rows = tuple(jnp.broadcast_to(component, q.shape) for component in _sub(state.tip, state.centroid))
+    return _rows(*_fixed_columns(state), tip_rows)
+
+
 def _base_twist_minor(robot, q):
     state = _chain_pass(robot, q)
     _, solved = _coupling(state)
@@ -488,9 +508,16 @@ BLOCK = 2048
 def batched(kernel, axes: int):
     """A batch-last kernel as a function of ``(robot, q (..., n))`` -> ``(..., *result)``.
 
-    Large batches run in blocks of `BLOCK` postures with ``lax.map`` (padded to
-    whole blocks), so memory stays bounded and each block's arrays stay in cache.
+    Large batches run in blocks of `BLOCK` postures in a loop that writes each block's
+    result in place into the whole result, so memory stays bounded and each block's arrays
+    stay in cache. The last block is shifted back to end at the last posture (it repeats
+    a few postures, with the same values), so nothing is padded and the result is never
+    copied to slice padding off. ``axes=0`` takes a kernel that already returns
+    ``(batch, *result)``.
     """
+
+    def one(robot, block):
+        return _batch_first(kernel(robot, block.T), axes)
 
     def apply(robot: SpatialRobot, posture: jax.Array) -> jax.Array:
         posture = jnp.asarray(posture)
@@ -498,14 +525,17 @@ def batched(kernel, axes: int):
         flat = posture.reshape((-1, n))
         count = flat.shape[0]
         if count <= BLOCK:
-            out = _batch_first(kernel(robot, flat.T), axes)
+            out = one(robot, flat)
         else:
-            blocks = -(-count // BLOCK)
-            padded = jnp.concatenate([flat, jnp.zeros((blocks * BLOCK - count, n), flat.dtype)])
-            out = jax.lax.map(
-                lambda block: _batch_first(kernel(robot, block.T), axes), padded.reshape(blocks, BLOCK, n)
-            )
-            out = out.reshape((blocks * BLOCK,) + out.shape[2:])[:count]
+            result = jax.eval_shape(one, robot, flat[:BLOCK])
+
+            def step(i, out):
+                start = jnp.minimum(i * BLOCK, count - BLOCK)
+                part = one(robot, jax.lax.dynamic_slice_in_dim(flat, start, BLOCK))
+                return jax.lax.dynamic_update_slice_in_dim(out, part, start, 0)
+
+            empty = jnp.zeros((count,) + result.shape[1:], result.dtype)
+            out = jax.lax.fori_loop(0, -(-count // BLOCK), step, empty)
         return out.reshape(batch + out.shape[1:])
 
     apply.__name__ = kernel.__name__.strip("_").replace("_minor", "")
@@ -535,6 +565,28 @@ straight_path_maps = batched(_straight_maps_minor, 2)
 straight_path_maps.__doc__ = """``(..., 6, n)``: rows 0-2 J*_v (tip velocity per joint rate at zero momentum) and
 rows 3-5 C_w (bus angular velocity per joint rate), bus axes, from one pass over the chain
 (the rows of `generalized_jacobian` and `base_twist_map` a straight tip path needs)."""
+
+_jstar_tip = batched(_jstar_tip_minor, 2)
+
+
+def tip_and_generalized_jacobian(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``(..., 6, n)`` J* and ``(..., 3)`` tip about the system centroid, bus axes, from one chain pass per posture.
+
+    Equal to `generalized_jacobian` and `tip`; for code that needs both (and their
+    derivatives) at the same postures, such as the singular-set search."""
+    stacked = _jstar_tip(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:, 0]
+
+
+_fixed_tip = batched(_fixed_tip_minor, 2)
+
+
+def tip_and_fixed_base_jacobian(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``(..., 6, n)`` fixed-base Jacobian and ``(..., 3)`` tip about the system centroid, bus axes,
+    from one chain pass per posture (equal to `fixed_base_jacobian` and `tip`)."""
+    stacked = _fixed_tip(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:, 0]
+
 
 mass_matrix = batched(_mass_minor, 2)
 mass_matrix.__doc__ = """``(..., n, n)`` H_m: the arm's joint-space inertia with the bus held fixed."""

@@ -191,7 +191,6 @@ def tree_constants(robot: TreeRobot) -> TreeConstants:
 class _TreePass:
     """One pass over the tree; per-joint 3-tuples of ``(n, *batch)``, per-tip of ``(k, *batch)``."""
 
-    rotations: tuple  # body axes (turned frames), 3x3 tuple of (n, *batch)
     origins: tuple  # joint origins o_j
     axes: tuple  # unit joint axes a_j
     tips: tuple  # tip origins, bus frame, (k, *batch) components
@@ -217,6 +216,12 @@ def _index(nested, i):
     return nested[i]
 
 
+def _lean_forward_step(carry, x):
+    """`_forward_step` without the body axes among its outputs (the carry still has them)."""
+    carry, out = _forward_step(carry, x)
+    return carry, out[1:]
+
+
 def _tree_backward_step(carry, x):
     """`_backward_step` after adding the totals of the segments hanging from this body."""
     (extra_moment, extra_about), rest = x[:2], x[2:]
@@ -236,8 +241,13 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
     cos, sin = jnp.cos(angle), jnp.sin(angle)
     spread = lambda x: jnp.broadcast_to(x, batch)
     segs = segments(robot.parents)
+    # When every body whose frame is needed (tips, branch points) ends a segment, its
+    # frame is that segment's last carry, and the scans need not store every body's axes.
+    ends = {stop - 1: s for s, (_, stop, _) in enumerate(segs)}
+    needed = {int(b) for b in robot.tip_bodies} | {p for _, _, p in segs if p >= 0}
+    lean = needed <= ends.keys()
     where = {}  # body index -> (segment number, local index)
-    outs = []
+    outs, lasts = [], []
     for s, (start, stop, parent) in enumerate(segs):
         if parent < 0:
             r = -1 - parent
@@ -245,6 +255,8 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
                 tuple(tuple(spread(cst.mount_rotation[r, i, c]) for c in range(3)) for i in range(3)),
                 tuple(spread(cst.mount_xyz[r, i]) for i in range(3)),
             )
+        elif lean:
+            carry = lasts[ends[parent]]
         else:
             seg, local = where[parent]
             rot, joint_origin, axis = (_index(outs[seg][i], local) for i in range(3))
@@ -259,21 +271,26 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
             cst.link_com[part],
             cst.link_inertia[part],
         )
-        _, out = jax.lax.scan(_forward_step, carry, xs)
-        outs.append(out)
+        last, out = jax.lax.scan(_lean_forward_step if lean else _forward_step, carry, xs)
+        outs.append((None, *out) if lean else out)
+        lasts.append(last)
         for j in range(start, stop):
             where[j] = (s, j - start)
-    rotations, origins, axes, centroids, inertias = (_cat([o[i] for o in outs]) for i in range(5))
+    origins, axes, centroids, inertias = (_cat([o[i] for o in outs]) for i in range(1, 5))
     bodies = np.asarray(robot.tip_bodies)
-    body_rot = _index(rotations, bodies)
-    body_origin = _add(_index(origins, bodies), _scale(slide[bodies], _index(axes, bodies)))
+    if lean:
+        frames = [lasts[ends[int(b)]] for b in bodies]
+        body_rot = tuple(tuple(jnp.stack([f[0][i][c] for f in frames]) for c in range(3)) for i in range(3))
+        body_origin = tuple(jnp.stack([f[1][i] for f in frames]) for i in range(3))
+    else:
+        body_rot = _index(_cat([o[0] for o in outs]), bodies)
+        body_origin = _add(_index(origins, bodies), _scale(slide[bodies], _index(axes, bodies)))
     offset = tuple(cst.tip_offset[:, i].reshape((-1,) + (1,) * len(batch)) for i in range(3))
     tips = _add(body_origin, _matvec(body_rot, offset))
     tip_rot = tuple(
         tuple(cst.tip_rotation[:, i, c].reshape((-1,) + (1,) * len(batch)) for c in range(3)) for i in range(3)
     )
     state = _TreePass(
-        rotations=rotations,
         origins=origins,
         axes=axes,
         tips=tips,
@@ -373,6 +390,33 @@ def _jstar_from(robot, state):
 # Kernels in batch-last form (q (n, *batch)) ----------------------------------------------
 
 
+def _jstar_first(robot, q):
+    """``(batch, k, 6, n)`` J* of every tip for ``q (n, batch)``: `_jstar_from`'s closed form,
+    assembled batch-first.
+
+    The pass runs batch-last (every scalar one contiguous array over postures); the
+    per-joint terms w = revolute a, A, own and shared (12 numbers per joint) and the tips
+    are turned batch-first, and the 6k x n entries of each posture are formed there, so
+    the result is written in its final order (forming them batch-last and transposing
+    the result was slower on XLA's CPU backend: the transposed write is not vectorized).
+    """
+    state = _tree_pass(robot, q)
+    _, solved = _coupling(state)
+    revolute = 1.0 - state.prismatic
+    own = _sub(_scale(state.prismatic, state.axes), _scale(revolute, _cross(state.axes, state.origins)))
+    shared = _sub(_scale(-1.0 / state.mass, state.momentum), _cross(state.centroid, solved))
+    turning = _scale(revolute, state.axes)
+    per_joint = jnp.transpose(jnp.stack([*turning, *solved, *own, *shared]), (2, 0, 1))  # (batch, 12, n)
+    tips = jnp.transpose(jnp.stack(state.tips), (2, 1, 0))  # (batch, k, 3)
+    term = lambda i: tuple(per_joint[:, None, 3 * i + c] for c in range(3))  # (batch, 1, n)
+    turning, solved, own, shared = (term(i) for i in range(4))
+    mask = jnp.asarray(robot.support, q.dtype)  # (k, n)
+    w_star = tuple(mask * t - a for t, a in zip(turning, solved, strict=True))
+    lever = _cross(w_star, tuple(tips[:, :, c, None] for c in range(3)))
+    v_star = tuple(l + mask * o + c for l, o, c in zip(lever, own, shared, strict=True))
+    return jnp.stack([*v_star, *w_star], axis=2)
+
+
 def _tip_minor(robot, q):
     state = _tree_pass(robot, q)
     return jnp.stack(_sub(state.tips, tuple(c[None] for c in state.centroid)), axis=1)
@@ -449,7 +493,7 @@ fixed_base_jacobian = batched(_fixed_minor, 3)
 fixed_base_jacobian.__doc__ = """``(..., k, 6, n)`` tip twists [v; w] per joint rate, bus held fixed, bus axes
 (zero in the columns of joints off each tip's path)."""
 
-generalized_jacobian = batched(_jstar_minor, 3)
+generalized_jacobian = batched(_jstar_first, 0)
 generalized_jacobian.__doc__ = """``(..., k, 6, n)`` J* of every tip over all joints at zero momentum, bus axes.
 
 The closed form of the module docstring: one pass over the tree and one 3x3 solve per posture."""
