@@ -104,6 +104,11 @@ class RobotFamily:
         holds some: a focused tree). Held joints have zero columns in every joint-rate map."""
         return np.ones(self.joint_count(robot), dtype=bool)
 
+    def tip_joints(self, robot) -> np.ndarray:
+        """``(n,)`` static booleans: the moving joints on the tip's own path from the base (all
+        moving joints of a serial arm; a focused tree's other arms move its tip only through the bus)."""
+        return self.moving_joints(robot)
+
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 
     def tip_shell(self, robot) -> tuple[float, float]:

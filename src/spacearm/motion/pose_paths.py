@@ -132,7 +132,8 @@ class PosePath:
 
 def check_pose_robot(robot, what: str = "straight_pose_path") -> None:
     """Refuse a robot whose tip pose cannot be commanded: the family needs a 6-row J*
-    (position and orientation) on an SO(3) attitude, and the arm at least 6 joints.
+    (position and orientation) on an SO(3) attitude, and at least 6 moving joints on the
+    tip's own path from the base (a tree's other arms move its tip only through the bus).
 
     Raises:
         ConfigError: naming the family or the joint count and what to use instead.
@@ -153,6 +154,13 @@ def check_pose_robot(robot, what: str = "straight_pose_path") -> None:
         raise ConfigError(
             f"{what}: pose targets need at least 6 joints to set the tip's position and orientation; "
             f"the arm has {n}{' moving' if n < family.joint_count(robot) else ''}; give a target point only"
+        )
+    own = int(np.sum(family.tip_joints(robot)))
+    if own < 6:
+        raise ConfigError(
+            f"{what}: pose targets need at least 6 joints to set the tip's position and orientation; "
+            f"the tip's path from the bus has {own} moving (the other arms move it only through the bus, "
+            "at impractical rates); give a target point only"
         )
 
 
@@ -367,6 +375,7 @@ def straight_pose_path(
         j = int(np.argmax(outside))
         raise ConfigError(
             f"q_start: joint {j + 1} = {q0[j]:.6g} is outside its limits [{lower[j]:.6g}, {upper[j]:.6g}]"
+            f" ({robot.joint_names[j]})"
         )
     p1 = np.asarray(target_position, float)
     if p1.shape != (3,) or not np.all(np.isfinite(p1)):

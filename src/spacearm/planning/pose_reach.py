@@ -145,7 +145,7 @@ def plan_pose_reach(
             j = int(path.limit_joint)
             lower = np.broadcast_to(np.asarray(robot.joint_lower, float), joints.shape[1:])[j]
             upper = np.broadcast_to(np.asarray(robot.joint_upper, float), joints.shape[1:])[j]
-            why = f"joint {j + 1} reaches its limit [{lower:.6g}, {upper:.6g}]"
+            why = f"joint {j + 1} reaches its limit [{lower:.6g}, {upper:.6g}] ({robot.joint_names[j]})"
         raise ConfigError(
             f"target: the straight pose path stops at s = {s:.3f} of the way: {why}; {left} "
             "(a straight pose path has no reorientation fallback: try another start posture or target)"

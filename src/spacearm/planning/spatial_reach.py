@@ -155,6 +155,7 @@ def _check(robot, q_start, target, options):
         j = int(np.argmax(outside))
         raise ConfigError(
             f"q_start: joint {j + 1} = {q0[j]:.6g} is outside its limits [{lower[j]:.6g}, {upper[j]:.6g}]"
+            f" ({robot.joint_names[j]})"
         )
     target = np.asarray(target, float)
     if target.shape != (3,) or not np.all(np.isfinite(target)):

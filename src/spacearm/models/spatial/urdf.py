@@ -13,8 +13,9 @@ in side branches (a camera, fingers). Merging composes the transforms and sums t
 spatial inertias. Links above ``root_link`` (a ``world`` link, a mobile base) are
 dropped, unchecked. The ``tip`` is a link; its origin is the tip point and its axes the
 tip frame. A lock value must lie within the joint's limits; ``lock_others`` holds every
-movable joint off the path at 0 (or its nearest limit), and without it one message
-names every movable joint off the path that is not locked.
+movable joint off the path at 0 (or its nearest limit; a ``<mimic>`` follower of a locked
+joint where its leader puts it), and without it one message names every movable joint
+off the path that is not locked. A ``<mimic>`` joint on the path moves on its own.
 
 The pieces (`parse_document`, `rigid_closure`, `merge_links`, `check_link`,
 `check_lock_joints`) also serve the tree reader, `spacearm.models.tree.urdf`.
@@ -55,6 +56,7 @@ __all__ = [
     "check_link",
     "check_lock_joints",
     "held_value",
+    "hold_others",
     "merge_links",
     "parse_document",
     "parse_urdf",
@@ -203,6 +205,8 @@ class _Joint:
     axis: np.ndarray
     lower: float
     upper: float
+    # URDF <mimic>: (leader joint, multiplier, offset), or None.
+    mimic: tuple[str, float, float] | None = None
 
 
 def _floats(where: str, text: str | None, count: int, default=None) -> np.ndarray:
@@ -326,7 +330,13 @@ def _read_joint(source: str, element, links: Mapping[str, _Link]) -> _Joint:
                 raise ConfigError(f"{where}limit: lower {lower} is above upper {upper}")
             if lower == upper:  # URDF's default 0, 0: no usable range given; treat as free
                 lower, upper = -math.inf, math.inf
-    return _Joint(name, kind, ends["parent"], ends["child"], rotation, translation, axis, lower, upper)
+    mimic = None
+    mimic_element = element.find("mimic") if kind in MOVABLE else None
+    if mimic_element is not None and mimic_element.get("joint"):
+        multiplier = float(_floats(f"{where}mimic multiplier", mimic_element.get("multiplier", "1"), 1)[0])
+        offset = float(_floats(f"{where}mimic offset", mimic_element.get("offset", "0"), 1)[0])
+        mimic = (mimic_element.get("joint"), multiplier, offset)
+    return _Joint(name, kind, ends["parent"], ends["child"], rotation, translation, axis, lower, upper, mimic)
 
 
 def _joint_motion(joint: _Joint, value: float) -> tuple[np.ndarray, np.ndarray]:
@@ -486,9 +496,27 @@ def check_lock_joints(document: UrdfDocument, lock_joints: Mapping[str, float], 
             )
 
 
-def held_value(joint: _Joint) -> float:
-    """Where ``lock_others`` holds a joint: 0, or the nearest limit when 0 is outside them."""
-    return float(min(max(0.0, joint.lower), joint.upper))
+def held_value(joint: _Joint, locked: Mapping[str, float] | None = None) -> float:
+    """Where ``lock_others`` holds a joint: 0, or the nearest limit when 0 is outside them.
+
+    A URDF ``<mimic>`` follower of a joint in ``locked`` (a gripper's second finger) is held
+    where its leader puts it, ``multiplier * leader + offset``, clipped to its limits.
+    """
+    value = 0.0
+    if joint.mimic is not None and locked is not None and joint.mimic[0] in locked:
+        leader, multiplier, offset = joint.mimic
+        value = multiplier * float(locked[leader]) + offset
+    return float(min(max(value, joint.lower), joint.upper))
+
+
+def hold_others(joints: list[_Joint], locked: Mapping[str, float]) -> dict[str, float]:
+    """Where ``lock_others`` holds ``joints`` (see `held_value`): mimic followers after their leaders."""
+    held = {j.name: held_value(j) for j in joints if j.mimic is None}
+    every = {**locked, **held}
+    for joint in joints:
+        if joint.mimic is not None:
+            held[joint.name] = every[joint.name] = held_value(joint, every)
+    return held
 
 
 def check_kinds(document: UrdfDocument, joints: list[_Joint]) -> None:
@@ -632,7 +660,7 @@ def parse_urdf(
     if others and not lock_others:
         where = f"off the path from '{root_link}' to '{tip}'"
         raise ConfigError(unlocked_message(source, others, where, keys))
-    lock_joints.update({joint.name: held_value(joint) for joint in others})
+    lock_joints.update(hold_others(others, lock_joints))
 
     starts = [root_link] + [j.child for j in arm]
     bodies = [rigid_closure(document, start, arm_names, lock_joints) for start in starts]

@@ -170,6 +170,12 @@ class TreeFamily(RobotFamily):
     def moving_joints(self, robot: TreeRobot) -> np.ndarray:
         return robot.moving_mask
 
+    def tip_joints(self, robot: TreeRobot) -> np.ndarray:
+        """The moving joints on the active tip's path from the bus (all moving ones without a tip focus)."""
+        if robot.active_tip is None:
+            return robot.moving_mask
+        return robot.support[robot.active_tip] & robot.moving_mask
+
     def attitude_rate_map(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
         """``(..., 3, n)`` bus angular velocity per joint rate (all arms; zero columns for held joints), bus axes."""
         return _base_rate_matrix(robot, joints)[..., 3:, :]

@@ -37,7 +37,10 @@ def base_twist_map(robot: TreeRobot, q: jax.Array, base_rotation: jax.Array | No
     """``(..., 6, n)`` C(q): bus twist [v of the bus centroid; w] per joint rate of all arms.
 
     Bus axes, or inertial axes with ``base_rotation``. C_w (rows 3:6) is the disturbance
-    map of Dubowsky & Torres (1991) over all joints.
+    map of Dubowsky & Torres (1991) over all joints. The bus centroid is that of the
+    ``base:`` body in an ``arms:`` file (the arms' root links are arm bodies) and that of
+    ``base_link`` with every link rigidly attached to it in a ``system:`` file, so one
+    robot written both ways has the same C_w but v rows that differ by w x (c_1 - c_2).
     """
     require_family(robot, "tree", "base_twist_map")
     C = _base_twist_map(robot, q)

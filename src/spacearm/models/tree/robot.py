@@ -332,9 +332,12 @@ def _moving_mask(robot: TreeRobot, moving) -> tuple[bool, ...]:
             mask[joints.index(name)] = True
         else:
             known = arms + tips + joints
+            # A system: file has one root, the bus: its name is no arm, so name tips and joints.
+            choices = f"the arms are {', '.join(arms)}; " if len(arms) > 1 else ""
             raise ConfigError(
                 f"moving: unknown arm, tip or joint {name!r}{did_you_mean(name, known)}; "
-                f"the arms are {', '.join(arms)}; the tips are {', '.join(tips)}"
+                f"{choices}the tips are {', '.join(tips)}; the joints are "
+                + (", ".join(joints) if len(joints) <= 16 else f"{len(joints)}: {', '.join(joints[:3])}, ...")
             )
     return tuple(bool(m) for m in mask)
 

@@ -30,7 +30,7 @@ from ..spatial.urdf import (
     check_kinds,
     check_link,
     check_lock_joints,
-    held_value,
+    hold_others,
     merge_links,
     parse_document,
     read_urdf_text,
@@ -179,7 +179,7 @@ def parse_urdf_tree(
     if others and not lock_others:
         where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
         raise ConfigError(unlocked_message(source, others, where, keys))
-    lock_joints.update({joint.name: held_value(joint) for joint in others})
+    lock_joints.update(hold_others(others, lock_joints))
 
     starts = [base_link] + [joint.child for joint in order]
     bodies = [rigid_closure(document, start, kept, lock_joints) for start in starts]
