@@ -25,7 +25,7 @@ def test_sobol_directions_match_scipy():
     ``fast_forward`` 2^(j+1) steps, so the public check stops at j = 11 (all 32 cost ~90 s).
     """
     qmc = pytest.importorskip("scipy.stats").qmc
-    for d in (1, 3, 6, 10):
+    for d in (1, 3, 6, 10, 15, 32):
         V = sobol_direction_numbers(d).astype(np.uint64)
         engine = qmc.Sobol(d, scramble=False, bits=32)
         np.testing.assert_array_equal(np.asarray(engine._sv, dtype=np.uint64), V)

@@ -153,9 +153,9 @@ def _chain_robot(tmp_path, joints: int, **arm) -> Path:
     return path
 
 
-def test_joint_box_metrics_on_more_than_10_joints_fail_validate(tmp_path, capsys):
+def test_joint_box_metrics_on_more_than_32_joints_fail_validate(tmp_path, capsys):
     """Before: validate accepted them and the run refused without naming file or metric."""
-    robot = _chain_robot(tmp_path, 12)
+    robot = _chain_robot(tmp_path, 33)
     code, _, err = validate(
         tmp_path,
         {
@@ -167,7 +167,7 @@ def test_joint_box_metrics_on_more_than_10_joints_fail_validate(tmp_path, capsys
         capsys,
     )
     assert code == 2
-    assert "file.yaml: metrics[0]: joints: the joint-box averages support 1 to 10 joints, the robot has 12" in err
+    assert "file.yaml: metrics[0]: joints: the joint-box averages support 1 to 32 joints, the robot has 33" in err
 
 
 def test_arm_fields_are_named_in_the_robot_file(tmp_path, capsys):

@@ -103,6 +103,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "tree-only kernels: C(q), reaction null space, H_m, H*, w_d per tip",
     ),
     (
+        "spacearm.models.tree.fields",
+        "Models",
+        "named tree design numbers (each arm's mount, mass and length factors, the bus, link masses and lengths)",
+    ),
+    (
         "spacearm.models.tree.shell",
         "Models",
         "the virtual manipulator's shell of one tip of a tree: radii between which it lies",

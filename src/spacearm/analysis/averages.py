@@ -36,7 +36,11 @@ budget are traced: a new value does not compile a new program.
 
 Several metrics at once (`joint_averages`): one chain pass per posture gives J*, C
 and H* (`posture_quantities`), every requested metric is read off them, and one
-estimator runs over the vector of metrics until every one meets its tolerance. A
+estimator runs over the vector of metrics until every one meets its tolerance.
+On a robot with several tips (a tree: J* is (k, 6, n)) w*, 1/kappa and w_d are per tip
+and named with the tip's index, ``manipulability[1]`` (`tip_metric`): each reads its
+tip's rows of the same J*, so every tip comes from the same pass; ||C_w||_F is of the
+whole system (the bus rate per joint rate over every arm's joints) and takes no tip. A
 fixed rule (``min_samples`` and ``max_samples`` give the same count, as in design
 problems) is a single pass over its points and plain means, differentiated by
 ordinary AD: no loop and no custom VJP.
@@ -62,6 +66,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -71,6 +76,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.linalg import gram_root_determinant, symmetric_eigenvalues
+from .._core.schema import did_you_mean
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
 from ..models.spatial.metrics import dynamic_manipulability
@@ -79,6 +85,7 @@ from .manipulability_average import average_manipulability as planar_average_man
 
 __all__ = [
     "METRICS",
+    "PER_TIP_METRICS",
     "JointAverage",
     "average_base_disturbance",
     "average_dynamic_manipulability",
@@ -89,6 +96,9 @@ __all__ = [
     "joint_averages",
     "posture_metrics",
     "posture_quantities",
+    "split_metric",
+    "tip_count",
+    "tip_metric",
 ]
 
 
@@ -140,9 +150,11 @@ def posture_quantities(robot, posture: jax.Array, needs: tuple[str, ...]) -> dic
     fast = family.fast_paths.get("posture_quantities")
     if fast is not None:
         return fast(robot, posture, tuple(needs))
-    if "arm_inertia" in needs:
-        raise ConfigError(f"metric: the arm inertia H* is not available for {family.name} robots")
     out = {}
+    if "arm_inertia" in needs:
+        if not hasattr(family, "arm_inertia"):
+            raise ConfigError(f"metric: the arm inertia H* is not available for {family.name} robots")
+        out["arm_inertia"] = family.arm_inertia(robot, posture)  # batched over postures (tree primitives)
     if "jacobian" in needs:
         out["jacobian"] = generalized_jacobian(robot, posture)
     if "base_rate" in needs:
@@ -187,16 +199,84 @@ _FROM_QUANTITIES = {
 }
 
 
+# Metrics of one tip: on a robot with several tips (J* of shape (..., k, 6, n)) they are
+# named with the tip's index, ``manipulability[1]``, and read that tip's rows of J*.
+PER_TIP_METRICS = ("manipulability", "conditioning", "dynamic_manipulability")
+_TIP_METRIC = re.compile(r"^(\w+)\[(\d+)\]$")
+
+
+def split_metric(metric: str) -> tuple[str, int | None]:
+    """``("manipulability", 1)`` for ``"manipulability[1]"``; ``(metric, None)`` without a tip."""
+    match = _TIP_METRIC.match(metric)
+    return (match.group(1), int(match.group(2))) if match else (metric, None)
+
+
+def tip_count(robot) -> int | None:
+    """The number of tips k of a robot whose per-tip quantities carry a tip axis, else None
+    (the family's `RobotFamily.tip_count`)."""
+    return family_of(robot).tip_count(robot)
+
+
+def tip_metric(where: str, robot, metric: str, tip: str | int | None = None, label: str | None = None) -> str:
+    """The metric name `joint_averages` takes for ``metric`` at tip ``tip`` of ``robot``.
+
+    Args:
+        where: names the file and field in messages.
+        robot: the design (a robot with several tips names them in ``labels.tip_names``).
+        metric: a name from `METRICS`.
+        tip: a tip's name or index (robots with several tips); None for a one-tip robot
+            or a whole-system metric.
+        label: the metric's name in messages (a sweep's or problem's name for it; default ``metric``).
+
+    Raises:
+        ConfigError: a per-tip metric without a tip on a robot with several, an unknown tip
+            (with a did-you-mean), or a tip on a whole-system metric or a one-arm robot.
+    """
+    count = tip_count(robot)
+    label = label or metric
+    if tip is None:
+        if count is None or metric not in PER_TIP_METRICS:
+            return metric
+        if count == 1:
+            return f"{metric}[0]"
+        names = ", ".join(robot.labels.tip_names) or ", ".join(map(str, range(count)))
+        raise ConfigError(f"{where}: {label} is per tip and the robot has {count} ({names}); name one with tip:")
+    if metric not in PER_TIP_METRICS:
+        raise ConfigError(f"{where}.tip: {label} is a quantity of the whole system (every joint); it takes no tip")
+    if count is None:
+        raise ConfigError(f"{where}.tip: the robot has one tip (a single arm); leave tip out")
+    names = tuple(robot.labels.tip_names)
+    if isinstance(tip, int) and not isinstance(tip, bool):
+        if not 0 <= tip < count:
+            raise ConfigError(f"{where}.tip: index {tip} out of range; the robot has {count} tips (0..{count - 1})")
+        return f"{metric}[{tip}]"
+    if isinstance(tip, str) and tip in names:
+        return f"{metric}[{names.index(tip)}]"
+    raise ConfigError(
+        f"{where}.tip: unknown tip {tip!r}{did_you_mean(str(tip), names)}; the tips: {', '.join(names)} "
+        f"(or an index 0..{count - 1})"
+    )
+
+
+def _tip_rows(quantities: dict, tip: int | None) -> dict:
+    """The quantities as one tip sees them: its rows of J* (the whole-system C and H* as they are)."""
+    if tip is None or "jacobian" not in quantities:
+        return quantities
+    return {**quantities, "jacobian": quantities["jacobian"][..., tip, :, :]}
+
+
 def posture_metrics(robot, posture: jax.Array, metrics: tuple[str, ...]) -> jax.Array:
-    """``(..., k)`` the metrics named in ``metrics`` (of `METRICS`) at postures ``(..., p)``.
+    """``(..., k)`` the metrics named in ``metrics`` (of `METRICS`, per-tip ones with their
+    tip, ``manipulability[1]``) at postures ``(..., p)``.
 
     Every metric is read off one `posture_quantities` call: J*, C and H* are computed
-    once per posture however many metrics use them.
+    once per posture however many metrics (and tips) use them.
     """
     family = family_of(robot)
-    needs = tuple(dict.fromkeys(need for name in metrics for need in _NEEDS[name]))
+    parsed = [split_metric(name) for name in metrics]
+    needs = tuple(dict.fromkeys(need for name, _ in parsed for need in _NEEDS[name]))
     quantities = posture_quantities(robot, posture, needs)
-    return jnp.stack([_FROM_QUANTITIES[name](family, quantities) for name in metrics], axis=-1)
+    return jnp.stack([_FROM_QUANTITIES[name](family, _tip_rows(quantities, tip)) for name, tip in parsed], axis=-1)
 
 
 def manipulability_metric(robot, posture):
@@ -392,10 +472,15 @@ def joint_averages(
     metrics = tuple(metrics)
     if not metrics or len(set(metrics)) != len(metrics):
         raise ConfigError(f"metrics: a non-empty list of distinct names from {', '.join(METRICS)} is required")
+    count = tip_count(robot)
     for metric in metrics:
-        if metric not in METRICS:
+        name, tip = split_metric(metric)
+        if name not in METRICS:
             raise ConfigError(f"metric: must be one of {', '.join(METRICS)}, got {metric!r}")
-    if "dynamic_manipulability" in metrics and not family_of(robot).rotates_with_base:
+        if (tip is None) != (count is None or name not in PER_TIP_METRICS) or (tip is not None and tip >= count):
+            tips = f"one of {name}[0] .. {name}[{count - 1}]" if count else name
+            raise ConfigError(f"metric: {metric!r} for a robot with {count or 1} tip(s): use {tips}")
+    if "dynamic_manipulability" in {split_metric(m)[0] for m in metrics} and not family_of(robot).rotates_with_base:
         raise ConfigError("metric: dynamic_manipulability needs the arm inertia H*, which only spatial robots provide")
     if randomizations < 2:
         raise ConfigError(f"randomizations: must be at least 2 for an error estimate, got {randomizations}")

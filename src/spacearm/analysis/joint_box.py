@@ -20,7 +20,7 @@ The box is written for any robot family (planar postures get phi0 = 0 in front,
 the box are differentiable in them too (the points move with the box).
 
 Quasi-Monte Carlo points: a Sobol sequence (Joe & Kuo's direction numbers,
-``new-joe-kuo-6.21201``, for up to 10 joints; tests/test_averages.py checks them
+``new-joe-kuo-6.21201``, for up to 32 joints; tests/test_averages.py checks them
 against SciPy's generator) in its natural order, so the first 2^m points of any
 block-aligned run form a (t, m, s)-net. Randomization by a random digital shift (an
 XOR of every point with one random 32-bit word per dimension): each randomization is
@@ -50,7 +50,8 @@ __all__ = [
 ]
 
 # Joe & Kuo (2008), new-joe-kuo-6.21201: (degree s, coefficients a, initial m_1..m_s)
-# for dimensions 2..10 (dimension 1 is the van der Corput sequence, m_k = 1).
+# for dimensions 2..32 (dimension 1 is the van der Corput sequence, m_k = 1): enough for
+# several arms on one bus (two 7-joint arms and a torso lift are 15 joints).
 _JOE_KUO = (
     (1, 0, (1,)),
     (2, 1, (1, 3)),
@@ -61,6 +62,28 @@ _JOE_KUO = (
     (5, 2, (1, 1, 5, 5, 17)),
     (5, 4, (1, 1, 5, 5, 5)),
     (5, 7, (1, 1, 7, 11, 19)),
+    (5, 11, (1, 1, 5, 1, 1)),
+    (5, 13, (1, 1, 1, 3, 11)),
+    (5, 14, (1, 3, 5, 5, 31)),
+    (6, 1, (1, 3, 3, 9, 7, 49)),
+    (6, 13, (1, 1, 1, 15, 21, 21)),
+    (6, 16, (1, 3, 1, 13, 27, 49)),
+    (6, 19, (1, 1, 1, 15, 7, 5)),
+    (6, 22, (1, 3, 1, 15, 13, 25)),
+    (6, 25, (1, 1, 5, 5, 19, 61)),
+    (7, 1, (1, 3, 7, 11, 23, 15, 103)),
+    (7, 4, (1, 3, 7, 13, 13, 15, 69)),
+    (7, 7, (1, 1, 3, 13, 7, 35, 63)),
+    (7, 8, (1, 3, 5, 9, 1, 25, 53)),
+    (7, 14, (1, 3, 1, 13, 9, 35, 107)),
+    (7, 19, (1, 3, 1, 5, 27, 61, 31)),
+    (7, 21, (1, 1, 5, 11, 19, 41, 61)),
+    (7, 28, (1, 3, 5, 3, 3, 13, 69)),
+    (7, 31, (1, 1, 7, 13, 1, 19, 1)),
+    (7, 32, (1, 3, 7, 5, 13, 19, 59)),
+    (7, 37, (1, 1, 3, 9, 25, 29, 41)),
+    (7, 41, (1, 3, 5, 13, 23, 1, 55)),
+    (7, 42, (1, 3, 7, 3, 13, 59, 17)),
 )
 MAX_SOBOL_DIMENSION = len(_JOE_KUO) + 1
 _BITS = 32

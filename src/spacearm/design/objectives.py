@@ -3,31 +3,39 @@
 Planar closed forms: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2. Joint-box
 averages (`AVERAGE_OBJECTIVES`, spatial robots): the mean translational w*, the global
 conditioning index, minus the mean base disturbance and the mean dynamic manipulability,
-evaluated together by `spacearm.analysis.averages.joint_averages`.
+evaluated together by `spacearm.analysis.averages.joint_averages`. On a robot with several
+tips (a tree) the per-tip averages name their tip, ``w_avg[left/tool0]``; the disturbance
+is of the whole system (C_w over every joint) and ``low_total_mass`` counts every arm.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import jax
 import jax.numpy as jnp
 
+from .._core.errors import ConfigError
 from ..analysis import average_manipulability
+from ..analysis.averages import split_metric, tip_metric
+from ..models.family import family_of
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
-from ..models.spatial.fields import arm_mass
 
 __all__ = [
     "AVERAGE_OBJECTIVES",
     "DESIGN_OBJECTIVES",
     "OBJECTIVES",
     "SPATIAL_OBJECTIVES",
+    "average_objective",
     "guaranteed_area",
     "maximum_reachable_area",
     "objective",
+    "objective_name",
     "objectives_for",
+    "split_objective",
     "total_mass_objective",
 ]
 
@@ -87,8 +95,54 @@ def maximum_reachable_area(robot: PlanarRobot) -> jax.Array:
 
 
 def total_mass_objective(robot) -> jax.Array:
-    """``(...)`` minus the launch mass of a spatial design: bus plus every arm body, kg (maximized)."""
-    return -(robot.base_mass + arm_mass(robot))
+    """``(...)`` minus the launch mass of a spatial design or a tree: bus plus every arm body, kg (maximized)."""
+    return -(robot.base_mass + family_of(robot).fields.arm_mass(robot))
+
+
+_TIP_OBJECTIVE = re.compile(r"^(\w+)\[(.+)\]$")
+
+
+def split_objective(name: str) -> tuple[str, str | None]:
+    """``("w_avg", "left/tool0")`` for the per-tip objective ``"w_avg[left/tool0]"``; ``(name, None)`` otherwise."""
+    match = _TIP_OBJECTIVE.match(name)
+    return (match.group(1), match.group(2)) if match else (name, None)
+
+
+def _tip(robot, tip: str | None) -> str | int | None:
+    """A tip named in an objective: its name, or its index where the robot's tips have no names."""
+    if tip is not None and tip.isdigit() and tip not in getattr(robot.labels, "tip_names", ()):
+        return int(tip)
+    return tip
+
+
+def objective_name(where: str, robot, name: str, tip: str | int | None = None) -> str:
+    """The canonical name of an objective on ``robot``: a per-tip average on a robot with
+    several tips carries its tip's name (``w_avg[left/tool0]``); checked (`tip_metric`)."""
+    base, written = split_objective(name)
+    if written is not None:
+        if tip is not None:
+            raise ConfigError(f"{where}: give the tip once, in the name ({name}) or as tip: ({tip})")
+        tip = _tip(robot, written)
+    if base not in AVERAGE_OBJECTIVES:
+        if tip is not None:
+            raise ConfigError(f"{where}.tip: {base} is not an average over the joint box; it takes no tip")
+        return base
+    metric = tip_metric(where, robot, AVERAGE_OBJECTIVES[base][0], tip, label=base)
+    _, index = split_metric(metric)
+    if tip is None:
+        return base  # one tip, or a whole-system quantity
+    names = tuple(robot.labels.tip_names)
+    return f"{base}[{names[index] if names else index}]"
+
+
+def average_objective(name: str, robot) -> tuple[str, float] | None:
+    """``(joint_averages metric, sign)`` of an average objective on ``robot`` (a per-tip one
+    with its tip's index, ``manipulability[1]``), or None for an objective of the design itself."""
+    base, tip = split_objective(name)
+    if base not in AVERAGE_OBJECTIVES:
+        return None
+    metric, sign = AVERAGE_OBJECTIVES[base]
+    return tip_metric("objectives", robot, metric, _tip(robot, tip), label=base), sign
 
 
 def objective(

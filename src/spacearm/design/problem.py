@@ -19,6 +19,13 @@ reference_point: [0.0, 0.0, -1.0]
 average: {samples: 2048, randomizations: 8, seed: 0}   # one fixed QMC rule for every design
 ```
 
+On a robot with several arms (a tree) the variables are its fields
+(``arms.right.mount.xyz[0]``, ``links.left/forearm_link.length``;
+`spacearm.models.tree.fields`) and a per-tip objective names its tip, as
+``{name: w_avg, tip: left/tool0}`` or ``w_avg[left/tool0]`` (the name it then carries in
+``pareto.csv``); ``low_disturbance`` and ``low_total_mass`` are of the whole system
+(see ``sweeps/pareto-dual-ur5.yaml``).
+
 Joint-box averages use one fixed randomized-QMC rule (`joint_averages` with
 ``min_samples = max_samples``): the same points for every design, so each objective is a
 smooth, deterministic function of the design with an exact gradient for that rule, and
@@ -48,7 +55,14 @@ from ..analysis.manipulability_average import average_manipulability as planar_a
 from ..models import load_robot
 from ..models.family import family_of
 from ..models.planar import PlanarRobot, fields as planar_fields
-from .objectives import AVERAGE_OBJECTIVES, objective, objectives_for
+from .objectives import (
+    AVERAGE_OBJECTIVES,
+    average_objective,
+    objective,
+    objective_name,
+    objectives_for,
+    split_objective,
+)
 
 __all__ = [
     "WBAR_OPTIONS",
@@ -238,11 +252,10 @@ def _evaluate(program: _Program, base, x: jax.Array, seed) -> jax.Array:
     """``(m,)`` objectives of one ``(d,)`` variable vector set on ``base``."""
     robot = _design(base, program.fields, x)
     values: list[Any] = [None] * len(program.objectives)
-    averaged = [
-        (i, *AVERAGE_OBJECTIVES[name]) for i, name in enumerate(program.objectives) if name in AVERAGE_OBJECTIVES
-    ]
+    kinds = [average_objective(name, robot) for name in program.objectives]  # per tip: manipulability[1]
+    averaged = [(i, *kind) for i, kind in enumerate(kinds) if kind is not None]
     for i, name in enumerate(program.objectives):
-        if name not in AVERAGE_OBJECTIVES:
+        if kinds[i] is None:
             values[i] = objective(
                 name, wbar_options=dict(program.wbar_options), clamp_guaranteed=program.clamp_guaranteed
             )(robot)
@@ -413,7 +426,7 @@ def problem_from_mapping(
         lower, upper = number(f"{where}[0]", bounds[0]), number(f"{where}[1]", bounds[1])
         if not lower < upper:
             raise ConfigError(f"{where}: the lower bound must be below the upper bound, got [{lower}, {upper}]")
-        if (field in _POSITIVE or field.endswith(".length")) and lower <= 0:
+        if (field in _POSITIVE or field in fields.FACTOR_FIELDS or field.endswith(".length")) and lower <= 0:
             raise ConfigError(f"{where}: must stay positive, got lower bound {lower}")
         variables.append(Variable(str(key), lower, upper, field))
     for i, first in enumerate(variables):
@@ -444,15 +457,19 @@ def problem_from_mapping(
 
     # Objectives of the family, their options.
     allowed = objectives_for(family.name)
-    raw_objectives = config.get(
-        "objectives", list(allowed[:2]) if family.name == "planar" else ["w_avg", "low_disturbance"]
-    )
+    tips = family.tip_count(base)
+    default = ["w_avg", "low_disturbance"]
+    if tips is not None and tips > 1:  # several arms: each tip's w_avg, and the system's disturbance
+        default = [{"name": "w_avg", "tip": t} for t in range(tips)] + ["low_disturbance"]
+    raw_objectives = config.get("objectives", list(allowed[:2]) if family.name == "planar" else default)
     if not isinstance(raw_objectives, (list, tuple)):
         raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
-    objectives = tuple(choice(f"{source}: objectives[{i}]", v, allowed) for i, v in enumerate(raw_objectives))
+    objectives = tuple(
+        _objective_entry(f"{source}: objectives[{i}]", v, allowed, base) for i, v in enumerate(raw_objectives)
+    )
     if len(objectives) < 2 or len(set(objectives)) != len(objectives):
         raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
-    averaged = any(name in AVERAGE_OBJECTIVES for name in objectives)
+    averaged = any(split_objective(name)[0] in AVERAGE_OBJECTIVES for name in objectives)
     # Optional where an objective has no natural zero: absent, the search takes it below
     # the nadir of its first population (and writes it to the summary).
     reference = config.get("reference_point", None if averaged else [0.0] * len(objectives))
@@ -514,6 +531,23 @@ def problem_from_mapping(
         nsga2=nsga2,
         description=description,
     )
+
+
+def _objective_entry(where: str, entry: Any, allowed: Sequence[str], base) -> str:
+    """An entry of ``objectives``: a name (``w_avg``, or ``w_avg[left/tool0]`` for one tip of a
+    robot with several) or a mapping ``{name: w_avg, tip: left/tool0}`` (a tip's name or
+    index); the objective's canonical name (`objective_name`)."""
+    tip = None
+    if isinstance(entry, Mapping):
+        check_keys(f"{where}: ", entry, {"name", "tip"})
+        if "name" not in entry:
+            raise ConfigError(f"{where}.name: missing required key (an objective name: {', '.join(allowed)})")
+        entry, tip = entry["name"], entry.get("tip")
+        if tip is not None and (isinstance(tip, bool) or not isinstance(tip, (str, int))):
+            raise ConfigError(f"{where}.tip: a tip's name or index, got {tip!r}")
+    name = split_objective(entry)[0] if isinstance(entry, str) else entry
+    choice(where, name, allowed)
+    return objective_name(where, base, entry, tip)
 
 
 def parse_search(source: str, search_map: Any) -> SearchSettings:

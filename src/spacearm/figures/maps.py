@@ -20,8 +20,8 @@ from ..models.planar.closed_forms import (
     manipulability,
     manipulability_ellipse,
     robot_frame_tip_position,
-    tip_coefficients,
 )
+from ..studies.table2_readings import Derivation, derivation_coefficients
 from . import figure
 
 ELLIPSE_SCALE = 0.2  # drawn semi-axis per unit singular value of J*, m / (m/rad)
@@ -38,6 +38,12 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
+def _reach(robot) -> float:
+    """L = the sum of the arm link lengths, on the host (``robot.reach`` of a concrete
+    design would compile an eager program that the compile cache never keeps)."""
+    return float(np.sum(np.asarray(robot.link_length)))
+
+
 def _table1(ratio: float = 1.0):
     robot = umetani1990()
     return robot.replace(base_attach=np.float64(1.4 * ratio))
@@ -47,7 +53,7 @@ def contour_map(ax, robot, *, ground: bool = False, n_cells: int = 241, elbow: s
     """Contours of w*/L^2 x 40 (eq. 11) over the reachable disk, robot frame."""
     x, y, w = workspace_map(robot, n_cells, elbow=elbow, ground=ground)
     x, y, w = np.asarray(x), np.asarray(y), np.asarray(w) * 40.0
-    reach = float(robot.reach)
+    reach = _reach(robot)
     filled = ax.contourf(x, y, w, levels=np.arange(0, 11), cmap="viridis", extend="max")
     lines = ax.contour(x, y, w, levels=CONTOUR_LEVELS_X40, colors="k", linewidths=0.6)
     ax.clabel(lines, fmt="%d", fontsize=7)
@@ -101,7 +107,7 @@ def fig6(out_dir: Path) -> list[Path]:
     plt = _plt()
     robot = _table1()
     fig, ax = plt.subplots(figsize=(6, 6))
-    reach = float(robot.reach)
+    reach = _reach(robot)
     axis = np.arange(-3.5, 3.51, 1.0)
     gx, gy = np.meshgrid(axis, axis)
     points = np.stack([gx.ravel(), gy.ravel()], -1)
@@ -155,7 +161,7 @@ def fig8(out_dir: Path) -> list[Path]:
         _draw_base(ax, robot)
         _draw_arm(ax, robot, phi_arm)
         _ellipse(ax, robot, phi_arm, scale=0.6)
-        w = float(manipulability(robot, np.concatenate([[0.0], phi_arm]))) / float(robot.reach) ** 2
+        w = float(manipulability(robot, np.concatenate([[0.0], phi_arm]))) / _reach(robot) ** 2
         deg = np.degrees(phi_arm)
         ax.set_title(
             f"{label}\nphi1 = {deg[0]:.1f} deg, phi2 = {deg[1]:.1f} deg, w*/L^2 x 40 = {40 * w:.2f}", fontsize=9
@@ -179,8 +185,8 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
     filled = None
     for column, (robot, label) in enumerate(zip(robots, labels, strict=False)):
         ax = axes[0, column]
-        K = np.asarray(tip_coefficients(robot))
-        arm, reach = K[1:].sum(), float(robot.reach)
+        K = derivation_coefficients(Derivation(), robot).tip  # eq. 1 as printed, in NumPy on the host
+        arm, reach = K[1:].sum(), _reach(robot)
         circles = [
             ((0, 0), K[0] + arm, "C0", "Maximum Reachable (S_M)"),
             ((K[0], 0), arm, "C2", "Attitude Constraint"),

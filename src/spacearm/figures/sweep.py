@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Mapping
 from pathlib import Path
@@ -48,8 +49,18 @@ COLUMN_LABELS: dict[str, str] = {
 
 
 def column_label(column: str) -> str:
-    """A table column in words with its unit (the column name itself when it has no entry)."""
+    """A table column in words with its unit (the column name itself when it has no entry);
+    a per-tip column (``w_avg_m3[left/tool0]``) names its tip."""
+    match = re.fullmatch(r"(\w+)\[(.+)\]", column)
+    if match and match.group(1) in COLUMN_LABELS:
+        return f"{COLUMN_LABELS[match.group(1)]}, tip {match.group(2)}"
     return COLUMN_LABELS.get(column, column)
+
+
+def _file_part(column: str) -> str:
+    """A column as part of a file name: letters, digits, ``_`` and ``.`` (a tip's ``left/tool0``
+    becomes ``left_tool0``)."""
+    return re.sub(r"[^A-Za-z0-9_.]+", "_", column).strip("_")
 
 
 def write_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray]) -> list[Path]:
@@ -120,7 +131,7 @@ def sweep_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray
             if column in errors:
                 title += f"\nstandard error ≤ {np.max(errors[column]):.2g} (the colour range spans {np.ptp(grid):.2g})"
             ax.set_title(title, fontsize=9)
-            paths.append(save_figure(fig, out_dir / f"heatmap_{column}.png", dpi=130))
+            paths.append(save_figure(fig, out_dir / f"heatmap_{_file_part(column)}.png", dpi=130))
             plt.close(fig)
     elif len(spec.axes) == 1 or spec.combine == "zip":
         axis = spec.axes[0]

@@ -2,7 +2,7 @@
 applied, and every sweep point as one batched robot (planar or spatial).
 
 The fields live with each family (`RobotFamily.fields`: `spacearm.models.planar.fields`,
-`spacearm.models.spatial.fields`), shared with the design problems; this module asks
+`spacearm.models.spatial.fields`, `spacearm.models.tree.fields`), shared with the design problems; this module asks
 the base robot's family.
 """
 
@@ -19,6 +19,7 @@ from .._core.errors import ConfigError
 from ..models.family import family_of
 from ..models.planar import PlanarRobot, fields as planar_fields
 from ..models.spatial import SpatialRobot, fields as spatial_fields
+from ..models.tree import fields as tree_fields
 
 __all__ = [
     "DERIVED_FIELDS",
@@ -59,6 +60,7 @@ class SweepSpec(Protocol):
 
 
 SPATIAL_FIELD_HELP = spatial_fields.FIELD_HELP
+_FIELDS_BY_FAMILY = {"planar": planar_fields, "spatial": spatial_fields, "tree": tree_fields}
 FIELD_HELP = planar_fields.FIELD_HELP
 SIMPLE_FIELDS = {
     "base.mass": ("base_mass", "kg"),
@@ -141,6 +143,6 @@ def axis_unit(axis: Axis) -> str:
     ("1" for a ratio, "factor" for a factor field)."""
     if axis.relative:
         return "relative"
-    fields = spatial_fields if axis.family == "spatial" else planar_fields
+    fields = _FIELDS_BY_FAMILY.get(axis.family, planar_fields)
     unit = fields.field_unit(axis.field)
     return "factor" if axis.field in fields.FACTOR_FIELDS else unit

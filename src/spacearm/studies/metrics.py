@@ -6,6 +6,7 @@ what a run would).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -22,14 +23,23 @@ from ..analysis import (
     normalized_workspace_areas,
     straight_path_workspace,
 )
-from ..analysis.averages import joint_average, joint_averages
+from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
 from ..analysis.joint_box import check_joint_box
 from ..analysis.spatial_workspaces import reachable_radii, singular_radius
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
 
-__all__ = ["METRICS", "WBAR_OPTIONS", "Metric", "MetricSpec", "design_function", "metric_columns", "metric_specs"]
+__all__ = [
+    "METRICS",
+    "WBAR_OPTIONS",
+    "Metric",
+    "MetricSpec",
+    "design_function",
+    "metric_columns",
+    "metric_specs",
+    "resolve_tips",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -140,13 +150,28 @@ def _straight_area(robot, options):
 
 
 def _check_posture(where: str, options: dict) -> None:
-    check_keys(f"{where}: ", options, {"q_deg"})
+    check_keys(f"{where}: ", options, {"q_deg", "tip"})
+    tip = options.get("tip")
+    if tip is not None and (isinstance(tip, bool) or not isinstance(tip, (str, int))):
+        raise ConfigError(f"{where}.tip: a tip's name or index, got {tip!r}")
     q = options.get("q_deg")
     if q is not None and (not isinstance(q, (list, tuple)) or not all(is_number(v) for v in q)):
         raise ConfigError(f"{where}.q_deg: must be a list of joint positions in degrees, one per joint")
 
 
+def _posture_tip(options: dict, robot, where: str = "metrics") -> int | None:
+    """The tip index the ``posture`` metric reads on a robot with several tips (None: one tip)."""
+    return split_metric(tip_metric(where, robot, "manipulability", options.get("tip"), label="posture"))[1]
+
+
+def _posture_columns(options: dict) -> list[str]:
+    """w*, 1/kappa (of the chosen tip, named in the column on a robot with several) and ||C_w||_F."""
+    tip = f"[{options['tip']}]" if options.get("tip") is not None else ""
+    return [f"w_star_m3{tip}", f"inverse_condition{tip}", "C_w_fro"]
+
+
 def _check_posture_robot(where: str, options: dict, robot) -> None:
+    _posture_tip(options, robot, where)
     q = options.get("q_deg")
     if q is not None and len(q) != robot.n_joints:
         raise ConfigError(f"{where}.q_deg: needs {robot.n_joints} joint positions (one per joint), got {len(q)}")
@@ -159,12 +184,17 @@ def _posture(robot, options):
     q_deg = jnp.asarray(options.get("q_deg", [30.0] * n), dtype=robot.base_mass.dtype)
     prismatic = jnp.asarray([kind == "prismatic" for kind in robot.joint_kinds])
     q = jnp.where(prismatic, q_deg, jnp.radians(q_deg))
-    singular = jnp.linalg.svd(generalized_jacobian(robot, q)[:3], compute_uv=False)
+    J, w = generalized_jacobian(robot, q), manipulability(robot, q)
+    tip = _posture_tip(options, robot)
+    if tip is not None:  # several tips: the chosen tip's rows of J* over every joint
+        J, w = J[tip], w[tip]
+    singular = jnp.linalg.svd(J[:3], compute_uv=False)
     largest = singular[0]
+    w_star, inverse_condition, disturbance = _posture_columns(options)
     return {
-        "w_star_m3": manipulability(robot, q),
-        "inverse_condition": jnp.where(largest > 0, singular[-1] / jnp.where(largest > 0, largest, 1.0), 0.0),
-        "C_w_fro": jnp.linalg.norm(base_rate_matrix(robot, q)[3:]),
+        w_star: w,
+        inverse_condition: jnp.where(largest > 0, singular[-1] / jnp.where(largest > 0, largest, 1.0), 0.0),
+        disturbance: jnp.linalg.norm(base_rate_matrix(robot, q)[3:]),
     }
 
 
@@ -175,7 +205,10 @@ SWEEP_RTOL = 1e-3
 
 
 def _check_average(where: str, options: dict) -> None:
-    check_keys(f"{where}: ", options, AVERAGE_OPTIONS)
+    check_keys(f"{where}: ", options, (*AVERAGE_OPTIONS, "tip"))
+    tip = options.get("tip")
+    if tip is not None and (isinstance(tip, bool) or not isinstance(tip, (str, int))):
+        raise ConfigError(f"{where}.tip: a tip's name or index, got {tip!r}")
     rtol = options.get("rtol", SWEEP_RTOL)
     if not is_number(rtol) or not rtol > 0:
         raise ConfigError(f"{where}.rtol: must be a positive number (the relative standard error), got {rtol!r}")
@@ -197,14 +230,57 @@ def _check_average_robot(where: str, options: dict, robot) -> None:
         raise ConfigError(f"{where}: {error}") from None
 
 
-def _joint_average(kind: str, column: str):
+def _average_kind(name: str, options: dict, robot, where: str = "metrics") -> str:
+    """The `joint_averages` metric of sweep metric ``name`` on ``robot``: a per-tip metric
+    of a robot with several tips carries its tip's index (``manipulability[1]``)."""
+    return tip_metric(where, robot, _AVERAGES[name][0], options.get("tip"), label=name)
+
+
+def _average_columns(name: str, options: dict) -> list[str]:
+    """The value and error columns of a joint-box average; a per-tip one names its tip
+    (``w_avg_m3[left/tool0]``, ``w_avg_m3[left/tool0]_error``)."""
+    column = _AVERAGES[name][1]
+    if options.get("tip") is not None:
+        column = f"{column}[{options['tip']}]"
+    return [column, f"{column}_error"]
+
+
+def _joint_average(name: str):
     """A joint-box average as sweep columns: the value and its standard error (same unit)."""
 
     def evaluate(robot, options):
-        average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **options}, designs_per_chunk=1)
-        return {column: average.value, f"{column}_error": average.error}
+        settings = {key: value for key, value in options.items() if key != "tip"}
+        kind = _average_kind(name, options, robot)
+        average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **settings}, designs_per_chunk=1)
+        column, error = _average_columns(name, options)
+        return {column: average.value, error: average.error}
 
     return evaluate
+
+
+def resolve_tips(where: str, metrics: Sequence[MetricSpec], robot) -> tuple[MetricSpec, ...]:
+    """The metrics with every ``tip`` option checked against the robot and written as the
+    tip's name (an index becomes the name; the table columns carry it).
+
+    Raises:
+        ConfigError: naming ``where``, the metric and its tip (`tip_metric`).
+    """
+    resolved = []
+    for i, metric in enumerate(metrics):
+        if metric.name in _AVERAGES or metric.name == "posture":
+            if metric.name == "posture":
+                tip = _posture_tip(metric.options, robot, where=f"{where}[{i}]")
+            else:
+                _, tip = split_metric(_average_kind(metric.name, metric.options, robot, where=f"{where}[{i}]"))
+            if metric.options.get("tip") is not None:
+                names = tuple(robot.labels.tip_names)
+                metric = MetricSpec(metric.name, {**metric.options, "tip": names[tip] if names else tip})
+        resolved.append(metric)
+    keys = [(m.name, m.options.get("tip")) for m in resolved]
+    for i, key in enumerate(keys):
+        if key in keys[:i]:
+            raise ConfigError(f"{where}[{i}]: {key[0]} is listed twice" + (f" for tip {key[1]}" if key[1] else ""))
+    return tuple(resolved)
 
 
 _REACH_OPTIONS = {"starts": 1, "steps": 1, "seed": 0}
@@ -276,12 +352,12 @@ METRICS: dict[str, Metric] = {
     ),
     "posture": Metric(
         _posture,
-        lambda o: ["w_star_m3", "inverse_condition", "C_w_fro"],
+        _posture_columns,
         check=_check_posture,
         check_robot=_check_posture_robot,
-        families=("spatial",),
+        families=("spatial", "tree"),
         description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
-        "1/kappa(J*_v), ||C_w||_F (bus rad/s per joint rad/s)",
+        "1/kappa(J*_v) (of one tip: option tip on a robot with several), ||C_w||_F (bus rad/s per joint rad/s)",
     ),
 }
 METRICS["reach_radii"] = Metric(
@@ -306,14 +382,17 @@ METRICS["path_independent_radius"] = Metric(
     "newton_steps, seed",
 )
 for _name, (_kind, _column, _text) in _AVERAGES.items():
+    _per_tip = _kind in PER_TIP_METRICS
     METRICS[_name] = Metric(
-        _joint_average(_kind, _column),
-        (lambda c: lambda o: [c, f"{c}_error"])(_column),
+        _joint_average(_name),
+        functools.partial(_average_columns, _name),
         check=_check_average,
         check_robot=_check_average_robot,
-        families=("spatial",),
+        families=("spatial", "tree"),
         designs_per_step=8,
-        description=_text + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})",
+        description=_text
+        + (" (of one tip: option tip, a name or an index, on a robot with several)" if _per_tip else "")
+        + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})",
     )
 
 
@@ -336,23 +415,24 @@ def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], di
     groups: dict[str, list[MetricSpec]] = {}
     for metric in metrics:
         if metric.name in _AVERAGES:
-            groups.setdefault(json.dumps(metric.options, sort_keys=True), []).append(metric)
+            settings = {key: value for key, value in metric.options.items() if key != "tip"}
+            groups.setdefault(json.dumps(settings, sort_keys=True), []).append(metric)
 
     def evaluate(robot: PlanarRobot) -> dict:
         values: dict = {}
         done: set = set()
         for group in groups.values():
-            options = {"rtol": SWEEP_RTOL, **group[0].options}
-            kinds = tuple(_AVERAGES[m.name][0] for m in group)
+            options = {"rtol": SWEEP_RTOL, **{k: v for k, v in group[0].options.items() if k != "tip"}}
+            kinds = tuple(_average_kind(m.name, m.options, robot) for m in group)  # several tips: one pass
             averages = joint_averages(robot, kinds, **options, designs_per_chunk=1)
             for metric, kind in zip(group, kinds, strict=False):
-                column = _AVERAGES[metric.name][1]
-                values.update({column: averages[kind].value, f"{column}_error": averages[kind].error})
+                column, error = _average_columns(metric.name, metric.options)
+                values.update({column: averages[kind].value, error: averages[kind].error})
         for metric in metrics:
             entry = METRICS[metric.name]
-            if metric.name in _AVERAGES or entry.fn in done:
+            if metric.name in _AVERAGES or (entry.fn, str(metric.options.get("tip"))) in done:
                 continue
-            done.add(entry.fn)
+            done.add((entry.fn, str(metric.options.get("tip"))))
             values.update(entry.fn(robot, metric.options))
         return {column: values[column] for column in wanted}
 
@@ -378,7 +458,7 @@ def metric_specs(where: str, entries: Any) -> tuple[MetricSpec, ...]:
             )
         METRICS[name].check(f"{where}[{i}]", options)
         specs.append(MetricSpec(name, dict(options)))
-    names = [s.name for s in specs]
+    names = [(s.name, str(s.options.get("tip"))) for s in specs]
     if len(set(names)) != len(names):
-        raise ConfigError(f"{where}: a metric is listed twice")
+        raise ConfigError(f"{where}: a metric is listed twice (a per-tip metric may appear once per tip)")
     return tuple(specs)

@@ -120,7 +120,16 @@ def _evaluator(metrics_key: str, per_step: int, mesh):
     """The jitted chunk program of a sweep's metrics, built once per process for each
     metric list, step size and device mesh (a second sweep of the same shape reuses it)."""
     metrics = tuple(MetricSpec(name, options) for name, options in json.loads(metrics_key))
-    step = jax.vmap(functools.partial(jax.lax.map, design_function(metrics), batch_size=per_step))
+    walk = functools.partial(jax.lax.map, design_function(metrics), batch_size=per_step)
+
+    def step(batch):
+        # Each device holds one row of designs (`_take`): walk it without a vmap of size 1,
+        # which would batch every traced step of the metrics once more (tracing time,
+        # paid again by every process even when the compiled program comes from the cache).
+        if jax.tree_util.tree_leaves(batch)[0].shape[0] == 1:
+            return jax.tree_util.tree_map(lambda v: v[None], walk(jax.tree_util.tree_map(lambda x: x[0], batch)))
+        return jax.vmap(walk)(batch)
+
     # shard_map: each device runs its own rows with no collective inside. Under plain
     # sharded jit a data-dependent loop (the joint-box averages' while_loop, vmapped)
     # needs the loop predicate reduced across devices every iteration, and that

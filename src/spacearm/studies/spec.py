@@ -43,7 +43,7 @@ from ..models.family import family_of
 from ..models.planar import PlanarRobot, robot_to_mapping
 from ..models.spatial import SpatialRobot
 from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field
-from .metrics import METRICS, MetricSpec, metric_specs
+from .metrics import METRICS, MetricSpec, metric_specs, resolve_tips
 from .table2 import REPORT_CHECKS, REPORTS
 
 __all__ = ["Axis", "MetricSpec", "SweepSpec", "apply_overrides", "axis_points", "load_sweep"]
@@ -93,7 +93,9 @@ class SweepSpec:
 
     def summary(self) -> str:
         axes = ", ".join(f"{a.name} ({len(a.values)})" for a in self.axes)
-        names = ", ".join(m.name for m in self.metrics)
+        names = ", ".join(
+            m.name + (f"[{m.options['tip']}]" if m.options.get("tip") is not None else "") for m in self.metrics
+        )
         count = f"{self.n_designs} design" + ("s" if self.n_designs != 1 else "")
         return f"{self.name}: {count} over {axes} [{self.combine}]; metrics {names}"
 
@@ -275,6 +277,17 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     if report is not None and report not in REPORTS:
         raise ConfigError(f"{where}: report: unknown report {report!r}; known: {', '.join(sorted(REPORTS))}")
 
+    for i, metric in enumerate(metrics):
+        entry = METRICS[metric.name]
+        if family not in entry.families:
+            others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
+            raise ConfigError(
+                f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
+                f"robots; the robot is {family}; its metrics: {others}"
+            )
+        entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
+    metrics = resolve_tips(f"{where}: metrics", metrics, robot)  # a tip index becomes the tip's name
+
     resolved = {
         "name": name,
         "description": config.get("description", ""),
@@ -301,15 +314,6 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     )
     if report is not None:
         REPORT_CHECKS[report](spec)
-    for i, metric in enumerate(metrics):
-        entry = METRICS[metric.name]
-        if family not in entry.families:
-            others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
-            raise ConfigError(
-                f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
-                f"robots; the robot is {family}; its metrics: {others}"
-            )
-        entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
     build_designs(spec)  # validates every sweep point before anything is written
     return spec
 
@@ -327,18 +331,27 @@ _NORMAL_FORMS = {"planar": robot_to_mapping}
 
 
 def _spatial_mapping(path: Path, config: Mapping) -> dict:
-    """A spatial robot file's mapping for the resolved config, its URDF path made to work
+    """A spatial or tree robot file's mapping for the resolved config, its URDF paths made to work
     from the current folder (relative when below it), so the resolved config is itself a
     sweep file for a run from the same folder."""
     mapping = copy.deepcopy(dict(config))
-    arm = dict(mapping.get("arm", {}))
-    if isinstance(arm.get("urdf"), str) and not os.path.isabs(arm["urdf"]):
-        urdf = (Path(path).resolve().parent / arm["urdf"]).resolve()
+    folder = Path(path).resolve().parent
+
+    def moved(entry):
+        if not isinstance(entry, Mapping) or not isinstance(entry.get("urdf"), str) or os.path.isabs(entry["urdf"]):
+            return entry
+        urdf = (folder / entry["urdf"]).resolve()
         try:
-            arm["urdf"] = str(urdf.relative_to(Path.cwd().resolve()))
+            return {**entry, "urdf": str(urdf.relative_to(Path.cwd().resolve()))}
         except ValueError:
-            arm["urdf"] = str(urdf)
-    mapping["arm"] = arm
+            return {**entry, "urdf": str(urdf)}
+
+    # One arm (``arm:``), arms on a bus (``arms:``, a list) or one whole-system URDF (``system:``).
+    for key in ("arm", "system"):
+        if key in mapping:
+            mapping[key] = moved(mapping[key])
+    if isinstance(mapping.get("arms"), list):
+        mapping["arms"] = [moved(entry) for entry in mapping["arms"]]
     return mapping
 
 

@@ -323,8 +323,12 @@ GRID_CHUNK = 64  # (derivation, design) pairs per call of the compiled grid prog
 
 
 @jax.jit
-def _grid_statistics(coeffs: DesignCoefficients, link_rates, sign, reach, l1l2, b0):
-    """Every rule of AVERAGES for a batch of coefficient sets (leading axis), one grid."""
+def _grid_statistics(coeffs: DesignCoefficients, link_rates, sign, reach, l1l2, b0, count):
+    """Every rule of AVERAGES for a batch of coefficient sets (leading axis), one grid.
+
+    Only the first ``count`` (traced) rows are computed, one by one; the padding rows
+    after them come out as zeros, so a chunk that is mostly padding costs no more than
+    its real rows."""
     phi1 = -jnp.pi + 2 * jnp.pi * (jnp.arange(_GRID_PHI1) + 0.5) / _GRID_PHI1
     phi2 = jnp.pi * (jnp.arange(_GRID_PHI2) + 0.5) / _GRID_PHI2
     cos_theta, sin_theta = grid_angle_tables([phi1, phi2])
@@ -351,7 +355,16 @@ def _grid_statistics(coeffs: DesignCoefficients, link_rates, sign, reach, l1l2, 
             "(b0+L)^2": mean * L**2 / (b + L) ** 2,
         }
 
-    return jax.lax.map(single, (coeffs, link_rates, sign, reach, l1l2, b0))
+    args = (coeffs, link_rates, sign, reach, l1l2, b0)
+    first = jax.tree_util.tree_map(lambda x: x[0], args)
+    size = jax.tree_util.tree_leaves(args)[0].shape[0]
+    out = jax.tree_util.tree_map(lambda v: jnp.zeros((size, *v.shape), v.dtype), jax.eval_shape(single, first))
+
+    def row(i, out):
+        values = single(jax.tree_util.tree_map(lambda x: x[i], args))
+        return jax.tree_util.tree_map(lambda o, v: o.at[i].set(v), out, values)
+
+    return jax.lax.fori_loop(0, count, row, out)
 
 
 def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[str, np.ndarray]:
@@ -386,13 +399,17 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
         repeat(lengths[:, 0] * lengths[:, 1]),
         repeat(robots.base_attach),
     )
-    # Fixed chunks of GRID_CHUNK pairs, the last padded (lax.map runs the pairs one by one
-    # anyway): one compiled program for any number of pairs, instead of one per count.
+    # Fixed chunks of GRID_CHUNK pairs, the last padded but its padding not computed (the
+    # program runs the pairs one by one anyway): one compiled program for any number of
+    # pairs, instead of one per count.
     # Sliced in NumPy, so the chunks compile no slicing programs either.
     count = len(derivations) * designs
     args = pad_leading(jax.tree_util.tree_map(np.asarray, args), -(-count // GRID_CHUNK) * GRID_CHUNK)
     chunks = [
-        _grid_statistics(*jax.tree_util.tree_map(lambda x, start=start: x[start : start + GRID_CHUNK], args))
+        _grid_statistics(
+            *jax.tree_util.tree_map(lambda x, start=start: x[start : start + GRID_CHUNK], args),
+            np.int32(min(GRID_CHUNK, count - start)),
+        )
         for start in range(0, count, GRID_CHUNK)
     ]
     return {

@@ -243,23 +243,41 @@ def set_field(robot: SpatialRobot, field: str, value, relative: bool = False) ->
     else:
         name = _LINK.match(field).group(1)
         body = _body_names(robot).index(name)
-        old = robot.root_mass if body == 0 else robot.link_mass[..., body - 1]
-        new = old * value if relative else value
-        # The inertia follows the mass (same shape, same radius of gyration); a body
-        # of zero mass has no radius of gyration and keeps its inertia as written.
-        ratio = xp.where(old > 0, new / xp.where(old > 0, old, 1.0), 1.0)
         if body == 0:
+            new = robot.root_mass * value if relative else value
+            ratio = mass_ratio(xp, robot.root_mass, new)
             changes.update(root_mass=new, root_inertia=robot.root_inertia * _column(ratio, 2))
         else:
-            inertia = robot.link_inertia
-            scaled = inertia[..., body - 1, :, :] * _column(ratio, 2)
-            changes.update(
-                link_mass=_replace_entry(xp, robot.link_mass, body - 1, new),
-                link_inertia=xp.stack(
-                    [scaled if k == body - 1 else inertia[..., k, :, :] for k in range(robot.n_joints)], axis=-3
-                ),
-            )
+            changes.update(link_mass_changes(xp, robot, body - 1, value, relative))
     return _rebuild(robot, changes)
+
+
+def mass_ratio(xp, old, new):
+    """``new / old`` where ``old > 0``, else 1: the factor a body's inertia takes with its mass
+    (same shape, same radius of gyration; a body of zero mass keeps its inertia as written)."""
+    return xp.where(old > 0, new / xp.where(old > 0, old, 1.0), 1.0)
+
+
+def link_mass_changes(xp, robot, link: int, value, relative: bool) -> dict:
+    """The leaves ``links.<name>.mass = value`` changes for moving body ``link`` (0..n-1) of any
+    robot with ``link_mass (..., n)`` and ``link_inertia (..., n, 3, 3)`` leaves: its mass,
+    and its inertia times the mass ratio (`mass_ratio`)."""
+    old = robot.link_mass[..., link]
+    new = old * value if relative else value
+    inertia = robot.link_inertia
+    scaled = inertia[..., link, :, :] * _column(mass_ratio(xp, old, new), 2)
+    count = inertia.shape[-3]
+    return {
+        "link_mass": _replace_entry(xp, robot.link_mass, link, new),
+        "link_inertia": xp.stack([scaled if k == link else inertia[..., k, :, :] for k in range(count)], axis=-3),
+    }
+
+
+def scale_rows(xp, leaf, rows, factor, trailing: int):
+    """``leaf (..., m, *t)`` with the rows picked by the static booleans ``rows (m,)`` times
+    ``factor`` (batch shape), the others as they are; ``trailing`` = len(t)."""
+    mask = np.asarray(rows, dtype=bool).reshape((-1,) + (1,) * trailing)
+    return leaf * xp.where(mask, _column(factor, 1 + trailing), 1.0)
 
 
 def _body_length(xp, robot: SpatialRobot, body: int, s) -> dict:

@@ -25,6 +25,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+import spacearm.models.tree.fields as tree_fields  # the module, not the package (no cycle)
+
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
@@ -149,7 +151,7 @@ class TreeFamily(RobotFamily):
         "fixed_base_manipulability": _fixed_base_manipulability,
         "posture_quantities": _posture_quantities,
     }
-    fields = None  # design fields for trees are not defined yet
+    fields = tree_fields
     attitude = SO3
     straight_field_loops = True
     straight_defaults: ClassVar[Mapping[str, Any]] = {
