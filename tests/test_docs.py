@@ -9,12 +9,15 @@ checks are fast.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import io
 import os
 import re
 import subprocess
 import sys
 from html.parser import HTMLParser
+from importlib import metadata
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
@@ -237,3 +240,70 @@ def test_the_spatial_tutorial_shows_the_files_it_ships():
             shipped.pop("robot") == "../configs/baxter-smallsat.yaml" and block.pop("robot") == "baxter-smallsat.yaml"
         )
         assert block == shipped, name
+
+
+def test_the_two_arm_tutorial_shows_the_file_it_ships():
+    yaml = pytest.importorskip("yaml")
+    [robot] = [yaml.safe_load(block) for block in _yaml_blocks(ROOT / "docs" / "tutorials" / "two-arms.md")]
+    assert robot == yaml.safe_load((ROOT / "configs" / "dual-ur5-servicer.yaml").read_text())
+
+
+# Pages whose numbers come from running them ----------------------------------------------------
+
+# Each ```python block of these pages runs, in order, in one namespace from the repository's
+# root; a ```text block right after a python block is what that block prints, character for
+# character. (Printed numbers are rounded so that they do not depend on the last bits.)
+EXECUTED_PAGES = ("tutorials/two-arms.md", "explanation/trees.md")
+
+_BLOCK = re.compile(r"```(python|text)\n(.*?)```", flags=re.S)
+
+
+def page_blocks(page: Path) -> list[tuple[str, str | None]]:
+    """``(code, printed or None)`` for every python block of ``page``, in order."""
+    blocks = [(m.group(1), m.group(2), m.start(), m.end()) for m in _BLOCK.finditer(page.read_text(encoding="utf-8"))]
+    out = []
+    for i, (kind, body, _, end) in enumerate(blocks):
+        if kind != "python":
+            continue
+        following = blocks[i + 1] if i + 1 < len(blocks) else None
+        adjacent = following is not None and following[0] == "text"
+        adjacent = adjacent and page.read_text(encoding="utf-8")[end : following[2]].strip() == ""
+        out.append((body, following[1] if adjacent else None))
+    return out
+
+
+def run_page(page: Path) -> list[tuple[str, str | None, str]]:
+    """Run a page's python blocks (from the repository root): ``(code, shown, printed)`` each."""
+    namespace: dict = {"__name__": "__docs__"}
+    results = []
+    cwd = os.getcwd()
+    os.chdir(ROOT)
+    try:
+        for code, shown in page_blocks(page):
+            buffer = io.StringIO()
+            with contextlib.redirect_stdout(buffer):
+                exec(compile(code, str(page), "exec"), namespace)
+            results.append((code, shown, buffer.getvalue()))
+    finally:
+        os.chdir(cwd)
+    return results
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", EXECUTED_PAGES)
+def test_pages_print_what_they_show(name):
+    """(~20 s each on a loaded 2-core machine: the dual UR5 kernels compile.) Every output block
+    of the page is what its code prints."""
+    try:
+        metadata.distribution("example-robot-data")
+    except metadata.PackageNotFoundError:
+        pytest.skip("the pages use the dual UR5 of example-robot-data (the test extra)")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    page = ROOT / "docs" / name
+    runs = run_page(page)
+    assert sum(shown is not None for _, shown, _ in runs) >= 3, "the page shows what its code prints"
+    for code, shown, printed in runs:
+        if shown is not None:
+            assert printed == shown, f"{name}: the block\n{code}\nprints\n{printed}\nbut the page shows\n{shown}"

@@ -246,8 +246,7 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
     tree = _tree_record(robot, arrays)
     _check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn})
     with _result_folder(out) as staging:
-        if not tree:
-            draw_spatial_reach(robot, plan, staging / "reach.png")
+        draw_spatial_reach(robot, plan, staging / "reach.png")  # one arm or several
         write_npz(staging / "reach.npz", **arrays)
         _write_replay(args, robot, staging)
     loop = f"by {plan.loops} pass(es) of a loop, then" if plan.loops else "along"
@@ -260,7 +259,7 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         + ", ".join(f"{v:.6f}" for v in np.where(prismatic, plan.end_joints, np.degrees(plan.end_joints)))
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m",
-        _figure_line(out, tree),
+        f"figure         {out / 'reach.png'}",
     ]
     if args.html:
         lines.append(f"replay         {out / 'reach.html'}")
@@ -278,12 +277,6 @@ def _tree_record(robot, arrays: dict) -> list[str]:
     if robot.moving is not None:
         lines.append(f"held joints    {int(np.sum(~robot.moving_mask))} of {robot.n_joints} (kept at --from)")
     return lines
-
-
-def _figure_line(out: Path, tree: list[str]) -> str:
-    if tree:
-        return f"history        {out / 'reach.npz'} (no figure for several arms yet)"
-    return f"figure         {out / 'reach.png'}"
 
 
 def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -333,8 +326,7 @@ def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
     tree = _tree_record(robot, arrays)
     _check_finite({**arrays, "tip error": plan.error, "tip axes error": plan.rotation_error})
     with _result_folder(out) as staging:
-        if not tree:
-            draw_spatial_reach(robot, plan, staging / "reach.png")
+        draw_spatial_reach(robot, plan, staging / "reach.png")  # one arm or several
         write_npz(staging / "reach.npz", **arrays)
         _write_replay(args, robot, staging)
     lines = tree + [
@@ -349,7 +341,7 @@ def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
         + " (deg; m for prismatic joints)",
         f"tip error      {plan.error:.3e} m, {plan.rotation_error:.3e} rad",
         f"sigma_min J*   {plan.min_singular:.6f} (smallest along the path)",
-        _figure_line(out, tree),
+        f"figure         {out / 'reach.png'}",
     ]
     if args.html:
         lines.append(f"replay         {out / 'reach.html'}")

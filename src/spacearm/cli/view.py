@@ -23,19 +23,22 @@ def register(subparsers) -> None:
         "view",
         help="the robot on its bus as an interactive offline HTML page (a slider per joint)",
         description=(
-            "Write ROBOT's interactive 3-D view: the arm drawn from its kinematic model on the bus "
+            "Write ROBOT's interactive 3-D view: the arm (or every arm, each in its colour) drawn from its kinematic model on the bus "
             "(the uniform box of its mass and inertia), about the system centroid, with a slider per joint "
             "(and the bus attitude) that re-poses it in the browser. One self-contained HTML file, no "
             "server and no network. Needs the 'view' extra: pip install -e \".[view]\"."
         ),
     )
-    parser.add_argument("robot", help="robot YAML file, e.g. configs/ur5-smallsat.yaml or configs/umetani1990.yaml")
+    parser.add_argument(
+        "robot",
+        help="robot YAML file, e.g. configs/ur5-smallsat.yaml, configs/dual-ur5-servicer.yaml or configs/umetani1990.yaml",
+    )
     parser.add_argument(
         "--posture",
         default=None,
         metavar="Q1,Q2,..",
-        help="first posture shown, DEGREES (radians with --radians; m for prismatic joints): spatial robots "
-        "the joints, planar robots the base attitude then the joints; default all zero "
+        help="first posture shown, DEGREES (radians with --radians; m for prismatic joints): spatial and tree "
+        "robots the joints (a tree's in its joint order, all arms), planar robots the base attitude then the joints; default all zero "
         "(write --posture=-10,20 when the first value is negative)",
     )
     parser.add_argument(
@@ -55,12 +58,13 @@ def run(args: argparse.Namespace) -> int:
     from ..models import load_robot
     from ..models.planar import PlanarRobot
     from ..models.spatial import SpatialRobot
+    from ..models.tree import TreeRobot
 
     plotly_bundle()  # the extra is checked before any work (MissingViewExtra: exit 2)
     robot = load_robot(args.robot)
-    if not isinstance(robot, (PlanarRobot, SpatialRobot)):
+    if not isinstance(robot, (PlanarRobot, SpatialRobot, TreeRobot)):
         raise ConfigError(
-            f"{args.robot}: spacearm view draws planar and single-arm spatial robots, not a {type(robot).__name__} yet"
+            f"{args.robot}: spacearm view draws planar, spatial and tree robots, not a {type(robot).__name__}"
         )
     planar = isinstance(robot, PlanarRobot)
     count = robot.n_links + 1 if planar else robot.n_joints

@@ -8,10 +8,16 @@ Registered figures (``spacearm figures``), all for the UR5 on its 500 kg smallsa
 - ``spatial-attitude``: the bus rotation vector log(R0^T R) and its angle along the loop.
 - ``spatial-straight``: a straight tip path to its dynamic singularity (or 0.6 m), the
   arm at the start and the end, the bus attitude along the path.
+- ``tree-arms``: several arms on one bus (configs/dual-ur5-servicer.yaml and
+  configs/three-arm-servicer.yaml), each arm in its own colour, the mount frames and the tips.
+
+One drawing helper serves one arm and many: `robot_drawing` gives the points of a
+spatial or tree robot in one posture (from the kernels' own passes), `draw_robot` draws them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 
@@ -21,13 +27,17 @@ import numpy as np
 
 from ..io import save_figure
 from ..models import load_robot
-from ..models.spatial import primitives
+from ..models.spatial import SpatialRobot, primitives
+from ..models.spatial.urdf import rpy_matrix
+from ..models.tree import TreeRobot, primitives as tree_primitives
 from ..motion.attitude import log, spatial_joint_path_history
 from ..motion.spatial_paths import spatial_straight_tip_path
 from ..planning.spatial_reach import PHASE_LOOP, PHASE_STRAIGHT
 from . import figure
+from .views.model import arm_names, bus_box, joint_owners
 
-CONFIG = Path(__file__).resolve().parents[3] / "configs" / "ur5-smallsat.yaml"
+CONFIGS = Path(__file__).resolve().parents[3] / "configs"
+CONFIG = CONFIGS / "ur5-smallsat.yaml"
 LOOP_START = np.array([0.3, -1.2, 1.6, -0.9, 1.2, 0.2])
 
 
@@ -65,10 +75,158 @@ def _bus_box(ax, centre, rotation, half, color, alpha):
         ax.plot(*points[[a, b]].T, color=color, lw=0.8, alpha=alpha)
 
 
+@dataclasses.dataclass(frozen=True)
+class RobotDrawing:
+    """A spatial or tree robot in one posture as drawn: inertial axes about the system centroid, m.
+
+    Attributes:
+        bus: ``(3,)`` bus centroid.
+        bus_corners: ``(8, 3)`` corners of the bus's equivalent uniform box (same mass and
+            principal moments; `spacearm.figures.views.model.bus_box`).
+        mounts: ``(r, 3)`` root (arm mount) origins.  mount_axes: ``(r, 3, 3)`` their axes as columns.
+        body_origins: ``(n, 3)`` body frame origins (joint origins, slid along prismatic axes;
+            for a single spatial arm, the joint origins).
+        segments: ``(s, 2, 3)`` links as segments joint to joint: parent body (or mount) to
+            joint origin, joint origin to body origin where a prismatic joint slid, and body to tip.
+        segment_arm: ``(s,)`` the arm (tip index) each segment belongs to, -1 when several share it.
+        tips: ``(k, 3)`` tip origins.
+        arm_names: ``k`` names, one per arm (the arm's name, else its tip's).
+    """
+
+    bus: np.ndarray
+    bus_corners: np.ndarray
+    mounts: np.ndarray
+    mount_axes: np.ndarray
+    body_origins: np.ndarray
+    segments: np.ndarray
+    segment_arm: np.ndarray
+    tips: np.ndarray
+    arm_names: tuple[str, ...]
+
+
+def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
+    """The points drawn of ``robot`` at joints ``q (n,)`` and bus attitude ``rotation`` (3, 3)
+    (identity by default), from the kernels' forward passes; see `RobotDrawing`."""
+    R = np.eye(3) if rotation is None else np.asarray(rotation, float)
+    q = np.asarray(q, float)
+    if isinstance(robot, TreeRobot):
+        axes, origins = (np.asarray(x, float) for x in tree_primitives.body_frames(robot, q))
+        tips = np.asarray(tree_primitives.tip_pose(robot, q)[1], float)
+        centroid = tips[0] - np.asarray(tree_primitives.tip(robot, q)[0], float)
+        mounts = np.asarray(robot.mount_xyz, float)
+        mount_axes = np.stack([rpy_matrix(np.asarray(rpy, float)) for rpy in robot.mount_rpy])
+        segments, arm = [], []
+        owner = joint_owners(robot)
+        for j, parent in enumerate(robot.parents):
+            if parent < 0:
+                start, start_axes = mounts[-1 - parent], mount_axes[-1 - parent]
+                offset = start_axes @ np.asarray(robot.joint_translation[j], float)
+            else:
+                start = origins[parent]
+                offset = axes[parent] @ np.asarray(robot.joint_translation[j], float)
+            joint = start + offset
+            segments.append((start, joint))
+            arm.append(owner[j])
+            if robot.joint_kinds[j] == "prismatic":
+                segments.append((joint, origins[j]))
+                arm.append(owner[j])
+        for t, body in enumerate(robot.tip_bodies):
+            segments.append((origins[body], tips[t]))
+            arm.append(t)
+        names = tuple(arm_names(robot))
+    elif isinstance(robot, SpatialRobot):
+        state = primitives._chain_pass(robot, jnp.asarray(q))  # one posture: (n,) batch-last
+        centroid = np.array([float(x) for x in state.centroid])
+        origins = np.stack([np.asarray(c, float) for c in state.origins], axis=-1)
+        tips = np.array([[float(x) for x in state.tip]])
+        mounts = np.asarray(robot.mount_xyz, float)[None]
+        mount_axes = rpy_matrix(np.asarray(robot.mount_rpy, float))[None]
+        chain = np.vstack([mounts, origins, tips])
+        segments = np.stack([chain[:-1], chain[1:]], axis=1)
+        arm = [0] * len(segments)
+        names = (robot.name,)
+    else:
+        raise TypeError(f"robot_drawing: a spatial or tree robot, got {type(robot).__name__}")
+    corners, _ = bus_box(robot)
+    place = lambda p: (np.asarray(p, float) - centroid) @ R.T  # bus frame to inertial, about the centroid
+    return RobotDrawing(
+        bus=place(np.asarray(robot.base_com, float)),
+        bus_corners=place(corners),
+        mounts=place(mounts),
+        mount_axes=R @ mount_axes,
+        body_origins=place(origins),
+        segments=place(np.asarray(segments, float)),
+        segment_arm=np.asarray(arm, int),
+        tips=place(tips),
+        arm_names=names,
+    )
+
+
+_EDGES = [(0, 1), (0, 2), (0, 4), (1, 3), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 6), (5, 7), (6, 7)]
+SHARED_COLOR = "0.35"  # joints that move several tips (a shared torso or turret)
+
+
+def draw_robot(
+    ax, robot, q, rotation=None, *, colors=None, alpha=1.0, label=None, bus_half=None, frames=True, frame_length=0.15
+) -> RobotDrawing:
+    """Draw a spatial or tree robot in one posture on 3-D axes; returns what was drawn.
+
+    The bus as a box (its equivalent uniform box from mass and inertia, or a cube of half
+    edge ``bus_half`` about its centroid), a line from the bus centroid to each mount, the
+    mount frames (x, y, z in red, green, blue, ``frame_length`` m), each arm's links as
+    segments joint to joint in the arm's colour (joints several arms share in grey), and
+    each tip as a marker.
+
+    Args:
+        ax: matplotlib 3-D axes.  q: ``(n,)`` joints, rad (m for prismatic joints).
+        rotation: ``(3, 3)`` bus attitude (identity by default).
+        colors: one colour for the whole robot, or one per arm; default matplotlib's cycle (C0, C1, ..).
+        label: a legend label (one colour), else each arm is labelled with its name.
+        bus_half: half edge of a cube drawn for the bus, m; default the equivalent box.
+        frames: draw the mount frames.
+    """
+    drawing = robot_drawing(robot, q, rotation)
+    k = len(drawing.arm_names)
+    single = isinstance(colors, str) or (
+        colors is not None and all(isinstance(c, (int, float, np.number)) for c in colors)  # one RGB(A) tuple
+    )
+    palette = [colors] * k if single else list(colors) if colors is not None else [f"C{t}" for t in range(k)]
+    box = drawing.bus_corners
+    if bus_half is not None:
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * bus_half
+        box = drawing.bus + corners @ np.asarray(np.eye(3) if rotation is None else rotation, float).T
+    bus_color = palette[0] if single else "0.4"
+    for a, b in _EDGES:
+        ax.plot(*box[[a, b]].T, color=bus_color, lw=0.8, alpha=0.6 * alpha)
+    for mount in drawing.mounts:
+        ax.plot(*np.vstack([drawing.bus, mount]).T, color=bus_color if single else SHARED_COLOR, lw=1.0, alpha=alpha)
+    if frames:
+        for mount, axes in zip(drawing.mounts, drawing.mount_axes, strict=True):
+            for c, color in enumerate(("tab:red", "tab:green", "tab:blue")):
+                ax.plot(*np.vstack([mount, mount + frame_length * axes[:, c]]).T, color=color, lw=1.2, alpha=alpha)
+    for t in range(-1, k):
+        pick = drawing.segment_arm == t
+        if not pick.any():
+            continue
+        color = palette[t] if t >= 0 else (palette[0] if single else SHARED_COLOR)
+        xyz = np.full((3 * int(pick.sum()), 3), np.nan)  # segments joined by NaN breaks: one line per arm
+        xyz[0::3], xyz[1::3] = drawing.segments[pick, 0], drawing.segments[pick, 1]
+        name = None if single else (drawing.arm_names[t] if t >= 0 else "shared joints")
+        ax.plot(*xyz.T, "-o", color=color, lw=1.8, ms=2.5, alpha=alpha, label=name)
+    for t in range(k):
+        ax.scatter(*drawing.tips[t], color=palette[t], marker="D", s=22, alpha=alpha, depthshade=False)
+    if single and label is not None:
+        ax.plot([], [], "-o", color=palette[0], lw=1.8, ms=2.5, alpha=alpha, label=label)
+    return drawing
+
+
+def drawn_points(drawing: RobotDrawing) -> np.ndarray:
+    """Every point of a `RobotDrawing`: bus box corners, mounts, segment ends and tips."""
+    return np.vstack([drawing.bus_corners, drawing.mounts, drawing.segments.reshape(-1, 3), drawing.tips])
+
+
 def _draw(ax, robot, q, R, color, alpha=1.0, label=None):
-    chain, bus = arm_points(robot, q, R)
-    _bus_box(ax, bus, R, BUS_HALF, color, 0.6 * alpha)
-    ax.plot(*np.vstack([bus, chain]).T, "-o", color=color, lw=1.6, ms=2.5, alpha=alpha, label=label)
+    draw_robot(ax, robot, q, R, colors=color, alpha=alpha, label=label, bus_half=BUS_HALF, frames=False)
 
 
 def _equal(ax, points):
@@ -200,9 +358,9 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
 
 
 def _drawn_points(robot, q, R) -> np.ndarray:
-    """Every point drawn for one posture: joint origins, tip and the bus cube's corners."""
-    chain, bus = arm_points(robot, q, R)
-    return np.vstack([chain, bus_corners(bus, R)])
+    """Every point drawn for one posture (spatial or tree robot): links, tips and the bus cube's corners."""
+    drawing = robot_drawing(robot, q, R)
+    return np.vstack([drawn_points(drawing), bus_corners(drawing.bus, R)])
 
 
 def draw_spatial_reach(robot, plan, path) -> Path:
@@ -240,3 +398,57 @@ def draw_spatial_reach(robot, plan, path) -> Path:
     written = save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
     plt.close(fig)
     return written
+
+
+# Several arms on one bus ------------------------------------------------------------------------
+
+# Postures of the tree figure: each UR5 reaching out from its face of the bus; the three-arm
+# servicer with the telescope and the boom half out.
+DUAL_UR5_POSTURE = np.array([0.4, -1.0, 1.4, -0.6, 1.2, 0.0, -0.4, -1.0, 1.4, -0.6, -1.2, 0.0])
+THREE_ARM_POSTURE = np.array([0.5, -0.6, 0.8, 0.3, 0.6, 0.15, -0.5, 0.3, 0.7, 1.0])
+
+
+def _tree_robot(name: str):
+    path = CONFIGS / f"{name}.yaml"
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: the tree figure uses the repository's configs/{name}.yaml")
+    return load_robot(os.fspath(path))
+
+
+def draw_tree_panel(ax, robot, q, title: str, view=(20.0, -35.0)) -> RobotDrawing:
+    """One robot on its bus in one panel: the arms in their colours, equal axes, a legend;
+    ``view`` is matplotlib's (elevation, azimuth) in degrees."""
+    drawing = draw_robot(ax, robot, q)
+    ax.view_init(*view)
+    _equal(ax, drawn_points(drawing))
+    ax.plot([], [], color="0.4", lw=0.8, label="bus (equivalent uniform box)")
+    ax.plot([], [], color="tab:red", lw=1.2, label="mount frames (x red, y green, z blue)")
+    ax.scatter([], [], color="0.3", marker="D", s=22, label="tips")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7, loc="upper left")
+    return drawing
+
+
+@figure("tree-arms")
+def fig_tree_arms(out_dir: Path) -> list[Path]:
+    """Two UR5 on a 400 kg servicer, and three arms on one servicer (a shared turret), each arm in its colour."""
+    fig = plt.figure(figsize=(12, 6))
+    dual = _tree_robot("dual-ur5-servicer")
+    draw_tree_panel(
+        fig.add_subplot(1, 2, 1, projection="3d"),
+        dual,
+        DUAL_UR5_POSTURE,
+        f"{dual.name}: {dual.n_joints} joints, {dual.n_tips} tips, {float(dual.base_mass):g} kg bus",
+        view=(15.0, 10.0),  # along the bus x axis: the arms on the +y and -y faces
+    )
+    three = _tree_robot("three-arm-servicer")
+    draw_tree_panel(
+        fig.add_subplot(1, 2, 2, projection="3d"),
+        three,
+        THREE_ARM_POSTURE,
+        f"{three.name}: {three.n_joints} joints, {three.n_tips} tips (a shared turret, grey)",
+    )
+    fig.suptitle("Several arms on one bus: inertial axes about the system centroid, bus attitude identity")
+    path = save_figure(fig, Path(out_dir) / "tree_arms.png", dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return [path]

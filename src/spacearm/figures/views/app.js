@@ -20,9 +20,54 @@
     var cr = Math.cos(r), sr = Math.sin(r), cp = Math.cos(p), sp = Math.sin(p), cy = Math.cos(y), sy = Math.sin(y);
     return [[cy*cp, cy*sp*sr - sy*cr, cy*sp*cr + sy*sr], [sy*cp, sy*sp*sr + cy*cr, sy*sp*cr - cy*sr], [-sp, cp*sr, cp*cr]];
   }
+  // One colour per arm (matplotlib's and Plotly's default cycle); joints several arms share in grey.
+  var ARM_COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+  var SHARED = "#595959";
+  function segmentLine(segments) {
+    var pts = []; segments.forEach(function (s) { pts.push(s[0], s[1], [null, null, null]); }); return cols(pts);
+  }
+  // A tree's traces: bus, bus centroid to each mount, mount frames (x, y, z), the shared joints,
+  // each arm's links, the tips. Their number depends on the model only, never on the pose.
+  function treeTraces(pose, model) {
+    var bus = cols(pose.corners), edges = edgeLine(pose.corners), k = model.tip_bodies.length, L = 0.15;
+    var toMounts = segmentLine(pose.mounts.map(function (m) { return [pose.bus, m]; }));
+    var traces = [
+      {type: "mesh3d", x: bus[0], y: bus[1], z: bus[2], i: FACES.map(function (f) { return f[0]; }),
+       j: FACES.map(function (f) { return f[1]; }), k: FACES.map(function (f) { return f[2]; }),
+       color: "#9aa7b8", opacity: 0.35, flatshading: true, name: "bus (equivalent box)", showlegend: true, hoverinfo: "name"},
+      {type: "scatter3d", mode: "lines", x: edges[0], y: edges[1], z: edges[2], line: {color: "#56657a", width: 3},
+       name: "bus edges", showlegend: false, hoverinfo: "skip"},
+      {type: "scatter3d", mode: "lines", x: toMounts[0], y: toMounts[1], z: toMounts[2], line: {color: "#56657a", width: 5},
+       name: "bus centroid to the mounts", hoverinfo: "name"}
+    ];
+    ["#d62728", "#2ca02c", "#1f77b4"].forEach(function (color, c) {
+      var axis = segmentLine(pose.mounts.map(function (m, r) {
+        var a = pose.mountAxes[r]; return [m, add3(m, [L * a[0][c], L * a[1][c], L * a[2][c]])];
+      }));
+      traces.push({type: "scatter3d", mode: "lines", x: axis[0], y: axis[1], z: axis[2], line: {color: color, width: 5},
+                   name: "mount " + "xyz"[c] + " axes", showlegend: c === 0, hoverinfo: "name"});
+    });
+    var groups = model.owner.indexOf(-1) >= 0 ? [-1] : [];
+    for (var t = 0; t < k; t++) groups.push(t);
+    groups.forEach(function (t) {
+      var mine = pose.segments.filter(function (s, i) { return pose.owner[i] === t; }), xyz = segmentLine(mine);
+      var color = t < 0 ? SHARED : ARM_COLORS[t % ARM_COLORS.length];
+      traces.push({type: "scatter3d", mode: "lines+markers", x: xyz[0], y: xyz[1], z: xyz[2],
+                   line: {color: color, width: 12}, marker: {size: 4, color: color},
+                   name: t < 0 ? "shared joints" : model.arm_names[t], hoverinfo: "name+x+y+z"});
+    });
+    var tips = cols(pose.tips);
+    traces.push({type: "scatter3d", mode: "markers", x: tips[0], y: tips[1], z: tips[2],
+                 marker: {size: 7, symbol: "diamond", color: pose.tips.map(function (p, t) { return ARM_COLORS[t % ARM_COLORS.length]; }),
+                          line: {color: "black", width: 1}},
+                 name: "tips", text: model.arm_names, hoverinfo: "text+x+y+z"});
+    return traces;
+  }
+  function add3(a, b) { return [a[0] + b[0], a[1] + b[1], a[2] + b[2]]; }
   // The traces that move with the pose, in this order.
   function poseTraces(pose, model) {
     model = model || M;
+    if (model.family === "tree") return treeTraces(pose, model);
     var bus = cols(pose.corners), edges = edgeLine(pose.corners), arm = cols(pose.joints);
     var root = cols([pose.bus, pose.mount, pose.joints[0]]), tip = pose.joints[pose.joints.length - 1];
     return [
@@ -110,6 +155,11 @@
   }
   function fmt(v) { return (v >= 0 ? " " : "") + v.toFixed(4); }
   function tipText(pose) {
+    if (pose.tips) {
+      return "tips about the system centroid, m" + pose.tips.map(function (t, i) {
+        return "\n" + M.arm_names[i] + "\n x " + fmt(t[0]) + "\n y " + fmt(t[1]) + "\n z " + fmt(t[2]);
+      }).join("");
+    }
     var t = pose.joints[pose.joints.length - 1];
     return "tip about the system centroid, m\n x " + fmt(t[0]) + "\n y " + fmt(t[1]) + (planar ? "" : "\n z " + fmt(t[2]));
   }
@@ -130,7 +180,9 @@
     var pose = function () { return spacearmPose(M, posture, planar ? null : rpy(attitude[0], attitude[1], attitude[2])); };
     var update = function () { var p = pose(); restyle(poseTraces(p), MOVING); readout.textContent = tipText(p); };
     var first = pose();
-    Plotly.newPlot(plot, poseTraces(first).concat(fixedTraces()), layout, CONFIG);
+    var moving = poseTraces(first);
+    MOVING = moving.map(function (t, i) { return i; });
+    Plotly.newPlot(plot, moving.concat(fixedTraces()), layout, CONFIG);
     readout.textContent = tipText(first);
     var offset = 0;
     if (planar) {
@@ -180,6 +232,8 @@
       extra.push({type: "scatter3d", mode: "markers", x: [g[0]], y: [g[1]], z: [g.length > 2 ? g[2] : 0],
         marker: {size: 6, color: "#2ca02c", symbol: "circle-open"}, name: "target", hoverinfo: "name+x+y+z"});
     }
+    var firstTraces = poseTraces(poseAt(0));
+    MOVING = firstTraces.map(function (t, i) { return i; });  // a tree has more traces than one arm
     var TRACE = MOVING.length + 2;
     var show = function (k) {
       frame = k; var p = poseAt(k), t = trace(k);
@@ -188,7 +242,7 @@
       readout.textContent = "frame " + (k + 1) + " of " + count + (F.phase ? " (" + F.phase[k] + ")" : "") +
         "\nbus turned " + turn(k).toFixed(3) + " deg from the start\n" + tipText(p);
     };
-    Plotly.newPlot(plot, poseTraces(poseAt(0)).concat(fixedTraces(), extra), layout, CONFIG);
+    Plotly.newPlot(plot, firstTraces.concat(fixedTraces(), extra), layout, CONFIG);
     var play = document.createElement("button"); play.textContent = "play"; controls.appendChild(play);
     var scrub = slider("frame", 0, count - 1, 1, 0, "", function (v) { stop(); show(v); });
     var stop = function () { if (timer) { clearInterval(timer); timer = null; play.textContent = "play"; } };

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ...models.planar import PlanarRobot
+from ...models.tree import TreeRobot
 from .model import chain_model, scene_extent
 from .page import write_page
 
@@ -21,10 +22,10 @@ def write_arm_view(robot, path: str | Path, posture=None, *, attitude_rpy=None) 
     """Write the interactive view of one robot.
 
     Args:
-        robot: a planar or spatial robot (one design).
+        robot: a planar, spatial or tree robot (one design).
         path: the HTML file to write.
         posture: the first posture shown: planar ``(n+1,)`` [phi0, phi1..phin], rad;
-            spatial ``(n,)`` joints, rad (m for prismatic joints); default zeros.
+            spatial and tree ``(n,)`` joints, rad (m for prismatic joints); default zeros.
         attitude_rpy: spatial robots: the first bus attitude as URDF roll, pitch, yaw, rad.
 
     Raises:
@@ -37,7 +38,13 @@ def write_arm_view(robot, path: str | Path, posture=None, *, attitude_rpy=None) 
         raise ValueError(f"posture: expected {count} values, got {posture.size}")
     planar = isinstance(robot, PlanarRobot)
     note = (
-        "Drag to turn, scroll to zoom. Links are drawn from the kinematic model (joint origins and the tip), "
+        "Drag to turn, scroll to zoom. Links are drawn from the kinematic model (joint origins and the tip"
+        + (
+            "s, each arm in its colour, the mount frames x, y, z in red, green, blue"
+            if isinstance(robot, TreeRobot)
+            else ""
+        )
+        + "), "
         "the bus as the uniform box of its mass and inertia; positions are about the system centroid"
         + (", in the arm's plane." if planar else ", inertial axes (the bus attitude sliders turn the bus frame).")
     )
@@ -47,6 +54,8 @@ def write_arm_view(robot, path: str | Path, posture=None, *, attitude_rpy=None) 
         posture=posture,
         extent=scene_extent(robot),
         rpy=[0.0, 0.0, 0.0] if attitude_rpy is None else np.asarray(attitude_rpy, float),
-        title=f"{model['name']}: {len(model['joint_kinds'])} joints on a {model['base_mass']:g} kg bus",
+        title=f"{model['name']}: {len(model['joint_kinds'])} joints"
+        + (f", {robot.n_tips} arms" if isinstance(robot, TreeRobot) else "")
+        + f" on a {model['base_mass']:g} kg bus",
     )
     return write_page(path, title=f"spacearm view: {model['name']}", note=note, data=data)

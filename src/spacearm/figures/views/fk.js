@@ -3,7 +3,10 @@
 // centre, corners: 8 bus-box corners, mount: the arm's root origin} in inertial axes about
 // the system centroid, m. Spatial: q (n,) joint values (rad; m for prismatic joints), R the
 // bus attitude as 3 rows (identity when absent). Planar: q = [phi0, phi1, .., phin] (base
-// attitude then joints, rad; R ignored), drawn in the plane z = 0.
+// attitude then joints, rad; R ignored), drawn in the plane z = 0. Tree (several arms on one bus):
+// {joints: body origins, tips: [[x,y,z],..], segments: [[a, b],..] links joint to joint,
+// owner: the arm (tip) of each segment (-1 when shared), mounts: root origins, mountAxes: their
+// axes as rows of columns, bus, corners}.
 "use strict";
 (function (root) {
   function mv(m, v) { return [m[0][0]*v[0]+m[0][1]*v[1]+m[0][2]*v[2], m[1][0]*v[0]+m[1][1]*v[1]+m[1][2]*v[2], m[2][0]*v[0]+m[2][1]*v[1]+m[2][2]*v[2]]; }
@@ -42,6 +45,39 @@
     points.push(add(origin, mv(rot, m.tip_translation)));
     return finish(points, mass, moment, m.base_com, m.bus_corners, m.mount_xyz, R);
   }
+  function tree(m, q, R) {
+    R = R || EYE;
+    var n = m.joint_axis.length, rots = [], origins = [], joints = [], segments = [], owner = [];
+    var mass = m.base_mass, moment = scale(m.base_mass, m.base_com);
+    m.mount_xyz.forEach(function (xyz, r) {
+      mass += m.root_mass[r];
+      moment = add(moment, scale(m.root_mass[r], add(xyz, mv(m.mount_rotation[r], m.root_com[r]))));
+    });
+    for (var k = 0; k < n; k++) {
+      var p = m.parents[k], rot = p < 0 ? m.mount_rotation[-1 - p] : rots[p], origin = p < 0 ? m.mount_xyz[-1 - p] : origins[p];
+      var jointOrigin = add(origin, mv(rot, m.joint_translation[k])), frame = mm(rot, m.joint_rotation[k]);
+      joints.push(jointOrigin);
+      segments.push([origin, jointOrigin]); owner.push(m.owner[k]);
+      if (m.joint_kinds[k] === "prismatic") {
+        rots.push(frame); origins.push(add(jointOrigin, scale(q[k], mv(frame, m.joint_axis[k]))));
+        segments.push([jointOrigin, origins[k]]); owner.push(m.owner[k]);
+      } else {
+        rots.push(mm(frame, axisAngle(m.joint_axis[k], q[k]))); origins.push(jointOrigin);
+      }
+      mass += m.link_mass[k];
+      moment = add(moment, scale(m.link_mass[k], add(origins[k], mv(rots[k], m.link_com[k]))));
+    }
+    var tips = m.tip_bodies.map(function (b, t) {
+      var tip = add(origins[b], mv(rots[b], m.tip_translation[t]));
+      segments.push([origins[b], tip]); owner.push(t);
+      return tip;
+    });
+    var g = scale(1 / mass, moment), out = function (p) { return mv(R, sub(p, g)); };
+    return {joints: origins.map(out), tips: tips.map(out), owner: owner,
+            segments: segments.map(function (s) { return [out(s[0]), out(s[1])]; }),
+            mounts: m.mount_xyz.map(out), mountAxes: m.mount_rotation.map(function (a) { return mm(R, a); }),
+            bus: out(m.base_com), corners: m.bus_corners.map(out)};
+  }
   function planar(m, phi) {
     var theta = phi[0], u = [Math.cos(theta), Math.sin(theta), 0];
     var c = Math.cos(theta), s = Math.sin(theta), R = [[c,-s,0],[s,c,0],[0,0,1]];
@@ -57,7 +93,9 @@
     var g = scale(1 / mass, moment), out = function (p) { return sub(p, g); };
     return {joints: points.map(out), bus: out([0, 0, 0]), corners: corners.map(out), mount: out(points[0])};
   }
-  function spacearmPose(model, q, R) { return model.family === "planar" ? planar(model, q) : spatial(model, q, R); }
+  function spacearmPose(model, q, R) {
+    return model.family === "planar" ? planar(model, q) : model.family === "tree" ? tree(model, q, R) : spatial(model, q, R);
+  }
   root.spacearmPose = spacearmPose;
   if (typeof module !== "undefined" && module.exports) module.exports = {spacearmPose: spacearmPose};
 })(typeof window !== "undefined" ? window : globalThis);

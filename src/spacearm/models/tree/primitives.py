@@ -65,6 +65,7 @@ __all__ = [
     "TreeConstants",
     "arm_inertia",
     "base_twist_map",
+    "body_frames",
     "fixed_base_jacobian",
     "generalized_jacobian",
     "jacobians",
@@ -563,6 +564,36 @@ def tip_pose(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     state = _tree_pass(robot, jnp.asarray(q), with_momentum=False)
     rotation = jnp.moveaxis(_pack(state.tip_rotations), -1, 0)
     return rotation, jnp.stack(state.tips, axis=-1)
+
+
+def body_frames(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Body frames with the bus frame fixed, one posture ``q (n,)``: ``(n, 3, 3)`` axes of
+    each body's URDF link frame (the child frame of joint j) and ``(n, 3)`` its origin, bus
+    frame, m (a prismatic joint's body origin is its joint origin slid by q_j along the axis).
+
+    A plain walk down the parents (joint frame in the parent body, then turned about or slid
+    along the unit axis, Rodrigues' formula): for drawing, not for the kernels' hot path."""
+    q = jnp.asarray(q)
+    mounts = jax.vmap(rpy_to_matrix)(jnp.asarray(robot.mount_rpy))
+    eye = jnp.eye(3, dtype=mounts.dtype)
+    rotations, origins = [], []
+    for j, parent in enumerate(robot.parents):
+        if parent < 0:
+            rotation, origin = mounts[-1 - parent], jnp.asarray(robot.mount_xyz)[-1 - parent]
+        else:
+            rotation, origin = rotations[parent], origins[parent]
+        frame = rotation @ jnp.asarray(robot.joint_rotation)[j]
+        origin = origin + rotation @ jnp.asarray(robot.joint_translation)[j]
+        axis = jnp.asarray(robot.joint_axis)[j]
+        axis = axis / jnp.linalg.norm(axis)
+        if robot.joint_kinds[j] == "prismatic":
+            origin = origin + q[j] * (frame @ axis)
+        else:
+            k = jnp.cross(eye, axis)  # [axis]x: row i is e_i x axis
+            frame = frame @ (eye + jnp.sin(q[j]) * k + (1.0 - jnp.cos(q[j])) * (k @ k))
+        rotations.append(frame)
+        origins.append(origin)
+    return jnp.stack(rotations), jnp.stack(origins)
 
 
 def jacobians(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
