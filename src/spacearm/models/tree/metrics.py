@@ -55,7 +55,7 @@ def base_twist_map(robot: TreeRobot, q: jax.Array, base_rotation: jax.Array | No
 def reaction_null_space(robot: TreeRobot, q: jax.Array) -> jax.Array:
     """``(..., n, n - 3)`` an orthonormal basis of the joint rates that leave the bus attitude
     still (the kernel of C_w, rank 3 away from degenerate designs): one arm may cancel
-    another's reaction (a balance arm; reaction null space: Nenchev et al., IEEE T-RA 1999)."""
+    another's reaction (a balance arm; reaction null space: Nenchev, Umetani & Yoshida, IEEE TRA 8(1), 1992)."""
     require_family(robot, "tree", "reaction_null_space")
     C_w = _base_twist_map(robot, q)[..., 3:, :]
     _, _, vt = jnp.linalg.svd(C_w, full_matrices=True)
