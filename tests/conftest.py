@@ -42,6 +42,7 @@ import spacearm as sa
 
 _FRESH_DIR_VARIABLE = "SPACEARM_TEST_FRESH_CACHE_DIR"  # set by the controller for pytest-xdist workers
 _fresh_dir: str | None = None
+_record_folder = ""  # the kept (or fresh) cache folder; workers compile into subfolders of it
 _CPU_RECORD = "test-cpu-seconds.json"  # in the kept cache folder: each test's CPU seconds in its last run
 _cpu_seconds: dict[str, float] = {}
 
@@ -84,7 +85,13 @@ def suite_cache_dir(fresh: bool) -> str:
 def pytest_configure(config):
     """Before any test compiles: one cache folder for the session, its subprocesses and its CLI runs."""
     fresh = config.getoption("--fresh-cache") or os.environ.get("SPACEARM_FRESH_CACHE", "") not in ("", "0")
-    folder = suite_cache_dir(fresh)
+    global _record_folder
+    _record_folder = suite_cache_dir(fresh)
+    # Each pytest-xdist worker compiles into its own subfolder: two workers reading and
+    # writing one cache entry at once crashed a worker inside JAX's cache (a segfault on
+    # read, an abort on write), and a dead worker hangs the whole run.
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    folder = os.path.join(_record_folder, f"worker-{worker}") if worker else _record_folder
     os.environ["SPACEARM_CACHE_DIR"] = folder
     if sa.enable_compilation_cache(folder) is None:
         raise pytest.UsageError(f"cannot create the test compilation cache folder {folder}")
@@ -98,7 +105,7 @@ def _record_path(config) -> str | None:
     """Where each test's CPU seconds are kept; None for a fresh cache (cold numbers, not kept)."""
     if config.getoption("--fresh-cache") or os.environ.get(_FRESH_DIR_VARIABLE):
         return None
-    return os.path.join(os.environ["SPACEARM_CACHE_DIR"], _CPU_RECORD)
+    return os.path.join(_record_folder, _CPU_RECORD)
 
 
 def _read_record(path: str) -> dict[str, float]:
