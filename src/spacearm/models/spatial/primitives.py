@@ -605,13 +605,32 @@ def tip_pose(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     return _pack(_matmul(state.last_rotation, _mat(cst.tip_rotation))), _pack(state.tip)
 
 
+def _point_twist_map(point, base_com):
+    """``(6, 6)`` J_S: the twist [v; w] of a point fixed to the bus per bus twist [v of the bus
+    centroid; w], bus axes."""
+    skew = _skew(_sub(point, base_com))
+    j_s = [[1.0 if c == r else 0.0 for c in range(3)] + [-skew[r][c] for c in range(3)] for r in range(3)]
+    j_s += [[0.0] * 3 + [1.0 if c == r else 0.0 for c in range(3)] for r in range(3)]
+    return _pack(j_s)
+
+
+def _bus_momentum_matrix(state, base_com):
+    """``(6, 6)`` I_S: [linear; angular about the bus centroid] momentum per bus twist, joints
+    locked, from a pass's total mass, centroid and inertia about it (``state.mass``,
+    ``state.centroid``, ``state.inertia_g``)."""
+    mass = state.mass
+    r_g = _sub(state.centroid, base_com)
+    skew = _skew(r_g)
+    about_com = _sym_full(_sym_add(state.inertia_g, _point_inertia(mass, r_g)))
+    i_s = [[mass if c == r else 0.0 for c in range(3)] + [-mass * skew[r][c] for c in range(3)] for r in range(3)]
+    i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
+    return _pack(i_s)
+
+
 def jacobians(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     """One posture: J_S ``(6, 6)`` (tip twist per bus twist [v of bus centroid; w]) and J_M ``(6, n)``, bus axes."""
     state = _chain_pass(robot, jnp.asarray(q), with_momentum=False)
-    skew = _skew(_sub(state.tip, _vec(jnp.asarray(robot.base_com))))
-    j_s = [[1.0 if c == r else 0.0 for c in range(3)] + [-skew[r][c] for c in range(3)] for r in range(3)]
-    j_s += [[0.0] * 3 + [1.0 if c == r else 0.0 for c in range(3)] for r in range(3)]
-    return _pack(j_s), _rows(*_fixed_columns(state))
+    return _point_twist_map(state.tip, _vec(jnp.asarray(robot.base_com))), _rows(*_fixed_columns(state))
 
 
 def momentum_map(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -619,14 +638,8 @@ def momentum_map(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Arra
     centroid] momentum is I_S [v; w] + I_M qdot (bus twist [v of bus centroid; w]), bus axes."""
     state = _chain_pass(robot, jnp.asarray(q))
     base_com = _vec(jnp.asarray(robot.base_com))
-    mass = state.mass
-    r_g = _sub(state.centroid, base_com)
-    skew = _skew(r_g)
-    about_com = _sym_full(_sym_add(state.inertia_g, _point_inertia(mass, r_g)))
-    i_s = [[mass if c == r else 0.0 for c in range(3)] + [-mass * skew[r][c] for c in range(3)] for r in range(3)]
-    i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
     angular = _sub(state.angular, _cross(base_com, state.momentum))
-    return _pack(i_s), _rows(state.momentum, angular)
+    return _bus_momentum_matrix(state, base_com), _rows(state.momentum, angular)
 
 
 def _posture_quantities_minor(robot, q, needs):

@@ -38,6 +38,7 @@ from ..spatial.primitives import (
     _add,
     _axis_frame,
     _backward_step,
+    _bus_momentum_matrix,
     _coupling,
     _cross,
     _dot,
@@ -47,13 +48,12 @@ from ..spatial.primitives import (
     _outer,
     _pack,
     _point_inertia,
+    _point_twist_map,
     _rows,
     _scale,
     _second_moment,
-    _skew,
     _sub,
     _sym_add,
-    _sym_full,
     _vec,
     batched,
     rpy_to_matrix,
@@ -601,12 +601,7 @@ def jacobians(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     J_M ``(6k, n)``, tip by tip, bus axes."""
     state = _tree_pass(robot, jnp.asarray(q), with_momentum=False)
     base_com = _vec(jnp.asarray(robot.base_com))
-    blocks = []
-    for t in range(robot.n_tips):
-        skew = _skew(_sub(_index(state.tips, t), base_com))
-        j_s = [[1.0 if c == r else 0.0 for c in range(3)] + [-skew[r][c] for c in range(3)] for r in range(3)]
-        j_s += [[0.0] * 3 + [1.0 if c == r else 0.0 for c in range(3)] for r in range(3)]
-        blocks.append(_pack(j_s))
+    blocks = [_point_twist_map(_index(state.tips, t), base_com) for t in range(robot.n_tips)]
     J_M = _tip_rows(*_fixed_columns(robot, state))
     return jnp.concatenate(blocks, axis=0), J_M.reshape((-1,) + J_M.shape[2:])
 
@@ -616,11 +611,5 @@ def momentum_map(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     centroid] momentum is I_S [v; w] + I_M qdot (bus twist [v of bus centroid; w]), bus axes."""
     state = _tree_pass(robot, jnp.asarray(q))
     base_com = _vec(jnp.asarray(robot.base_com))
-    mass = state.mass
-    r_g = _sub(state.centroid, base_com)
-    skew = _skew(r_g)
-    about_com = _sym_full(_sym_add(state.inertia_g, _point_inertia(mass, r_g)))
-    i_s = [[mass if c == r else 0.0 for c in range(3)] + [-mass * skew[r][c] for c in range(3)] for r in range(3)]
-    i_s += [[mass * skew[r][c] for c in range(3)] + list(about_com[r]) for r in range(3)]
     angular = _sub(state.angular, _cross(base_com, state.momentum))
-    return _pack(i_s), _rows(state.momentum, angular)
+    return _bus_momentum_matrix(state, base_com), _rows(state.momentum, angular)
