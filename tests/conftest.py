@@ -5,7 +5,8 @@ session-scoped (their pytrees have the same shapes, so every test hits the same 
 entry points). They are also shared across sessions: a persistent compilation cache,
 kept between runs, lets programs traced again from new closures (each DesignProblem's
 objective), in a new process (each command-line subprocess) or in the next run load
-instead of compiling. The folder is ``$SPACEARM_TEST_CACHE``, else
+instead of compiling (only subprocesses use it unless ``SPACEARM_TEST_IN_PROCESS_CACHE=1``:
+see `pytest_configure`). The folder is ``$SPACEARM_TEST_CACHE``, else
 ``$XDG_CACHE_HOME/spacearm-tests`` (``~/.cache/spacearm-tests``); ``--fresh-cache`` or
 ``SPACEARM_FRESH_CACHE=1`` uses a new empty folder instead, deleted at the end (what a
 first run on a clean machine costs). The command-line tests call spacearm.cli.main,
@@ -87,12 +88,16 @@ def pytest_configure(config):
     fresh = config.getoption("--fresh-cache") or os.environ.get("SPACEARM_FRESH_CACHE", "") not in ("", "0")
     global _record_folder
     _record_folder = suite_cache_dir(fresh)
-    # Each pytest-xdist worker compiles into its own subfolder: two workers reading and
-    # writing one cache entry at once crashed a worker inside JAX's cache (a segfault on
-    # read, an abort on write), and a dead worker hangs the whole run.
-    worker = os.environ.get("PYTEST_XDIST_WORKER")
-    folder = os.path.join(_record_folder, f"worker-{worker}") if worker else _record_folder
-    os.environ["SPACEARM_CACHE_DIR"] = folder
+    folder = _record_folder
+    os.makedirs(folder, exist_ok=True)
+    os.environ["SPACEARM_CACHE_DIR"] = folder  # subprocesses and CLI runs share the cache
+    # The long-lived test processes themselves do not write to the persistent cache: in
+    # full runs XLA crashed three times while serializing an executable (a segfault in
+    # `executable.serialize()`, on varying programs, never when the file ran alone), and a
+    # dead pytest-xdist worker fails the run or hangs it. Short-lived subprocesses still
+    # use the cache; in-process programs compile once per process as before.
+    if os.environ.get("SPACEARM_TEST_IN_PROCESS_CACHE", "") in ("", "0"):
+        return
     if sa.enable_compilation_cache(folder) is None:
         raise pytest.UsageError(f"cannot create the test compilation cache folder {folder}")
 
