@@ -40,6 +40,7 @@ import pytest
 jax.config.update("jax_enable_x64", True)
 
 import spacearm as sa
+import spacearm.cli
 
 _FRESH_DIR_VARIABLE = "SPACEARM_TEST_FRESH_CACHE_DIR"  # set by the controller for pytest-xdist workers
 _fresh_dir: str | None = None
@@ -97,6 +98,9 @@ def pytest_configure(config):
     # dead pytest-xdist worker fails the run or hangs it. Short-lived subprocesses still
     # use the cache; in-process programs compile once per process as before.
     if os.environ.get("SPACEARM_TEST_IN_PROCESS_CACHE", "") in ("", "0"):
+        # The command line enables the cache when it starts; called in-process by the
+        # tests, it must not turn it on for the rest of the worker's life.
+        spacearm.cli.enable_compilation_cache = lambda *args, **kwargs: None
         return
     if sa.enable_compilation_cache(folder) is None:
         raise pytest.UsageError(f"cannot create the test compilation cache folder {folder}")
