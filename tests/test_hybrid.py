@@ -157,6 +157,7 @@ def test_parse_hybrid_checks_its_section():
 @pytest.fixture(scope="module")
 def planar_hybrid():
     problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR))
+    jax.clear_caches()  # count this run's compilations, not whether another file already ran the same problem
     with count_compiles() as compiles:
         result = hybrid_search(problem, HybridSettings(population=16, generations=6, seed=3))
     return problem, result, dict(compiles)
