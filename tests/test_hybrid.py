@@ -16,7 +16,7 @@ from spacearm import design
 from spacearm._core.errors import ConfigError
 from spacearm.cli import main as cli_main
 from spacearm.design.fronts import hypervolume, nondominated_mask, reference_from_population
-from spacearm.design.hybrid import HybridSettings, hybrid_search, nondominated_ranks, parse_hybrid
+from spacearm.design.hybrid import HybridSettings, _neighbour_designs, hybrid_search, nondominated_ranks, parse_hybrid
 from spacearm.design.spatial_problem import load_design_problem
 from spacearm.models import load_robot
 from spacearm.models.spatial import fields
@@ -152,6 +152,35 @@ def test_parse_hybrid_checks_its_section():
         parse_hybrid("f.yaml", {"jacobian": "forward"})
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.gradient_share: must lie in \[0, 1\]"):
         parse_hybrid("f.yaml", {"gradient_share": 1.5})
+    assert parse_hybrid("f.yaml", {"step_rule": "armijo"}).step_rule == "armijo"
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.step_rule: must be one of auto, per_variable, armijo"):
+        parse_hybrid("f.yaml", {"step_rule": "newton"})
+
+
+def test_neighbour_designs_lie_on_chords_between_near_front_designs_and_fill_gaps():
+    """Three-objective densification: every new design lies on the chord between a front
+    design and one of its 4 nearest front neighbours (in range-scaled objectives), and an
+    isolated front point (the largest gap) is drawn far more often than a crowded one."""
+    rng = np.random.default_rng(0)
+    u = np.concatenate([rng.uniform(0.0, 0.3, size=(40, 2)), [[0.9, 0.05]]])  # one isolated design
+    z = np.column_stack([u, np.full(u.shape[0], 0.3)])
+    f = np.column_stack([u, 1.0 - u.sum(axis=1)])  # a linear front: f is the design's (u, v)
+    new = _neighbour_designs(np.random.default_rng(1), f, z, 4000)
+    assert new.shape == (4000, 3) and np.all(new[:, 2] == 0.3)
+    scaled = (f - f.min(axis=0)) / np.ptp(f, axis=0)
+    near = np.argsort(np.linalg.norm(scaled[:, None] - scaled[None], axis=2), axis=1)[:, 1:5]
+    pairs = [(i, j) for i in range(f.shape[0]) for j in near[i]]
+    a, b = z[[p[0] for p in pairs]], z[[p[1] for p in pairs]]
+    # Distance of each new design to the nearest chord a-b.
+    t = np.clip(np.einsum("nk,pk->np", new, b - a) - np.sum(a * (b - a), axis=1), 0, None)
+    t = np.minimum(t / np.sum((b - a) ** 2, axis=1), 1.0)
+    off = np.linalg.norm(new[:, None, :] - (a[None] + t[:, :, None] * (b - a)[None]), axis=2).min(axis=1)
+    assert off.max() < 1e-12
+    # The isolated design is drawn most of the time
+    # (its gap^2 outweighs the 40 crowded ones together), and its chords reach far;
+    # drawn uniformly it would be 1 in 41.
+    far = np.sum(new[:, 0] > 0.5)
+    assert far > 0.3 * new.shape[0]
 
 
 @pytest.fixture(scope="module")
@@ -248,3 +277,52 @@ def test_spatial_optimize_without_reference_writes_a_front_that_batch_function_r
     assert len(summary["reference_point"]) == 3 and summary["against_nsga2"]["nsga2_final_hypervolume"] > 0
     for name in ("front.png", "designs.png", "convergence.png"):
         assert (out / name).stat().st_size > 0
+
+
+HIDDEN_FIELDS = {  # the fields of the issue's unseen 9-variable arm problem, with bounds of our own
+    "mount.xyz[0]": [-0.3, 0.5],
+    "mount.xyz[1]": [-0.3, 0.3],
+    "mount.rpy[0]": [-0.6, 0.6],
+    "mount.rpy[1]": [-0.6, 0.6],
+    "links.upper_arm_link.length": [0.7, 1.4],
+    "links.forearm_link.length": [0.7, 1.4],
+    "links.upper_arm_link.mass": [5.0, 10.0],
+    "links.forearm_link.mass": [1.5, 3.5],
+    "base.mass": [200.0, 500.0],
+}
+
+
+@pytest.mark.slow
+def test_nine_variable_arm_without_reference_writes_the_batch_function_front(tmp_path):
+    """The unseen 9-variable problem's shape at a cheap joint-box rule (compiles the spatial
+    value program: tens of seconds on a loaded machine): no reference point in the file, so
+    the one taken below the first population's nadir is written to the summary, with the
+    front's hypervolume above it; pareto.csv holds the 9 variables then the 3 objectives, and
+    its objectives are ``sa.load_problem(file).batch_function()`` at its designs to 1e-9."""
+    config = _tiny_arm_problem(
+        variables=HIDDEN_FIELDS,
+        average={"samples": 32, "randomizations": 2, "seed": 1},
+        hybrid={"population": 8, "generations": 3},
+    )
+    config["robot"] = str(Path(UR5).resolve())
+    path = tmp_path / "hidden.yaml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
+    out = tmp_path / "out"
+    assert cli_main(["optimize", str(path), "--out", str(out), "--no-baselines"]) == 0
+    with open(out / "pareto.csv") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == list(HIDDEN_FIELDS) + config["objectives"]
+    table = np.array(rows[1:], dtype=float)
+    designs, front = table[:, :9], table[:, 9:]
+    bounds = np.array(list(HIDDEN_FIELDS.values()))
+    assert np.all(designs >= bounds[:, 0]) and np.all(designs <= bounds[:, 1])
+    problem = sa.load_problem(str(path))
+    assert problem.reference_point is None
+    again = np.asarray(problem.batch_function()(jnp.asarray(designs)))
+    np.testing.assert_allclose(front, again, rtol=1e-9, atol=0)
+    assert front.shape[0] >= 2 and np.all(nondominated_mask(front))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["reference_point_from"].startswith("nadir")
+    reference = np.array(summary["reference_point"])
+    assert np.sum(np.all(front > reference, axis=1)) >= 2
+    assert summary["methods"]["hybrid"]["hypervolume"] == pytest.approx(hypervolume(front, reference), rel=1e-12)

@@ -20,22 +20,41 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    vmapped vector-Jacobian product.
    Dominated points follow their layer's gradient towards the front instead of
    freezing; on the front the hypervolume gradient itself spreads the points (a
-   hypervolume-maximal set is spread by the front's slope). Each step has its own
-   length in the unit box, doubled after a step that passed Armijo's sufficient-increase
-   test on its layer's hypervolume (linearized at the old point) and halved after one that
-   did not (the step is then refused), so steps shrink to the precision the front needs.
+   hypervolume-maximal set is spread by the front's slope). For joint-box averages over
+   more than 4 variables (``step_rule: per_variable``) every member has a step length per
+   variable in the unit box and moves each variable by its own step in the sign of its gradient (Rprop:
+   Riedmiller & Braun, ICNN 1993): a step grows by 1.2 while its variable's gradient keeps
+   its sign and halves (without a move) when the sign flips, so the weakly sensitive
+   variables (a mount's position and angles beside link lengths and masses) converge as
+   fast as the strong ones; the normalized gradient they replace moved them by a sliver of
+   each step (pareto-ur5-arm: 99.68 % of the best known after 38 generations against
+   99.2 %). A step that fails Armijo's sufficient-increase test on its layer's
+   hypervolume (linearized at the old point) is refused and its lengths halved
+   (``step_rule: armijo``, the default for fewer variables or closed-form objectives,
+   where per-variable steps ended lower: one length per member along the normalized
+   gradient, doubled after a passed test).
    Offspring fill the value batches of the stepped designs (and of the differences):
    with half of the population stepping (the default for joint-box averages; all of it
    for closed-form objectives, whose values are cheap), a generation of pareto-ur5-arm
    costs one batch of values and the vector-Jacobian products of half a batch, and
    reached a higher hypervolume per CPU second than a step for every member (two value
    batches and a full batch of products per generation) or for a quarter of them.
-3. **Stopping** from the front's own convergence: the archive's hypervolume gained less
-   than ``tolerance`` (relative) over the last ``patience`` generations; or, without the
-   two-objective densification, the population's own hypervolume rose no higher in the
-   last ``population_patience`` generations while the archive's gained less than
-   ``population_tolerance``; or a budget of generations, evaluations or
-   seconds ran out.
+3. **Densification.** Every generation one more batch of designs interpolated between
+   neighbouring archive-front designs (the Pareto set is a curve or a surface, and a chord
+   between near optimal designs stays second-order close to it): along the front's curve
+   where the gaps lose the most hypervolume for two objectives (these join the
+   population); for three or more, on chords from front designs drawn by the size of
+   their gap to near neighbours (`_neighbour_designs`; archive only, as in the population
+   they crowd the refined members out). The archive's hypervolume counts every evaluated
+   design, and once the population sits on the front it grows by filling the front in.
+4. **Stopping** from the front's own convergence: the archive's hypervolume gained less
+   than ``tolerance`` (relative) over the last ``patience`` generations; or, without
+   densification, the population's own hypervolume rose no higher in the last
+   ``population_patience`` generations while the archive's gained less than
+   ``population_tolerance``; or a budget of generations, evaluations or seconds ran out.
+   (The population rule stopped three-objective runs while their archive still gained
+   fast: pareto-ur5-arm after 38 generations at 99.68 % of the best known, where 100
+   reach 99.94 %.)
 
 Every design is evaluated by the problem's own ``batch_function()`` in batches of the
 population (compiled once; the differences and the offspring are archived, being designs
@@ -55,6 +74,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
+from scipy.spatial import cKDTree
 from scipy.stats import qmc
 
 from .._core.errors import ConfigError
@@ -78,8 +98,7 @@ class HybridSettings:
         max_seconds: stop past this run time, s (None: no limit).
         patience, tolerance: stop when the archive hypervolume gained less than
             ``tolerance`` (relative) over ``patience`` generations.
-        population_patience: without densification (three or more objectives, or
-            ``densify: false``), also stop when the population's own hypervolume has not
+        population_patience: without densification (``densify: false``), also stop when the population's own hypervolume has not
             risen above its best by more than ``tolerance`` (relative) for this many
             generations (0: never) while the archive's hypervolume gained less than
             ``population_tolerance`` (relative) over them.
@@ -98,8 +117,13 @@ class HybridSettings:
         initial_step, min_step, max_step: gradient step lengths in the unit box.
         reference_margin: the reference point, when the problem gives none, lies this
             share of the first population's front range below its nadir.
-        densify: with two objectives, also evaluate a population of designs interpolated
-            between neighbouring archive-front designs every generation.
+        densify: also evaluate a population of designs interpolated between neighbouring
+            archive-front designs every generation.
+        step_rule: ``"per_variable"`` (a step length per variable, Rprop),
+            ``"armijo"`` (one length per member along the normalized gradient) or
+            ``"auto"`` (per variable for joint-box averages over more than 4 variables,
+            where weak and strong variables mix; Armijo otherwise: on pareto-attachment,
+            pareto-6var and pareto-mount-ur5 per-variable steps ended lower).
         crossover_eta, mutation_eta: distribution indices of SBX and polynomial mutation.
         seed: random seed (Latin hypercube, variation).
     """
@@ -114,6 +138,7 @@ class HybridSettings:
     population_tolerance: float = 1e-3
     gradient_share: float | None = None
     jacobian: str = "auto"
+    step_rule: str = "auto"
     initial_step: float = 0.05
     min_step: float = 1e-5
     max_step: float = 0.3
@@ -125,6 +150,9 @@ class HybridSettings:
 
 
 JACOBIANS = ("auto", "reverse", "differences")
+STEP_RULES = ("auto", "per_variable", "armijo")
+# Where an evaluated design came from (the evaluations of each are reported).
+SOURCES = ("start", "differences", "steps", "offspring", "densified")
 # Forward differences cost d values per gradient; a vector-Jacobian product through the
 # joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
 # about 2.5 times as long as the values'.
@@ -162,9 +190,10 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
         where = f"{source}: hybrid.{key}"
         if value is None and key in ("max_evaluations", "max_seconds", "gradient_share"):
             changes[key] = None
-        elif key == "jacobian":
-            if value not in JACOBIANS:
-                raise ConfigError(f"{where}: must be one of {', '.join(JACOBIANS)}, got {value!r}")
+        elif key in ("jacobian", "step_rule"):
+            allowed = JACOBIANS if key == "jacobian" else STEP_RULES
+            if value not in allowed:
+                raise ConfigError(f"{where}: must be one of {', '.join(allowed)}, got {value!r}")
             changes[key] = value
         elif key == "densify":
             if not isinstance(value, bool):
@@ -254,6 +283,32 @@ def _variation(rng: np.random.Generator, z: np.ndarray, f: np.ndarray, settings:
     return np.clip(children + np.where(mutate, delta, 0.0), 0.0, 1.0)
 
 
+def _neighbour_designs(
+    rng: np.random.Generator, front_f: np.ndarray, front_z: np.ndarray, count: int, neighbours: int = 4
+) -> np.ndarray:
+    """``count`` unit-box designs between archive-front designs and their neighbours on the front.
+
+    The Pareto set of an m-objective problem is (piecewise) an (m-1)-manifold in design
+    space; a chord between two neighbouring optimal designs stays second-order close to it.
+    Each new design lies at a uniform place on the chord from a front design to one of its
+    ``neighbours`` nearest front designs (in objectives scaled by the front's range); front
+    designs are drawn with probability proportional to the (m-1)-volume of their gap (the
+    distance to their nearest neighbour to the power m-1), so the sparse parts of the front
+    fill first.
+    """
+    n, m = front_f.shape
+    spread = np.ptp(front_f, axis=0)
+    scaled = (front_f - front_f.min(axis=0)) / np.where(spread > 0, spread, 1.0)
+    k = min(neighbours, n - 1)
+    distance, index = cKDTree(scaled).query(scaled, k=k + 1)
+    gap = distance[:, 1] ** (m - 1)
+    total = gap.sum()
+    chosen = rng.choice(n, size=count, p=gap / total) if total > 0 else rng.integers(n, size=count)
+    mates = index[chosen, rng.integers(1, k + 1, size=count)]
+    t = rng.uniform(size=(count, 1))
+    return np.clip(front_z[chosen] + t * (front_z[mates] - front_z[chosen]), 0.0, 1.0)
+
+
 def _pull_program(problem):
     """The vmapped vector-Jacobian product: ``(z, w) -> J(z)^T w`` per design, unit box."""
     objective = problem.objective_function()
@@ -295,8 +350,9 @@ def hybrid_search(
 
     Returns:
         A `SearchResult` (method ``"hybrid"``) with every value-evaluated design in
-        order; ``extra`` holds the reference point used, the evaluation counts and the
-        compile seconds of each program.
+        order; ``extra`` holds the reference point used, the evaluation counts (also by
+        source: start, differences, steps, offspring, densified) and the compile seconds
+        of each program.
     """
     settings = settings or HybridSettings()
     if reference is None:
@@ -314,7 +370,7 @@ def hybrid_search(
     closed_forms = not any(name in AVERAGE_OBJECTIVES for name in problem.objectives)
     share = settings.gradient_share if settings.gradient_share is not None else (1.0 if closed_forms else 0.5)
     stepping = min(population, round(share * population))
-    densifying = settings.densify and m == 2
+    densifying = settings.densify
 
     # Compile every program once, for the population's shapes, before the timed run:
     # the value program (every evaluation goes through it in batches of the population),
@@ -342,8 +398,9 @@ def hybrid_search(
     designs, values, checkpoints = [], [], []
     unit_designs = []  # parallel to values: the unit-box designs
     counts = dict(value=0, value_and_gradient=0)
+    spent = np.zeros(len(SOURCES))  # evaluations each source took
 
-    def value_of(z):
+    def value_of(z, source):
         """Values of any number of unit-box designs, in batches of the compiled size (the
         last one padded with copies, which are not archived)."""
         rows = z.shape[0]
@@ -353,6 +410,7 @@ def hybrid_search(
             [np.asarray(evaluate(jnp.asarray(x[i : i + population]))) for i in range(0, x.shape[0], population)]
         )[:rows]
         unit_designs.append(z)
+        np.add.at(spent, np.broadcast_to(np.asarray(source), (rows,)), 1)
         designs.append(x[:rows])
         values.append(f)
         counts["value"] += padded.shape[0]
@@ -360,7 +418,7 @@ def hybrid_search(
 
     # 1. Space-filling start: two populations of a Latin hypercube sample.
     start_designs = qmc.LatinHypercube(d, seed=settings.seed).random(2 * population)
-    f_start = value_of(start_designs)
+    f_start = value_of(start_designs, 0)
     if reference is None:
         reference = reference_from_population(f_start, settings.reference_margin)
         reference_from = (
@@ -371,7 +429,12 @@ def hybrid_search(
     reference = np.asarray(reference, dtype=np.float64)
     keep = _survivors(f_start, population)
     z, f = start_designs[keep], f_start[keep]
-    steps = np.full(population, settings.initial_step)
+    step_rule = settings.step_rule
+    if step_rule == "auto":
+        step_rule = "per_variable" if d > DIFFERENCES_UP_TO and not closed_forms else "armijo"
+    per_variable = step_rule == "per_variable"
+    steps = np.full((population, d) if per_variable else population, settings.initial_step)
+    signs = np.zeros((population, d))  # the last gradient's sign per variable (per_variable)
     first_front = nondominated_mask(f_start)
     front_f, front_z = f_start[first_front], start_designs[first_front]
 
@@ -430,7 +493,10 @@ def hybrid_search(
             h = np.where(z_step > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (stepping, d)
             shifted = z_step[:, None, :] + h[:, :, None] * np.eye(d)[None]  # (stepping, d, d)
             children = filled(stepping * d)
-            f_both = value_of(np.concatenate([shifted.reshape(-1, d), children]))
+            f_both = value_of(
+                np.concatenate([shifted.reshape(-1, d), children]),
+                np.repeat([1, 3], [stepping * d, children.shape[0]]),
+            )
             f_shifted = f_both[: stepping * d].reshape(stepping, d, m)
             new_z.append(children)
             new_f.append(f_both[stepping * d :])
@@ -439,36 +505,64 @@ def hybrid_search(
         grad = np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
         grad = np.where(((z_step <= 0.0) & (grad < 0)) | ((z_step >= 1.0) & (grad > 0)), 0.0, grad)  # projected
         norm = np.linalg.norm(grad, axis=1, keepdims=True)
-        direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
-        z_stepped = np.clip(z_step + steps[chosen][:, None] * direction, 0.0, 1.0)
+        if per_variable:
+            # Each variable its own step (Rprop: Riedmiller & Braun, ICNN 1993): longer while
+            # its gradient keeps its sign, halved (and no move this time) when it flips, so
+            # weakly sensitive variables move as fast as strong ones.
+            sign = np.sign(grad)
+            agree = sign * signs[chosen]
+            step_c = np.clip(
+                np.where(agree > 0, 1.2 * steps[chosen], np.where(agree < 0, 0.5 * steps[chosen], steps[chosen])),
+                settings.min_step,
+                settings.max_step,
+            )
+            move = np.where(agree < 0, 0.0, sign * step_c)
+            signs[chosen] = np.where(agree < 0, 0.0, sign)
+        else:
+            direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
+            move = steps[chosen][:, None] * direction
+        z_stepped = np.clip(z_step + move, 0.0, 1.0)
         # 2b. Exploration: NSGA-II offspring fill the stepped designs' batch.
         children = filled(stepping, least=population // 2)
-        f_both = value_of(np.concatenate([z_stepped, children]))
+        f_both = value_of(np.concatenate([z_stepped, children]), np.repeat([2, 3], [stepping, children.shape[0]]))
         f_stepped = f_both[:stepping]
         new_z.append(children)
         new_f.append(f_both[stepping:])
         # Armijo's test on the layer hypervolume, linearized at the old point: the step's
         # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
         gain = np.sum(weights * (f_stepped - f[chosen]), axis=1)
-        better = (gain >= 0.1 * steps[chosen] * norm[:, 0]) & (norm[:, 0] > 0) & np.all(np.isfinite(f_stepped), axis=1)
+        # (per variable: what the gradient promised for the move actually made)
+        promised = np.sum(grad * (z_stepped - z_step), axis=1) if per_variable else steps[chosen] * norm[:, 0]
+        better = (gain >= 0.1 * promised) & (promised > 0) & np.all(np.isfinite(f_stepped), axis=1)
         z[chosen] = np.where(better[:, None], z_stepped, z_step)
         f[chosen] = np.where(better[:, None], f_stepped, f[chosen])
-        steps[chosen] = np.clip(
-            np.where(better, 2.0 * steps[chosen], 0.5 * steps[chosen]), settings.min_step, settings.max_step
-        )
+        if per_variable:
+            steps[chosen] = np.where(better[:, None], step_c, np.maximum(0.5 * step_c, settings.min_step))
+        else:
+            steps[chosen] = np.clip(
+                np.where(better, 2.0 * steps[chosen], 0.5 * steps[chosen]), settings.min_step, settings.max_step
+            )
         accepted_total += int(better.sum())
         if densifying and front_f.shape[0] >= 2:
-            # 2c. Two objectives: designs interpolated between neighbouring archive-front
-            # designs, where the gaps lose the most hypervolume (the Pareto set is a curve).
-            order = np.argsort(front_f[:, 0])
-            z_dense = np.clip(_densify(front_f[order], front_z[order], population), 0.0, 1.0)
-            z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
-            new_z.append(z_dense)
-            new_f.append(value_of(z_dense))
+            # 2c. Designs interpolated between neighbouring archive-front designs, where the
+            # gaps lose the most hypervolume: along the front's curve for two objectives,
+            # on chords to near neighbours for more.
+            if m == 2:
+                order = np.argsort(front_f[:, 0])
+                z_dense = np.clip(_densify(front_f[order], front_z[order], population), 0.0, 1.0)
+                z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
+                new_z.append(z_dense)
+                new_f.append(value_of(z_dense, 4))
+            else:
+                # Archive only: in the population these near-front designs would crowd
+                # the members being refined out (pareto-ur5-arm ended lower with them).
+                value_of(_neighbour_designs(rng, front_f, front_z, population), 4)
         z_all, f_all = np.concatenate([z, *new_z]), np.concatenate([f, *new_f])
-        steps_all = np.concatenate([steps, np.full(z_all.shape[0] - population, settings.initial_step)])
+        fresh = z_all.shape[0] - population
+        steps_all = np.concatenate([steps, np.full((fresh, *steps.shape[1:]), settings.initial_step)])
+        signs_all = np.concatenate([signs, np.zeros((fresh, d))])
         keep = _survivors(np.where(np.isfinite(f_all), f_all, -np.inf), population)
-        z, f, steps = z_all[keep], f_all[keep], steps_all[keep]
+        z, f, steps, signs = z_all[keep], f_all[keep], steps_all[keep], signs_all[keep]
         record()
         # 3. Stopping from the front's own convergence, or a budget.
         hv = [c["hypervolume"] for c in checkpoints]
@@ -515,10 +609,12 @@ def hybrid_search(
             generations=generation,
             stop_reason=stop_reason,
             jacobian=jacobian,
+            step_rule=step_rule,
             gradient_steps_per_generation=stepping,
             value_evaluations=counts["value"],
             value_and_gradient_evaluations=counts["value_and_gradient"],
             accepted_gradient_steps=accepted_total,
+            evaluations_by_source={name: int(n) for name, n in zip(SOURCES, spent, strict=True)},
             compile_seconds_by_program={k: float(v) for k, v in compile_seconds.items()},
             settings=dataclasses.asdict(settings),
         ),
