@@ -77,7 +77,8 @@ def test_reach_radius_gradient_matches_central_differences(ur5_radius):
 
 def test_reach_radius_planar_matches_the_root_tracing_and_differences():
     """(a, b) Planar two-link arms: the objective equals the root tracing of det J*
-    (`singularities.path_independent_radius`), and its gradient central differences."""
+    (`singularities.path_independent_radius`), and its gradient central differences
+    (~20 s: compiles the planar radius search for values and for the gradient)."""
     problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR, objectives=["wbar", "reach_radius"]))
     xs = np.array([[1.4, 0.5], [0.7, 0.4], [2.2, 0.65]])
     batch = problem.batch_function()

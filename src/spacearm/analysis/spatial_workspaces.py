@@ -563,7 +563,7 @@ def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps):
     value = jnp.sqrt(_tip_radius_sq(robot, posture))
     n = best.shape[-1]
     constraint = _translational(robot, posture, jacobian).T @ jax.lax.stop_gradient(u)
-    mu = jax.lax.stop_gradient(multipliers[:n])
+    mu = jax.lax.stop_gradient(jnp.where(jnp.all(jnp.isfinite(multipliers)), multipliers[:n], 0.0))  # no set found
     value = value - jnp.dot(mu, constraint - jax.lax.stop_gradient(constraint))
     return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
 
