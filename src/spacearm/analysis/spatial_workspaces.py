@@ -21,7 +21,9 @@ below is a spherical shell (planar: an annulus) described by radii.
 - Path-independent workspace (Papadopoulos & Dubowsky): the sphere about the centroid
   that no dynamic-singular tip position enters; its radius is min |tip| over the
   singular set, found by sampling, then descent of |tip|^2 along the singular set
-  (tangent steps, each followed by Newton projection back onto it).
+  (tangent steps, each followed by Newton projection back onto it), then Newton steps
+  on the KKT system at the best posture; differentiable in the design by the envelope
+  theorem of the constrained minimum (the set's motion enters through its multipliers).
 - Guaranteed Workspace (Area 5) in 3-D: the shell between the inner reachable radius
   and the path-independent radius (empty if the first exceeds the second). Beside it
   the analogue of eq. (8): the same search over the *kinematic* singular set (the
@@ -453,6 +455,90 @@ def singular_postures(
     return _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol)
 
 
+def _kkt_polish(robot, best, free, jacobian, lower, upper, wraps, steps: int = 3):
+    """Newton steps on the KKT system of min |tip| over the singular set, from ``best``.
+
+    The set in the form `_refine` projects with, g(q, u) = (J_v(q)^T u, (|u|^2 - 1) / 2) = 0,
+    u the left null direction of J_v (square and redundant J_v alike). Stationarity of the
+    Lagrangian |tip| - mu . J_v^T u - nu (|u|^2 - 1) / 2 in (q, u), with g = 0, is solved
+    for (q, u, mu, nu) by Newton's method: its Hessian in q by central differences of the
+    jet (`_jet` at the 2n + 1 rows q, q +- h e_k in one pass), everything else exact.
+    Joints on a limit (``free`` False) stay where they are. The descent before leaves the
+    posture ~1e-5 rad from the minimum, which the multipliers (hence the gradient) feel to
+    first order; two or three Newton steps take it to rounding.
+
+    Returns:
+        ``(q (n,), u (t,), multipliers (n + 1,), accepted)``: the polished posture and the
+        least-squares multipliers there, or the posture as given and its multipliers where
+        Newton did not reduce the KKT residual or left the box (``accepted`` False).
+    """
+    fixed = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
+    n, t = best.shape[-1], family_of(robot).translational_rows
+    dtype = best.dtype
+    h = float(jnp.finfo(dtype).eps) ** (1.0 / 3.0)
+    eye = jnp.eye(n, dtype=dtype)
+    offsets = jnp.concatenate([jnp.zeros((1, n), dtype), h * eye, -h * eye]) * free
+
+    def evaluate(q, u, first):
+        J, tip, dJ, dtip = _jet(fixed, q[None] + offsets, jacobian)
+        u = jnp.where(first, jnp.linalg.eigh(J[0] @ J[0].T)[1][:, 0], u)
+        grad_r = jnp.einsum("kd,kdn->kn", tip, dtip) / jnp.sqrt(jnp.sum(tip * tip, axis=-1))[:, None] * free
+        A_q = jnp.einsum("i,kijm->kjm", u, dJ) * free  # d(J_v^T u)_j / dq_m at each row
+        A = jnp.block([[A_q[0], J[0].T], [jnp.zeros((1, n), dtype), u[None]]])  # (n + 1, n + t)
+        gram = A @ A.T
+        damping = 1e-14 * jnp.trace(gram) / (n + 1)
+        rhs = A @ jnp.concatenate([grad_r[0], jnp.zeros((t,), dtype)])
+        multipliers = jnp.linalg.solve(gram + damping * jnp.eye(n + 1, dtype=dtype), rhs)
+        return J[0], dJ[0], u, grad_r, A_q, multipliers
+
+    def residual(J, u, grad_r0, A_q0, mu, nu):
+        return jnp.concatenate([grad_r0 - A_q0.T @ mu, -J @ mu - nu * u, J.T @ u, (0.5 * (u @ u - 1.0))[None]])
+
+    def body(i, state):
+        q, u, lam, _, lam0, norm0, _ = state
+        J, dJ, u, grad_r, A_q, lam_ls = evaluate(q, u, i == 0)
+        lam = jnp.where(i == 0, lam_ls, lam)
+        mu, nu = lam[:n], lam[n]
+        F = residual(J, u, grad_r[0], A_q[0], mu, nu)
+        gradient_l = grad_r - jnp.einsum("kjm,j->km", A_q, mu)  # d Lagrangian / dq at each row
+        H = (gradient_l[1 : n + 1] - gradient_l[n + 1 :]) / (2.0 * h)
+        H = 0.5 * (H + H.T)
+        H = jnp.where(free[:, None] & free[None, :], H, eye)
+        M = -jnp.einsum("ijk,j->ki", dJ, mu) * free[:, None]  # d(-J mu)/dq, transposed
+        K = jnp.block(
+            [
+                [H, M, -A_q[0].T, jnp.zeros((n, 1), dtype)],
+                [M.T, -nu * jnp.eye(t, dtype=dtype), -J, -u[:, None]],
+                [A_q[0], J.T, jnp.zeros((n, n + 1), dtype)],
+                [jnp.zeros((1, n), dtype), u[None], jnp.zeros((1, n + 1), dtype)],
+            ]
+        )
+        # Minimum-norm steps: a joint that does not move the tip (the UR5's last) leaves K
+        # singular, and a plain solve would swing it along the null direction.
+        delta = jnp.linalg.lstsq(K, -F, rcond=float(jnp.finfo(dtype).eps) ** 0.6)[0]
+        step = i < steps  # the last iteration only evaluates
+        norm_now = jnp.linalg.norm(F)
+        return (
+            jnp.where(step, q + delta[:n] * free, q),
+            jnp.where(step, u + delta[n : n + t], u),
+            jnp.where(step, lam + delta[n + t :], lam_ls),
+            lam_ls,
+            jnp.where(i == 0, lam_ls, lam0),
+            jnp.where(i == 0, norm_now, norm0),
+            norm_now,
+        )
+
+    zero = jnp.zeros((), dtype)
+    state = (best, jnp.zeros((t,), dtype), jnp.zeros((n + 1,), dtype), jnp.zeros((n + 1,), dtype))
+    state = jax.lax.fori_loop(0, steps + 1, body, (*state, jnp.zeros((n + 1,), dtype), zero, zero))
+    q, u, _, lam, lam0, norm0, norm = state
+    inside = jnp.all(wraps | ((q >= lower) & (q <= upper)))
+    accepted = jnp.isfinite(norm) & (norm <= norm0) & inside & jnp.all(jnp.abs(q - best) <= 0.05)
+    J0 = _translational(fixed, best, jacobian)
+    u0 = jnp.linalg.eigh(J0 @ J0.T)[1][:, 0]
+    return jnp.where(accepted, q, best), jnp.where(accepted, u, u0), jnp.where(accepted, lam, lam0), accepted
+
+
 def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps):
     """The smallest radius over the rows of ``q`` (``radius_sq`` their |tip|^2, inf off the set),
     differentiable in the design, and its posture."""
@@ -463,25 +549,22 @@ def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps):
     span = upper - lower
     at_lower = ~wraps & (best <= lower + 1e-6 * span)
     at_upper = ~wraps & (best >= upper - 1e-6 * span)
+    free = ~(at_lower | at_upper)
+    # A minimum of |tip| on the singular set moves with the design: by the envelope theorem
+    # for the constrained minimum, d radius / d design = d r / d design - mu . d(J_v^T u) /
+    # d design at the fixed (q, u), with the Lagrange multipliers mu of the polished KKT
+    # point (`_kkt_polish`; the joints on a limit carry their own multipliers, accounted for
+    # by moving them with the limit). mu = 0 where |tip| is stationary in the box. The
+    # value is unchanged (J_v^T u = 0 at the posture to rounding).
+    bounds = (jax.lax.stop_gradient(lower), jax.lax.stop_gradient(upper))
+    best, u, multipliers, _ = _kkt_polish(robot, best, free, jacobian, *bounds, wraps)
+    best = jax.lax.stop_gradient(best)
     posture = jnp.where(at_upper, upper, jnp.where(at_lower, lower, best))
     value = jnp.sqrt(_tip_radius_sq(robot, posture))
-    if best.shape[-1] == family_of(robot).translational_rows:
-        # A minimum of |tip| on the hypersurface s = 0 moves with the design: by the
-        # envelope theorem for the constrained minimum, d radius / d design =
-        # d r / d design - lambda d s / d design at the fixed posture, with the Lagrange
-        # multiplier lambda = (grad_F r . grad_F s) / |grad_F s|^2 over the free joints F
-        # (stationarity grad_F r = lambda grad_F s; the joints on a limit carry their own
-        # multipliers, accounted for by moving them with the limit above). The value is
-        # unchanged (s = 0 at the posture to rounding).
-        free = ~(at_lower | at_upper)
-        fixed = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
-        J, tip, dJ, dtip = _jet(fixed, best[None], jacobian)
-        grad_r = jnp.einsum("d,dn->n", tip[0], dtip[0]) / jnp.sqrt(jnp.sum(tip[0] * tip[0]))
-        grad_s = jax.vmap(lambda d: jax.jvp(_measure_of, (J[0],), (d,))[1], in_axes=-1)(dJ[0])
-        grad_r, grad_s = jnp.where(free, grad_r, 0.0), jnp.where(free, grad_s, 0.0)
-        multiplier = jax.lax.stop_gradient(jnp.dot(grad_r, grad_s) / jnp.maximum(jnp.dot(grad_s, grad_s), 1e-300))
-        constraint = singularity_measure(robot, posture, jacobian)
-        value = value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
+    n = best.shape[-1]
+    constraint = _translational(robot, posture, jacobian).T @ jax.lax.stop_gradient(u)
+    mu = jax.lax.stop_gradient(jnp.where(jnp.all(jnp.isfinite(multipliers)), multipliers[:n], 0.0))  # no set found
+    value = value - jnp.dot(mu, constraint - jax.lax.stop_gradient(constraint))
     return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
 
 
@@ -605,11 +688,12 @@ def singular_radius(
     Returns:
         ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
         ``inf`` when no sampled posture converged onto the set (none in the box).
-        The radius is differentiable in the design: for a square J_v (n = 3 spatial,
-        n = 2 planar) by the envelope theorem of the constrained minimum (the Lagrange
-        multiplier of s = 0; tested against the planar closed form); for redundant arms
-        only with the singular posture held fixed (the motion of the set is not
-        included). Joints at a limit at the minimum move with the limit.
+        The minimizing posture is polished by Newton steps on the KKT system of the
+        constrained minimum (`_kkt_polish`). The radius is differentiable in the design
+        by the envelope theorem of the constrained minimum, square and redundant J_v
+        alike (the Lagrange multipliers of J_v^T u = 0; tested against the planar closed
+        form and against central differences on the UR5, tests/test_reach_radius.py).
+        Joints at a limit at the minimum move with the limit.
     """
     check_joint_box(robot)
     return _singular_radius(

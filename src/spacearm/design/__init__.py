@@ -16,7 +16,9 @@ trade-off computable.
   `spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
   pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space); joint-box
   averages ``w_avg``, ``gci``, ``low_disturbance``, ``w_d_avg`` (`AVERAGE_OBJECTIVES`),
-  all from one fixed QMC rule and one chain pass per posture.
+  all from one fixed QMC rule and one chain pass per posture; ``low_total_mass``; and
+  ``reach_radius`` (the path-independent workspace radius, single-arm robots of either
+  family, with its envelope-theorem gradient; `spacearm.design.objectives.reach_radius`).
 * `hybrid_search` (the default of ``spacearm optimize``): an NSGA-II population refined
   by set-based hypervolume-gradient steps on the whole front at once (each
   non-dominated-sorting layer climbs its own hypervolume, computed exactly in JAX by

@@ -19,6 +19,11 @@ reference_point: [0.0, 0.0, -1.0]
 average: {samples: 2048, randomizations: 8, seed: 0}   # one fixed QMC rule for every design
 ```
 
+The objective ``reach_radius`` (the path-independent workspace radius, m; single-arm
+robots) takes its search's options from an optional ``radius:`` section
+(`spacearm.design.objectives.RADIUS_OPTIONS`: samples, keep, candidates, descent_steps,
+newton_steps, seed).
+
 On a robot with several arms (a tree) the variables are its fields
 (``arms.right.mount.xyz[0]``, ``links.left/forearm_link.length``;
 `spacearm.models.tree.fields`) and a per-tip objective names its tip, as
@@ -57,6 +62,8 @@ from ..models.family import family_of
 from ..models.planar import PlanarRobot, fields as planar_fields
 from .objectives import (
     AVERAGE_OBJECTIVES,
+    RADIUS_OBJECTIVES,
+    RADIUS_OPTIONS,
     average_objective,
     objective,
     objective_name,
@@ -160,6 +167,7 @@ class DesignProblem(VariableBounds):
         wbar_options: keyword arguments of the planar w-bar (objective ``wbar``).
         clamp_guaranteed: see `guaranteed_area` (objective ``S_G``).
         samples, randomizations, seed: the fixed QMC rule of the joint-box averages.
+        radius_options: options of the ``reach_radius`` search (`RADIUS_OPTIONS`), as given.
     """
 
     name: str
@@ -179,6 +187,7 @@ class DesignProblem(VariableBounds):
     grid_chunk: int = 2048
     nsga2: Mapping[str, Any] | None = None
     description: str = ""
+    radius_options: Mapping[str, Any] = dataclasses.field(default_factory=dict)
 
     @property
     def family(self):
@@ -209,6 +218,7 @@ class DesignProblem(VariableBounds):
             self.clamp_guaranteed,
             self.samples,
             self.randomizations,
+            tuple(sorted(self.radius_options.items())),
         )
 
     def objective_function(self) -> Callable[[jax.Array], jax.Array]:
@@ -237,6 +247,7 @@ class _Program:
     clamp_guaranteed: bool
     samples: int
     randomizations: int
+    radius_options: tuple[tuple[str, int], ...] = ()
 
 
 def _design(base, fields_set: tuple[str, ...], x: jax.Array):
@@ -257,7 +268,10 @@ def _evaluate(program: _Program, base, x: jax.Array, seed) -> jax.Array:
     for i, name in enumerate(program.objectives):
         if kinds[i] is None:
             values[i] = objective(
-                name, wbar_options=dict(program.wbar_options), clamp_guaranteed=program.clamp_guaranteed
+                name,
+                wbar_options=dict(program.wbar_options),
+                clamp_guaranteed=program.clamp_guaranteed,
+                radius_options=dict(program.radius_options),
             )(robot)
     if averaged:
         means = joint_averages(
@@ -296,6 +310,7 @@ _TOP_KEYS = {
     "search",
     "baselines",
     "hybrid",
+    "radius",
 }  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _FIXED_KEYS = {"base_mass", "base_inertia", "arm_mass", "reach", "links"}
 _AVERAGE_KEYS = {"samples", "randomizations", "seed"}
@@ -470,9 +485,12 @@ def problem_from_mapping(
     if len(objectives) < 2 or len(set(objectives)) != len(objectives):
         raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
     averaged = any(split_objective(name)[0] in AVERAGE_OBJECTIVES for name in objectives)
+    radius_options = _radius_options(source, config.get("radius"), objectives)
     # Optional where an objective has no natural zero: absent, the search takes it below
-    # the nadir of its first population (and writes it to the summary).
-    reference = config.get("reference_point", None if averaged else [0.0] * len(objectives))
+    # the nadir of its first population (and writes it to the summary). The radius is
+    # positive, but a few mm on a UR5: a zero reference would dwarf its differences.
+    searched = averaged or any(name in RADIUS_OBJECTIVES for name in objectives)
+    reference = config.get("reference_point", None if searched else [0.0] * len(objectives))
     if reference is not None:
         if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
             raise ConfigError(
@@ -507,6 +525,9 @@ def problem_from_mapping(
     if averaged:
         check_joint_box(base)
         fixed_summary.update(samples=samples, randomizations=randomizations, seed=seed)
+    if any(name in RADIUS_OBJECTIVES for name in objectives):
+        check_joint_box(base)
+        fixed_summary.update(radius={**RADIUS_OPTIONS, **radius_options})
 
     search = parse_search(source, config.get("search", {}))
     grid_points, grid_chunk, nsga2 = parse_baselines(
@@ -530,7 +551,30 @@ def problem_from_mapping(
         grid_chunk=grid_chunk,
         nsga2=nsga2,
         description=description,
+        radius_options=radius_options,
     )
+
+
+def _radius_options(source: str, section: Any, objectives: Sequence[str]) -> dict[str, int]:
+    """The ``radius:`` section (options of the ``reach_radius`` search), checked; only with that objective."""
+    if section is None:
+        return {}
+    if not any(name in RADIUS_OBJECTIVES for name in objectives):
+        raise ConfigError(f"{source}: radius: options of the reach_radius objective, which objectives does not list")
+    if not isinstance(section, Mapping):
+        raise ConfigError(f"{source}: radius: must be a mapping ({', '.join(RADIUS_OPTIONS)})")
+    check_keys(f"{source}: radius: ", section, set(RADIUS_OPTIONS))
+    least = {"newton_steps": 0, "seed": 0}
+    options = {
+        key: integer(f"{source}: radius.{key}", value, least=least.get(key, 1)) for key, value in section.items()
+    }
+    merged = {**RADIUS_OPTIONS, **options}
+    if merged["keep"] > merged["samples"]:
+        raise ConfigError(
+            f"{source}: radius.keep: at most radius.samples ({merged['samples']}) postures can be kept, "
+            f"got {merged['keep']}"
+        )
+    return options
 
 
 def _objective_entry(where: str, entry: Any, allowed: Sequence[str], base) -> str:
