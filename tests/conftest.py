@@ -5,8 +5,8 @@ session-scoped (their pytrees have the same shapes, so every test hits the same 
 entry points). They are also shared across sessions: a persistent compilation cache,
 kept between runs, lets programs traced again from new closures (each DesignProblem's
 objective), in a new process (each command-line subprocess) or in the next run load
-instead of compiling (only subprocesses use it unless ``SPACEARM_TEST_IN_PROCESS_CACHE=1``:
-see `pytest_configure`). The folder is ``$SPACEARM_TEST_CACHE``, else
+instead of compiling (``SPACEARM_TEST_IN_PROCESS_CACHE=0`` leaves the test processes
+themselves out: only subprocesses use it then). The folder is ``$SPACEARM_TEST_CACHE``, else
 ``$XDG_CACHE_HOME/spacearm-tests`` (``~/.cache/spacearm-tests``); ``--fresh-cache`` or
 ``SPACEARM_FRESH_CACHE=1`` uses a new empty folder instead, deleted at the end (what a
 first run on a clean machine costs). The command-line tests call spacearm.cli.main,
@@ -92,12 +92,9 @@ def pytest_configure(config):
     folder = _record_folder
     os.makedirs(folder, exist_ok=True)
     os.environ["SPACEARM_CACHE_DIR"] = folder  # subprocesses and CLI runs share the cache
-    # The long-lived test processes themselves do not write to the persistent cache: in
-    # full runs XLA crashed three times while serializing an executable (a segfault in
-    # `executable.serialize()`, on varying programs, never when the file ran alone), and a
-    # dead pytest-xdist worker fails the run or hangs it. Short-lived subprocesses still
-    # use the cache; in-process programs compile once per process as before.
-    if os.environ.get("SPACEARM_TEST_IN_PROCESS_CACHE", "") in ("", "0"):
+    # SPACEARM_TEST_IN_PROCESS_CACHE=0: the test processes compile everything themselves
+    # (short-lived subprocesses still use the cache), to tell a cache problem from others.
+    if os.environ.get("SPACEARM_TEST_IN_PROCESS_CACHE", "1") == "0":
         # The command line enables the cache when it starts; called in-process by the
         # tests, it must not turn it on for the rest of the worker's life.
         spacearm.cli.enable_compilation_cache = lambda *args, **kwargs: None
