@@ -8,9 +8,10 @@ an event, located by Newton predictions on the event functions to ``tol``:
 
 - singular: ds/dsigma reaches 0 (a sign change when the translational J* is square,
   a one-sided approach otherwise, where every step stays within half the predicted
-  distance), or, for a redundant arm, the tip advances less than ``sing_rate`` per
-  radian of joint motion (a stall: the minimum-norm flow may approach rank loss only
-  asymptotically);
+  distance), or, for a redundant arm, a stall: the tip advances less than ``sing_rate``
+  per radian of joint motion, or the rate is flat (its predicted zero lies beyond the
+  next joint limit) and the tip travel left until that limit, predicted from the rate
+  and its slope, is below ``tip_tol`` (see `step_lane`);
 - length: s reaches ``max_length``;
 - limit: a joint reaches its limit;
 - the step budget ``max_steps`` runs out (reason 3, not converged).
@@ -99,6 +100,7 @@ def step_lane(
     rtol,
     sing_rate,
     max_steps,
+    tip_tol=-jnp.inf,
     tableau: str = "dop853",
     rolled: bool = False,
 ):
@@ -110,7 +112,24 @@ def step_lane(
         lower, upper: ``(n,)`` joint limits.
         square: whether the translational J* is square (the singular end is a sign change).
         sing_rate: the stall rate of a redundant arm, m/rad (-inf: no stall event).
+        tip_tol: the stall travel of a redundant arm, m (-inf: none; see below).
         rolled: the Runge-Kutta stages in a loop (for fields that hold a loop), static.
+
+    The stall by travel. The minimum-norm flow of a redundant arm can reach a slow
+    manifold instead of the rank loss: on the UR5 every path of
+    benchmarks/bench_spatial_straight.py gets there after 55-160 steps, where the five
+    arm joints sit at the elbow singularity and only joint 6, whose axis nearly passes
+    through the tip, still moves it, through the bus reaction. ds/dsigma then stays flat
+    (1e-6 to 1.3e-4 m/rad, drifting by < 1 % per radian) until joint 6 meets its limit,
+    after up to 4 pi rad, and the field is stiff there (Jacobian eigenvalues near
+    -0.18 / sigma_3(J*_v), -4e3 to -3e4 per rad), so explicit steps stay at ~1e-3 rad and
+    such a path needs 2,000 to 30,000 steps for < 1 mm of tip travel. The path ends
+    there, singular, when the rate's linear model rate + slope t stays positive up to
+    the next joint limit h_lim (along the current joint direction) and predicts a travel
+    h_lim (rate + slope h_lim / 2) <= ``tip_tol`` to it; a limit within ``max_step`` is
+    located as usual. The end then falls short of the exact one by at most ``tip_tol``
+    of tip travel (as far as the rate stays near its linear model), while the joints
+    skip the rest of the creep (joint 6 by up to its range).
 
     Returns:
         (new lane state, finished, reason): finished when an event is located to ``tol``
@@ -141,7 +160,12 @@ def step_lane(
     h_event = candidates[event]
     reached = jnp.abs(h_event) <= tol
     if not square:
-        stalled = rate <= sing_rate
+        # The stall: a slow rate, or a flat one whose travel to the next limit is below tip_tol.
+        finite = jnp.isfinite(h_lim)
+        span = jnp.where(finite, h_lim, 0.0)
+        flat = finite & ((slope >= 0) | (rate > -slope * span)) & (span > max_step) & (h_len > span)
+        travel = span * (rate + 0.5 * slope * span)
+        stalled = (rate <= sing_rate) | (flat & (travel <= tip_tol))
         event = jnp.where(stalled & ~reached, REASON_SINGULAR, event).astype(jnp.int32)
         reached = reached | stalled
     h = jnp.minimum(h_event, max_h)

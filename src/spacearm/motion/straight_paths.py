@@ -228,7 +228,7 @@ def _lane_start(robot, joints, coords, direction, max_step):
     return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0}, rolled=family.straight_field_loops)
 
 
-def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_steps, *, tableau):
+def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, tip_tol, max_steps, *, tableau):
     family = family_of(robot)
     n = family.joint_count(robot)
     dtype = lane["y"].dtype
@@ -248,6 +248,7 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_step
         rtol=rtol,
         sing_rate=sing_rate,
         max_steps=max_steps,
+        tip_tol=tip_tol,
         tableau=tableau,
         rolled=family.straight_field_loops,
     )
@@ -264,6 +265,7 @@ def _straight_flat(
     tol,
     rtol,
     sing_rate,
+    tip_tol,
     max_steps,
     real,
     robot_batched,
@@ -279,11 +281,13 @@ def _straight_flat(
 
     start = jax.vmap(_lane_start, in_axes=(robot_axis, 0, 0, 0, None))
     step = jax.vmap(
-        functools.partial(_lane_step, tableau=tableau), in_axes=(robot_axis, 0, 0, None, None, None, None, None)
+        functools.partial(_lane_step, tableau=tableau), in_axes=(robot_axis, 0, 0, None, None, None, None, None, None)
     )
     results = run_queue(
         lambda index: start(robot_for(index), joints[index], coords[index], direction[index], max_step),
-        lambda index, lane: step(robot_for(index), lane, max_length[index], max_step, tol, rtol, sing_rate, max_steps),
+        lambda index, lane: step(
+            robot_for(index), lane, max_length[index], max_step, tol, rtol, sing_rate, tip_tol, max_steps
+        ),
         count,
         min(lanes, count),
         real,
@@ -352,6 +356,7 @@ def straight_tip_path(
     lanes: int | None = None,
     base_rotation: jax.Array | None = None,
     sing_rate: float | None = None,
+    tip_tol: float | None = None,
 ):
     """Move the tip along a straight inertial line until J* loses rank (Fig. 3a), any family.
 
@@ -388,6 +393,10 @@ def straight_tip_path(
             advances less than this per radian of joint motion, m/rad (None: 1e-6; the
             minimum-norm flow of a redundant arm may approach rank loss only
             asymptotically). Planar paths have no such stall event.
+        tip_tol: spatial redundant arms: the path also ends (singular) once ds/dsigma is
+            flat and the tip travel it predicts up to the next joint limit is below this,
+            m (None: 1e-3; `spacearm.motion.lanes.step_lane`): the UR5 can creep there
+            for thousands of steps, moved only by the bus reaction to its last joint.
 
     Returns:
         `StraightPath` (planar) or `SpatialStraightPath` (spatial) with batch shape ``(...)``.
@@ -411,6 +420,7 @@ def straight_tip_path(
     rtol = option(rtol, "rtol", default_tol)
     max_step = option(max_step, "max_step")
     sing_rate = option(sing_rate, "sing_rate")
+    tip_tol = option(tip_tol, "tip_tol", -np.inf)
     max_steps = option(max_steps, "max_steps")
     if tableau not in ("dop853", "rk4"):
         raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
@@ -431,6 +441,7 @@ def straight_tip_path(
         _as_array(tol, dtype),
         _as_array(rtol, dtype),
         _as_array(sing_rate, dtype),
+        _as_array(tip_tol, dtype),
         np.int32(max_steps),
         np.int32(count),
         batched,
