@@ -36,6 +36,8 @@ __all__ = ["PATH_BUCKET", "lane_count", "run_queue", "start_lane", "step_lane"]
 
 # Batches of paths are padded to PATH_BUCKET or the next power of two beyond.
 PATH_BUCKET = 512
+# The forward-difference step of the start's slope of ds/dsigma, rad of joint arc.
+PROBE = 1e-7
 
 
 def lane_count(padded: int, lanes: int | None = None) -> int:
@@ -54,36 +56,23 @@ def lane_count(padded: int, lanes: int | None = None) -> int:
 
 def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False) -> dict:
     """The lane state at the start of one path (``params``: the field's per-path parameters;
-    ``rolled``: the field holds a loop, so its two evaluations run in a loop, static)."""
+    ``rolled``: the field holds a loop, static).
+
+    The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
+    through the last two steps (a forward difference at the start): cheaper than a jvp of
+    the field, and exact enough, since the end test is on ds/dsigma itself. Where the
+    field holds a loop (``rolled``), nothing is evaluated here: the lane starts ``fresh``
+    and `step_lane` takes its two start evaluations from its own stage loop, so the
+    program holds one copy of the field (a spatial field is a pass over the chain, about
+    1 s of CPU to compile per copy), not three (the start, the refill, the step).
+    """
     dtype = y0.dtype
-    # The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
-    # through the last two steps (a forward difference at the start): cheaper than a jvp
-    # of the field, and exact enough, since the end test is on ds/dsigma itself. The two
-    # evaluations, f0 = field(y0) and field(y0 + probe f0), run as a two-pass loop where
-    # the field holds a loop (``rolled``): one copy of the field in the program (a
-    # spatial field holds a pass over the chain, costly to compile).
-    probe = 1e-7
-
+    lane = dict(params, y=y0, arc=jnp.zeros((), dtype), count=jnp.int32(0), h_control=jnp.asarray(max_step, dtype))
     if rolled:
-
-        def evaluate(k, pair):
-            f = field(jnp.where(k == 0, y0, y0 + probe * pair[0]))
-            return jnp.where(k == 0, f, pair[0]), f
-
-        f0, f1 = jax.lax.fori_loop(0, 2, evaluate, (jnp.zeros_like(y0), jnp.zeros_like(y0)))
-    else:
-        f0 = field(y0)
-        f1 = field(y0 + probe * f0)
-    slope0 = (f1[-1] - f0[-1]) / probe
-    return dict(
-        params,
-        y=y0,
-        f=f0,
-        slope=slope0,
-        arc=jnp.zeros((), dtype),
-        count=jnp.int32(0),
-        h_control=jnp.asarray(max_step, dtype),
-    )
+        return dict(lane, f=jnp.zeros_like(y0), slope=jnp.zeros((), dtype), fresh=jnp.bool_(True))
+    f0 = field(y0)
+    f1 = field(y0 + PROBE * f0)
+    return dict(lane, f=f0, slope=(f1[-1] - f0[-1]) / PROBE)
 
 
 def step_lane(
@@ -113,7 +102,8 @@ def step_lane(
         square: whether the translational J* is square (the singular end is a sign change).
         sing_rate: the stall rate of a redundant arm, m/rad (-inf: no stall event).
         tip_tol: the stall travel of a redundant arm, m (-inf: none; see below).
-        rolled: the Runge-Kutta stages in a loop (for fields that hold a loop), static.
+        rolled: the Runge-Kutta stages in a loop (for fields that hold a loop), static; the
+            call on a fresh lane (`start_lane`) is the start: f and the slope, no step.
 
     The stall by travel. The minimum-norm flow of a redundant arm can reach a slow
     manifold instead of the rank loss: on the UR5 every path of
@@ -168,6 +158,8 @@ def step_lane(
         stalled = (rate <= sing_rate) | (flat & (travel <= tip_tol))
         event = jnp.where(stalled & ~reached, REASON_SINGULAR, event).astype(jnp.int32)
         reached = reached | stalled
+    fresh = lane["fresh"] if rolled else jnp.bool_(False)  # f and slope not evaluated yet
+    reached = reached & ~fresh
     h = jnp.minimum(h_event, max_h)
 
     adaptive = tableau == "dop853"
@@ -176,6 +168,9 @@ def step_lane(
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
     if rolled:  # field(y_new) as the loop's last stage: one copy of the field in the program
+        # A fresh lane's step is the start's probe: with f = 0 and h = PROBE the second
+        # stage is field(y) = f0 and the last field(y + PROBE * (sum of b_i k_i, i > 1)).
+        h = jnp.where(fresh, PROBE, h)
         y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, rolled=True, first_slope=f, end_slope=True)
         f_new = slopes[-1]
     else:
@@ -187,13 +182,13 @@ def step_lane(
         factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
         limited = jnp.abs(h) < 0.999 * h_control
         grown = jnp.where(accept & limited, h_control, jnp.abs(h) * factor)
-        h_control = jnp.where(reached, h_control, jnp.minimum(grown, max_step))
+        h_control = jnp.where(reached | fresh, h_control, jnp.minimum(grown, max_step))
     else:
         accept = jnp.bool_(True)
     take = accept & ~reached
     slope_new = jnp.where(h != 0, (f_new[-1] - f[-1]) / jnp.where(h != 0, h, 1.0), slope)
     keep = lambda new, old: jnp.where(take, new, old)
-    count = lane["count"] + jnp.where(reached, 0, 1).astype(jnp.int32)
+    count = lane["count"] + jnp.where(reached | fresh, 0, 1).astype(jnp.int32)
     new_lane = dict(
         lane,
         y=keep(y_new, y),
@@ -203,7 +198,13 @@ def step_lane(
         count=count,
         h_control=h_control,
     )
-    finished = reached | (count >= max_steps)
+    if rolled:  # a fresh lane keeps y and takes f0 and the secant along the probe (unit joint rates)
+        f0 = slopes[1]
+        probe = jnp.linalg.norm(y_new[first : first + n] - q)
+        slope0 = (f_new[-1] - f0[-1]) / jnp.where(probe > 0, probe, 1.0)
+        started = dict(lane, f=f0, slope=jnp.where(probe > 0, slope0, 0.0), fresh=jnp.bool_(False))
+        new_lane = jax.tree_util.tree_map(lambda a, b: jnp.where(fresh, a, b), started, new_lane)
+    finished = (reached | (count >= max_steps)) & ~fresh
     reason = jnp.where(reached, event, REASON_STEP_BUDGET)
     return new_lane, finished, reason
 
@@ -247,7 +248,7 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         refill = finished & (next_index + rank < real)
         index = jnp.where(refill, next_index + rank, index)
 
-        def refilled():  # the start costs two field evaluations: only when a lane takes a path
+        def refilled():  # an unrolled start costs two field evaluations: only when a lane takes a path
             fresh = start(index)
             return jax.tree_util.tree_map(
                 lambda new, old: jnp.where(refill.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), fresh, lane
