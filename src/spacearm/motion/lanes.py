@@ -107,19 +107,20 @@ def step_lane(
 
     The stall by travel. The minimum-norm flow of a redundant arm can reach a slow
     manifold instead of the rank loss: on the UR5 every path of
-    benchmarks/bench_spatial_straight.py gets there after 55-160 steps, where the five
+    benchmarks/bench_spatial_straight.py gets there after 54-160 steps, where the five
     arm joints sit at the elbow singularity and only joint 6, whose axis nearly passes
     through the tip, still moves it, through the bus reaction. ds/dsigma then stays flat
     (1e-6 to 1.3e-4 m/rad, drifting by < 1 % per radian) until joint 6 meets its limit,
-    after up to 4 pi rad, and the field is stiff there (Jacobian eigenvalues near
-    -0.18 / sigma_3(J*_v), -4e3 to -3e4 per rad), so explicit steps stay at ~1e-3 rad and
-    such a path needs 2,000 to 30,000 steps for < 1 mm of tip travel. The path ends
-    there, singular, when the rate's linear model rate + slope t stays positive up to
-    the next joint limit h_lim (along the current joint direction) and predicts a travel
+    6 rad or more later, and the field is stiff there (Jacobian eigenvalues near
+    -0.18 / sigma_3(J*_v), -4e3 to -3e4 per rad), so explicit steps stay at 1e-4 to 1e-3
+    rad: thousands to over 100,000 steps for < 1 mm of tip travel. The path ends there,
+    singular, when the rate's linear model rate + slope t stays positive up to the next
+    joint limit h_lim (along the current joint direction) and predicts a travel
     h_lim (rate + slope h_lim / 2) <= ``tip_tol`` to it; a limit within ``max_step`` is
-    located as usual. The end then falls short of the exact one by at most ``tip_tol``
-    of tip travel (as far as the rate stays near its linear model), while the joints
-    skip the rest of the creep (joint 6 by up to its range).
+    located as usual, and so is a length event before the limit. The end then falls
+    short of the exact one by at most ``tip_tol`` of tip travel (as far as the rate
+    stays near its linear model), while the joints skip the rest of the creep (joint 6
+    by up to its range).
 
     Returns:
         (new lane state, finished, reason): finished when an event is located to ``tol``
