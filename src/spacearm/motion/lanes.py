@@ -119,8 +119,8 @@ def step_lane(
     h_lim (rate + slope h_lim / 2) <= ``tip_tol`` to it; a limit within ``max_step`` is
     located as usual, and so is a length event before the limit. The end then falls
     short of the exact one by at most ``tip_tol`` of tip travel (as far as the rate
-    stays near its linear model), while the joints skip the rest of the creep (joint 6
-    by up to its range).
+    stays near its linear model and the joints keep their direction, as on the creep),
+    while the joints skip the rest of the creep (joint 6 by up to its range).
 
     Returns:
         (new lane state, finished, reason): finished when an event is located to ``tol``
