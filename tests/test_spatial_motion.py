@@ -34,6 +34,11 @@ def test_straight_paths_follow_the_line_to_a_singularity(ur5):
     start = np.einsum("pij,pj->pi", R0, np.asarray(sa.tip_position(ur5, q0)))
     # the tip stays on the inertial line (R is integrated with q: an attitude error would bend it)
     np.testing.assert_allclose(np.asarray(out.end_tip) - start, np.asarray(out.length)[:, None] * d, atol=1e-8)
+    # the ends, taken from the field's last chain pass, are those of the end joints
+    tip_end = np.einsum("pij,pj->pi", np.asarray(out.end_rotation), np.asarray(sa.tip_position(ur5, out.end_joints)))
+    np.testing.assert_allclose(out.end_tip, tip_end, rtol=0, atol=1e-14)
+    w_fixed = np.asarray(sa.fixed_base_manipulability(ur5, out.end_joints))
+    np.testing.assert_allclose(out.fixed_manipulability, w_fixed, rtol=1e-12, atol=1e-18)
     # all three end singular within 200 steps; paths 0 and 2 by the stall (a flat
     # ds/dsigma, the bus reaction to joint 6 alone moving the tip): J*_v lost rank there
     np.testing.assert_array_equal(out.reason, sa.motion.REASON_SINGULAR)
@@ -78,6 +83,11 @@ def test_straight_field_takes_one_chain_pass_and_equals_the_two_pass_field(ur5):
     maps = np.asarray(primitives.straight_path_maps(ur5, q))
     np.testing.assert_array_equal(maps[:, :3], np.asarray(primitives.generalized_jacobian(ur5, q))[:, :3])
     np.testing.assert_allclose(maps[:, 3:], np.asarray(primitives.base_twist_map(ur5, q))[:, 3:], rtol=0, atol=1e-15)
+    # the same pass also gives a path's end quantities: fixed-base J_v and the tip
+    both, fixed_v, tip = (np.asarray(x) for x in primitives.straight_maps_and_ends(ur5, q))
+    np.testing.assert_allclose(both, maps, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(fixed_v, np.asarray(primitives.fixed_base_jacobian(ur5, q))[:, :3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(tip, np.asarray(primitives.tip(ur5, q)), rtol=0, atol=1e-15)
     for qk in q:
         R = np.asarray(attitude.expm(jnp.asarray(rng.normal(size=3))))
         d = rng.normal(size=3)

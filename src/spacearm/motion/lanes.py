@@ -54,7 +54,7 @@ def lane_count(padded: int, lanes: int | None = None) -> int:
     return int(min(512, max(64, padded // 16), padded))
 
 
-def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False) -> dict:
+def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False, aux: int = 0) -> dict:
     """The lane state at the start of one path (``params``: the field's per-path parameters;
     ``rolled``: the field holds a loop, static).
 
@@ -65,11 +65,16 @@ def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = F
     and `step_lane` takes its two start evaluations from its own stage loop, so the
     program holds one copy of the field (a spatial field is a pass over the chain, about
     1 s of CPU to compile per copy), not three (the start, the refill, the step).
+
+    ``aux`` > 0 (rolled only, static): the field returns ``(slope, aux vector (aux,))``,
+    and the lane keeps the aux vector of its current y (``"aux"``, written with the
+    results by `run_queue`): quantities of the path's end from the field's own pass.
     """
     dtype = y0.dtype
     lane = dict(params, y=y0, arc=jnp.zeros((), dtype), count=jnp.int32(0), h_control=jnp.asarray(max_step, dtype))
     if rolled:
-        return dict(lane, f=jnp.zeros_like(y0), slope=jnp.zeros((), dtype), fresh=jnp.bool_(True))
+        lane = dict(lane, f=jnp.zeros_like(y0), slope=jnp.zeros((), dtype), fresh=jnp.bool_(True))
+        return dict(lane, aux=jnp.zeros((aux,), dtype)) if aux else lane
     f0 = field(y0)
     f1 = field(y0 + PROBE * f0)
     return dict(lane, f=f0, slope=(f1[-1] - f0[-1]) / PROBE)
@@ -172,7 +177,12 @@ def step_lane(
         # A fresh lane's step is the start's probe: with f = 0 and h = PROBE the second
         # stage is field(y) = f0 and the last field(y + PROBE * (sum of b_i k_i, i > 1)).
         h = jnp.where(fresh, PROBE, h)
-        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, rolled=True, first_slope=f, end_slope=True)
+        if "aux" in lane:  # the aux vector at y_new (last stage), at y for a fresh lane (second)
+            y_new, slopes, auxes = rk_step(
+                field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True, aux=lane["aux"]
+            )
+        else:
+            y_new, slopes = rk_step(field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True)
         f_new = slopes[-1]
     else:
         y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, first_slope=f)
@@ -199,11 +209,15 @@ def step_lane(
         count=count,
         h_control=h_control,
     )
+    if "aux" in lane:
+        new_lane["aux"] = keep(auxes[-1], lane["aux"])
     if rolled:  # a fresh lane keeps y and takes f0 and the secant along the probe (unit joint rates)
         f0 = slopes[1]
         probe = jnp.linalg.norm(y_new[first : first + n] - q)
         slope0 = (f_new[-1] - f0[-1]) / jnp.where(probe > 0, probe, 1.0)
         started = dict(lane, f=f0, slope=jnp.where(probe > 0, slope0, 0.0), fresh=jnp.bool_(False))
+        if "aux" in lane:
+            started["aux"] = auxes[1]
         new_lane = jax.tree_util.tree_map(lambda a, b: jnp.where(fresh, a, b), started, new_lane)
     finished = (reached | (count >= max_steps)) & ~fresh
     reason = jnp.where(reached, event, REASON_STEP_BUDGET)
@@ -222,7 +236,8 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
             and their results stay zero.
 
     Returns:
-        ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``.
+        ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``, and
+        ``"aux": (count, p)`` where the lanes keep an aux vector (`start_lane`).
     """
     index0 = jnp.arange(width, dtype=jnp.int32)
     lanes0 = start(index0)
@@ -233,6 +248,8 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         "count": jnp.zeros((count,), jnp.int32),
         "reason": jnp.zeros((count,), jnp.int32),
     }
+    if "aux" in lanes0:
+        results0["aux"] = jnp.zeros((count,) + lanes0["aux"].shape[1:], y0.dtype)
     state0 = (lanes0, index0, index0 < real, jnp.int32(width), results0)
 
     def cond(state):
@@ -244,6 +261,8 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         finished = finished & active
         target = jnp.where(finished, index, count)  # out of range: dropped
         written = {"y": lane["y"], "arc": lane["arc"], "count": lane["count"], "reason": reason}
+        if "aux" in lane:
+            written["aux"] = lane["aux"]
         results = {k: results[k].at[target].set(written[k], mode="drop") for k in results}
         rank = jnp.cumsum(finished.astype(jnp.int32)) - 1
         refill = finished & (next_index + rank < real)
