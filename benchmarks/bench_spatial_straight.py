@@ -1,12 +1,15 @@
 """CPU seconds of the spatial straight tip path on the UR5 smallsat: first call and warm call.
 
-Usage: [MAX_STEPS=k] python benchmarks/bench_spatial_straight.py [paths] [out.npz]
+Usage: [MAX_STEPS=k] [TIP_TOL=m] python benchmarks/bench_spatial_straight.py [paths] [out.npz]
        python benchmarks/bench_spatial_straight.py reaction [paths] [out.npz]
 
 Measures process CPU time (user + system, all threads) of the first call of
 ``sa.straight_tip_path`` (trace + compile + run) and of a second call with the same
 shapes (run only), then of a call with one more path (a new batch size). The persistent
 compile cache is off. Saves the path ends to ``out.npz`` for comparisons across versions.
+``TIP_TOL=-inf MAX_STEPS=120000`` integrates the UR5's creep at the elbow singularity to
+the joint limits instead of ending it by the stall by travel (`spacearm.motion.lanes.step_lane`):
+the exact ends the stall ends are compared with (75 s of CPU).
 """
 
 import os
@@ -65,6 +68,8 @@ def main() -> None:
     d = directions(count + 1)
     q = np.broadcast_to(q0, (count, 6))
     options = {"max_steps": int(os.environ["MAX_STEPS"])} if "MAX_STEPS" in os.environ else {}
+    if "TIP_TOL" in os.environ:
+        options["tip_tol"] = float(os.environ["TIP_TOL"])
     first, t_first = timed(lambda: sa.straight_tip_path(robot, q, d[:count], **options))
     _, t_warm = timed(lambda: sa.straight_tip_path(robot, q, d[:count], **options))
     _, t_more = timed(lambda: sa.straight_tip_path(robot, np.broadcast_to(q0, (count + 1, 6)), d, **options))

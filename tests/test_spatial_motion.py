@@ -31,14 +31,32 @@ def test_straight_paths_follow_the_line_to_a_singularity(ur5):
     R0 = np.asarray(attitude.expm(jnp.asarray(rng.normal(size=(3, 3)))))
     d = np.einsum("pij,pj->pi", R0, d_bus)  # the same paths in bus axes as with R0 = 1 (left invariance)
     out = spatial_straight_tip_path(ur5, q0, d, base_rotation=R0, max_steps=1500)
-    # (paths 0 and 2 spend the step budget approaching rank loss asymptotically: reason 3)
     start = np.einsum("pij,pj->pi", R0, np.asarray(sa.tip_position(ur5, q0)))
     # the tip stays on the inertial line (R is integrated with q: an attitude error would bend it)
     np.testing.assert_allclose(np.asarray(out.end_tip) - start, np.asarray(out.length)[:, None] * d, atol=1e-8)
-    singular = np.asarray(out.reason) == sa.motion.REASON_SINGULAR
-    assert singular.any()
-    w_end = np.asarray(sa.manipulability(ur5, out.end_joints))
-    assert np.all(w_end[singular] < 1e-3 * np.asarray(sa.manipulability(ur5, q0))[singular])
+    # the ends, taken from the field's last chain pass, are those of the end joints
+    tip_end = np.einsum("pij,pj->pi", np.asarray(out.end_rotation), np.asarray(sa.tip_position(ur5, out.end_joints)))
+    np.testing.assert_allclose(out.end_tip, tip_end, rtol=0, atol=1e-14)
+    w_fixed = np.asarray(sa.fixed_base_manipulability(ur5, out.end_joints))
+    np.testing.assert_allclose(out.fixed_manipulability, w_fixed, rtol=1e-12, atol=1e-18)
+    # all three end singular within 200 steps; paths 0 and 2 by the stall (a flat
+    # ds/dsigma, the bus reaction to joint 6 alone moving the tip): J*_v lost rank there
+    np.testing.assert_array_equal(out.reason, sa.motion.REASON_SINGULAR)
+    assert np.all(np.asarray(out.steps) < 200)
+
+    def rank_ratio(q):  # sigma_3 / sigma_1 of the translational J*
+        sigma = np.linalg.svd(np.asarray(sa.generalized_jacobian(ur5, q))[:, :3], compute_uv=False)
+        return sigma[:, 2] / sigma[:, 0]
+
+    assert np.all(rank_ratio(q0) > 1e-2) and np.all(rank_ratio(out.end_joints) < 1e-4)
+    # Path 0 integrated through the creep (no stall by travel) meets joint 6's limit after
+    # ~3,150 steps, 0.9 mm further along the line: the stall end is short of it by at most
+    # tip_tol (1e-3 m), with J*_v as singular there.
+    exact = spatial_straight_tip_path(ur5, q0, d, base_rotation=R0, max_steps=3500, tip_tol=-np.inf)
+    assert int(exact.reason[0]) == sa.motion.REASON_JOINT_LIMIT
+    assert abs(float(exact.end_joints[0, 5]) + 2 * np.pi) < 1e-9
+    assert 0.0 < float(exact.length[0] - out.length[0]) <= 1e-3
+    assert rank_ratio(exact.end_joints[:1])[0] < 1e-4
     # the attitude is a rotation, and the bus did turn
     R = np.asarray(out.end_rotation)
     np.testing.assert_allclose(np.swapaxes(R, -1, -2) @ R, np.broadcast_to(np.eye(3), R.shape), atol=1e-13)
@@ -65,6 +83,11 @@ def test_straight_field_takes_one_chain_pass_and_equals_the_two_pass_field(ur5):
     maps = np.asarray(primitives.straight_path_maps(ur5, q))
     np.testing.assert_array_equal(maps[:, :3], np.asarray(primitives.generalized_jacobian(ur5, q))[:, :3])
     np.testing.assert_allclose(maps[:, 3:], np.asarray(primitives.base_twist_map(ur5, q))[:, 3:], rtol=0, atol=1e-15)
+    # the same pass also gives a path's end quantities: fixed-base J_v and the tip
+    both, fixed_v, tip = (np.asarray(x) for x in primitives.straight_maps_and_ends(ur5, q))
+    np.testing.assert_allclose(both, maps, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(fixed_v, np.asarray(primitives.fixed_base_jacobian(ur5, q))[:, :3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(tip, np.asarray(primitives.tip(ur5, q)), rtol=0, atol=1e-15)
     for qk in q:
         R = np.asarray(attitude.expm(jnp.asarray(rng.normal(size=3))))
         d = rng.normal(size=3)

@@ -53,7 +53,7 @@ class RobotFamily:
             over the chain): the integrator then rolls its Runge-Kutta stages into a
             loop instead of writing them out (a shorter compile for the same speed).
         straight_defaults: the family's defaults of the straight-path options
-            (``max_step``, ``tol``, ``rtol``, ``sing_rate``, ``max_steps``).
+            (``max_step``, ``tol``, ``rtol``, ``sing_rate``, ``tip_tol``, ``max_steps``).
         fields: the family's named design numbers (a module with ``FIELD_HELP``,
             ``canonical_name``, ``check_field``, ``set_field``, ``field_stage``,
             ``conflicting_number``, ``field_unit``, ``field_columns``): what sweep axes

@@ -158,7 +158,9 @@ def tableau_arrays(tableau: str):
     raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
 
 
-def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False, first_slope=None, end_slope=False):
+def rk_step(
+    field, y, h, tableau="dop853", return_slopes=False, *, rolled=False, first_slope=None, end_slope=False, aux=None
+):
     """One explicit Runge-Kutta step of size h (may be negative) of y' = field(y).
 
     Unrolled (default), the stages are written out at trace time: under vmap on CPU this
@@ -173,6 +175,10 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False,
         end_slope: rolled only: also evaluate field(y_new) inside the same loop, as a 13th
             stage whose weights are the solution weights (one copy of the field in the
             program instead of two); it is the last row of the returned slopes.
+        aux: rolled only: ``field`` returns ``(slope, aux vector)`` and this is the zero aux
+            vector ``(p,)``; the step also returns each stage's aux ``(stages, p)`` (zero
+            where a stage is not evaluated): what the field's evaluation computes besides
+            the slope, kept without a second copy of the field.
 
     Returns:
         y_new, or (y_new, slopes) with ``return_slopes``: a list of the stage slopes
@@ -192,6 +198,17 @@ def rk_step(field, y, h, tableau="dop853", return_slopes=False, *, rolled=False,
         else:
             first = 1
             K = K.at[0].set(first_slope)
+        if aux is not None:
+
+            def stage(i, carry):
+                K, X = carry
+                k, x = field(y + h * (A[i] @ K))
+                return K.at[i].set(k), X.at[i].set(x)
+
+            X = jnp.zeros((stages,) + aux.shape, aux.dtype)
+            K, X = jax.lax.fori_loop(first, stages, stage, (K, X))
+            y_new = y + h * (jnp.asarray(b, y.dtype) @ K)
+            return (y_new, K, X) if return_slopes else (y_new, X)
         K = jax.lax.fori_loop(first, stages, lambda i, K: K.at[i].set(field(y + h * (A[i] @ K))), K)
         y_new = y + h * (jnp.asarray(b, y.dtype) @ K)
         return (y_new, K) if return_slopes else y_new

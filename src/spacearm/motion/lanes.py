@@ -8,9 +8,10 @@ an event, located by Newton predictions on the event functions to ``tol``:
 
 - singular: ds/dsigma reaches 0 (a sign change when the translational J* is square,
   a one-sided approach otherwise, where every step stays within half the predicted
-  distance), or, for a redundant arm, the tip advances less than ``sing_rate`` per
-  radian of joint motion (a stall: the minimum-norm flow may approach rank loss only
-  asymptotically);
+  distance), or, for a redundant arm, a stall: the tip advances less than ``sing_rate``
+  per radian of joint motion, or the rate is flat (its predicted zero lies beyond the
+  next joint limit) and the tip travel left until that limit, predicted from the rate
+  and its slope, is below ``tip_tol`` (see `step_lane`);
 - length: s reaches ``max_length``;
 - limit: a joint reaches its limit;
 - the step budget ``max_steps`` runs out (reason 3, not converged).
@@ -35,6 +36,8 @@ __all__ = ["PATH_BUCKET", "lane_count", "run_queue", "start_lane", "step_lane"]
 
 # Batches of paths are padded to PATH_BUCKET or the next power of two beyond.
 PATH_BUCKET = 512
+# The forward-difference step of the start's slope of ds/dsigma, rad of joint arc.
+PROBE = 1e-7
 
 
 def lane_count(padded: int, lanes: int | None = None) -> int:
@@ -51,38 +54,30 @@ def lane_count(padded: int, lanes: int | None = None) -> int:
     return int(min(512, max(64, padded // 16), padded))
 
 
-def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False) -> dict:
+def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = False, aux: int = 0) -> dict:
     """The lane state at the start of one path (``params``: the field's per-path parameters;
-    ``rolled``: the field holds a loop, so its two evaluations run in a loop, static)."""
+    ``rolled``: the field holds a loop, static).
+
+    The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
+    through the last two steps (a forward difference at the start): cheaper than a jvp of
+    the field, and exact enough, since the end test is on ds/dsigma itself. Where the
+    field holds a loop (``rolled``), nothing is evaluated here: the lane starts ``fresh``
+    and `step_lane` takes its two start evaluations from its own stage loop, so the
+    program holds one copy of the field (a spatial field is a pass over the chain, about
+    1 s of CPU to compile per copy), not three (the start, the refill, the step).
+
+    ``aux`` > 0 (rolled only, static): the field returns ``(slope, aux vector (aux,))``,
+    and the lane keeps the aux vector of its current y (``"aux"``, written with the
+    results by `run_queue`): quantities of the path's end from the field's own pass.
+    """
     dtype = y0.dtype
-    # The slope of ds/dsigma, for the Newton prediction of the singular end, is a secant
-    # through the last two steps (a forward difference at the start): cheaper than a jvp
-    # of the field, and exact enough, since the end test is on ds/dsigma itself. The two
-    # evaluations, f0 = field(y0) and field(y0 + probe f0), run as a two-pass loop where
-    # the field holds a loop (``rolled``): one copy of the field in the program (a
-    # spatial field holds a pass over the chain, costly to compile).
-    probe = 1e-7
-
+    lane = dict(params, y=y0, arc=jnp.zeros((), dtype), count=jnp.int32(0), h_control=jnp.asarray(max_step, dtype))
     if rolled:
-
-        def evaluate(k, pair):
-            f = field(jnp.where(k == 0, y0, y0 + probe * pair[0]))
-            return jnp.where(k == 0, f, pair[0]), f
-
-        f0, f1 = jax.lax.fori_loop(0, 2, evaluate, (jnp.zeros_like(y0), jnp.zeros_like(y0)))
-    else:
-        f0 = field(y0)
-        f1 = field(y0 + probe * f0)
-    slope0 = (f1[-1] - f0[-1]) / probe
-    return dict(
-        params,
-        y=y0,
-        f=f0,
-        slope=slope0,
-        arc=jnp.zeros((), dtype),
-        count=jnp.int32(0),
-        h_control=jnp.asarray(max_step, dtype),
-    )
+        lane = dict(lane, f=jnp.zeros_like(y0), slope=jnp.zeros((), dtype), fresh=jnp.bool_(True))
+        return dict(lane, aux=jnp.zeros((aux,), dtype)) if aux else lane
+    f0 = field(y0)
+    f1 = field(y0 + PROBE * f0)
+    return dict(lane, f=f0, slope=(f1[-1] - f0[-1]) / PROBE)
 
 
 def step_lane(
@@ -99,6 +94,7 @@ def step_lane(
     rtol,
     sing_rate,
     max_steps,
+    tip_tol=-jnp.inf,
     tableau: str = "dop853",
     rolled: bool = False,
 ):
@@ -110,7 +106,26 @@ def step_lane(
         lower, upper: ``(n,)`` joint limits.
         square: whether the translational J* is square (the singular end is a sign change).
         sing_rate: the stall rate of a redundant arm, m/rad (-inf: no stall event).
-        rolled: the Runge-Kutta stages in a loop (for fields that hold a loop), static.
+        tip_tol: the stall travel of a redundant arm, m (-inf: none; see below).
+        rolled: the Runge-Kutta stages in a loop (for fields that hold a loop), static; the
+            call on a fresh lane (`start_lane`) is the start: f and the slope, no step.
+
+    The stall by travel. The minimum-norm flow of a redundant arm can reach a slow
+    manifold instead of the rank loss: on the UR5 every path of
+    benchmarks/bench_spatial_straight.py gets there after 54-160 steps, where the five
+    arm joints sit at the elbow singularity and only joint 6, whose axis nearly passes
+    through the tip, still moves it, through the bus reaction. ds/dsigma then stays flat
+    (1e-6 to 1.3e-4 m/rad, drifting by < 1 % per radian) until joint 6 meets its limit,
+    6 rad or more later, and the field is stiff there (Jacobian eigenvalues near
+    -0.18 / sigma_3(J*_v), -4e3 to -3e4 per rad), so explicit steps stay at 1e-4 to 1e-3
+    rad: thousands to over 100,000 steps for < 1 mm of tip travel. The path ends there,
+    singular, when the rate's linear model rate + slope t stays positive up to the next
+    joint limit h_lim (along the current joint direction) and predicts a travel
+    h_lim (rate + slope h_lim / 2) <= ``tip_tol`` to it; a limit within ``max_step`` is
+    located as usual, and so is a length event before the limit. The end then falls
+    short of the exact one by at most ``tip_tol`` of tip travel (as far as the rate
+    stays near its linear model and the joints keep their direction, as on the creep),
+    while the joints skip the rest of the creep (joint 6 by up to its range).
 
     Returns:
         (new lane state, finished, reason): finished when an event is located to ``tol``
@@ -141,9 +156,16 @@ def step_lane(
     h_event = candidates[event]
     reached = jnp.abs(h_event) <= tol
     if not square:
-        stalled = rate <= sing_rate
+        # The stall: a slow rate, or a flat one whose travel to the next limit is below tip_tol.
+        finite = jnp.isfinite(h_lim)
+        span = jnp.where(finite, h_lim, 0.0)
+        flat = finite & ((slope >= 0) | (rate > -slope * span)) & (span > max_step) & (h_len > span)
+        travel = span * (rate + 0.5 * slope * span)
+        stalled = (rate <= sing_rate) | (flat & (travel <= tip_tol))
         event = jnp.where(stalled & ~reached, REASON_SINGULAR, event).astype(jnp.int32)
         reached = reached | stalled
+    fresh = lane["fresh"] if rolled else jnp.bool_(False)  # f and slope not evaluated yet
+    reached = reached & ~fresh
     h = jnp.minimum(h_event, max_h)
 
     adaptive = tableau == "dop853"
@@ -152,7 +174,15 @@ def step_lane(
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
     if rolled:  # field(y_new) as the loop's last stage: one copy of the field in the program
-        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, rolled=True, first_slope=f, end_slope=True)
+        # A fresh lane's step is the start's probe: with f = 0 and h = PROBE the second
+        # stage is field(y) = f0 and the last field(y + PROBE * (sum of b_i k_i, i > 1)).
+        h = jnp.where(fresh, PROBE, h)
+        if "aux" in lane:  # the aux vector at y_new (last stage), at y for a fresh lane (second)
+            y_new, slopes, auxes = rk_step(
+                field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True, aux=lane["aux"]
+            )
+        else:
+            y_new, slopes = rk_step(field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True)
         f_new = slopes[-1]
     else:
         y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, first_slope=f)
@@ -163,13 +193,13 @@ def step_lane(
         factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
         limited = jnp.abs(h) < 0.999 * h_control
         grown = jnp.where(accept & limited, h_control, jnp.abs(h) * factor)
-        h_control = jnp.where(reached, h_control, jnp.minimum(grown, max_step))
+        h_control = jnp.where(reached | fresh, h_control, jnp.minimum(grown, max_step))
     else:
         accept = jnp.bool_(True)
     take = accept & ~reached
     slope_new = jnp.where(h != 0, (f_new[-1] - f[-1]) / jnp.where(h != 0, h, 1.0), slope)
     keep = lambda new, old: jnp.where(take, new, old)
-    count = lane["count"] + jnp.where(reached, 0, 1).astype(jnp.int32)
+    count = lane["count"] + jnp.where(reached | fresh, 0, 1).astype(jnp.int32)
     new_lane = dict(
         lane,
         y=keep(y_new, y),
@@ -179,7 +209,17 @@ def step_lane(
         count=count,
         h_control=h_control,
     )
-    finished = reached | (count >= max_steps)
+    if "aux" in lane:
+        new_lane["aux"] = keep(auxes[-1], lane["aux"])
+    if rolled:  # a fresh lane keeps y and takes f0 and the secant along the probe (unit joint rates)
+        f0 = slopes[1]
+        probe = jnp.linalg.norm(y_new[first : first + n] - q)
+        slope0 = (f_new[-1] - f0[-1]) / jnp.where(probe > 0, probe, 1.0)
+        started = dict(lane, f=f0, slope=jnp.where(probe > 0, slope0, 0.0), fresh=jnp.bool_(False))
+        if "aux" in lane:
+            started["aux"] = auxes[1]
+        new_lane = jax.tree_util.tree_map(lambda a, b: jnp.where(fresh, a, b), started, new_lane)
+    finished = (reached | (count >= max_steps)) & ~fresh
     reason = jnp.where(reached, event, REASON_STEP_BUDGET)
     return new_lane, finished, reason
 
@@ -196,7 +236,8 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
             and their results stay zero.
 
     Returns:
-        ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``.
+        ``{"y": (count, m), "arc": (count,), "count": (count,), "reason": (count,)}``, and
+        ``"aux": (count, p)`` where the lanes keep an aux vector (`start_lane`).
     """
     index0 = jnp.arange(width, dtype=jnp.int32)
     lanes0 = start(index0)
@@ -207,6 +248,8 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         "count": jnp.zeros((count,), jnp.int32),
         "reason": jnp.zeros((count,), jnp.int32),
     }
+    if "aux" in lanes0:
+        results0["aux"] = jnp.zeros((count,) + lanes0["aux"].shape[1:], y0.dtype)
     state0 = (lanes0, index0, index0 < real, jnp.int32(width), results0)
 
     def cond(state):
@@ -218,12 +261,14 @@ def run_queue(start, step, count: int, width: int, real) -> dict:
         finished = finished & active
         target = jnp.where(finished, index, count)  # out of range: dropped
         written = {"y": lane["y"], "arc": lane["arc"], "count": lane["count"], "reason": reason}
+        if "aux" in lane:
+            written["aux"] = lane["aux"]
         results = {k: results[k].at[target].set(written[k], mode="drop") for k in results}
         rank = jnp.cumsum(finished.astype(jnp.int32)) - 1
         refill = finished & (next_index + rank < real)
         index = jnp.where(refill, next_index + rank, index)
 
-        def refilled():  # the start costs two field evaluations: only when a lane takes a path
+        def refilled():  # an unrolled start costs two field evaluations: only when a lane takes a path
             fresh = start(index)
             return jax.tree_util.tree_map(
                 lambda new, old: jnp.where(refill.reshape((-1,) + (1,) * (old.ndim - 1)), new, old), fresh, lane

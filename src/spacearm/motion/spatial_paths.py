@@ -31,6 +31,7 @@ def spatial_straight_tip_path(
     tol: float = 1e-11,
     rtol: float = 1e-12,
     sing_rate: float = 1e-6,
+    tip_tol: float = 1e-3,
     max_steps: int = 4000,
 ) -> SpatialStraightPath:
     """Move the tip along a straight inertial line until J*_v loses rank (or a limit).
@@ -46,8 +47,10 @@ def spatial_straight_tip_path(
         rtol: DOP853 relative tolerance.
         sing_rate: for n > 3, the path also ends (singular) once the tip advances less
             than this per radian of joint motion, m/rad (the minimum-norm flow of a
-            redundant arm may approach rank loss only asymptotically; some UR5 paths
-            still spend the step budget on that approach, reason 3).
+            redundant arm may approach rank loss only asymptotically).
+        tip_tol: for n > 3, the path also ends (singular) once ds/dsigma is flat and
+            the tip travel it predicts up to the next joint limit is below this, m (the
+            UR5's creep on the bus reaction to joint 6; `spacearm.motion.lanes.step_lane`).
         max_steps: step budget per path (traced: a new budget does not recompile).
 
     Returns:
@@ -66,6 +69,7 @@ def spatial_straight_tip_path(
         tol=tol,
         rtol=rtol,
         sing_rate=sing_rate,
+        tip_tol=tip_tol,
         max_steps=max_steps,
     )
 

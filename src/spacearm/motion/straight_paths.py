@@ -147,6 +147,21 @@ def _attitude_in_posture(robot, results):
 def _attitude_beside_posture(robot, results, robot_batched):
     """Ends of a family whose attitude is a rotation beside the joints (spatial)."""
     family = family_of(robot)
+    if "aux" in results:  # the fixed-base J_v and the tip from the field's last pass (_ends_field)
+        n = family.joint_count(robot)
+        joints, coords = jax.vmap(lambda y: family.split_state(robot, y[:-1]))(results["y"])
+        R = family.attitude.from_coords(coords)
+        fixed_v = results["aux"][:, : 3 * n].reshape(-1, 3, n)
+        return SpatialStraightPath(
+            end_joints=joints,
+            end_rotation=R,
+            end_tip=jnp.einsum("pij,pj->pi", R, results["aux"][:, 3 * n :]),
+            length=results["y"][:, -1],
+            reason=results["reason"],
+            fixed_manipulability=gram_root_determinant(fixed_v),
+            joint_arc=results["arc"],
+            steps=results["count"],
+        )
 
     def one(robot, y):
         joints, coords = family.split_state(robot, y[:-1])
@@ -198,6 +213,35 @@ def _straight_field(robot, direction: jax.Array, sign0):
     return (fast or generic_straight_field)(robot, direction, sign0)
 
 
+def _ends_size(robot) -> int:
+    """The aux vector of `_ends_field` (3 n: the fixed-base J_v, 3: the tip), or 0 where the
+    family has no one-pass kernel for it (its ends then take a pass of their own)."""
+    family = family_of(robot)
+    if "straight_maps_and_ends" not in family.fast_paths or not family.straight_field_loops:
+        return 0
+    return 3 * family.joint_count(robot) + 3
+
+
+def _ends_field(robot, direction: jax.Array, sign0):
+    """`generic_straight_field` that also returns, from the same chain pass, the end
+    quantities of the path at y: ``(slope, [fixed-base J_v (3 n), tip about the centroid
+    (3)])``, bus axes: the ends then need no chain pass of their own (~0.6 s of CPU to
+    compile for the UR5)."""
+    family = family_of(robot)
+    group = family.attitude
+    maps_and_ends = family.fast_paths["straight_maps_and_ends"]
+
+    def field(y):
+        joints, coords = family.split_state(robot, y[:-1])
+        maps, fixed_v, tip = maps_and_ends(robot, joints)
+        J, A = maps[: family.translational_rows], maps[family.translational_rows :]
+        dq, ds = straight_path_rates(J, group.coords_matrix(coords).T @ direction, sign0)
+        dg = group.rate(coords, A @ dq)
+        return jnp.concatenate([family.join_state(robot, dq, dg), ds[None]]), jnp.concatenate([fixed_v.ravel(), tip])
+
+    return field
+
+
 def _square(robot) -> bool:
     family = family_of(robot)
     return family.joint_count(robot) == family.translational_rows
@@ -223,16 +267,18 @@ def _lane_start(robot, joints, coords, direction, max_step):
     dtype = joints.dtype
     direction = direction / jnp.linalg.norm(direction)
     sign0 = _start_sign(robot, joints)
-    field = _straight_field(robot, direction, sign0)
+    aux = _ends_size(robot)
+    field = (_ends_field if aux else _straight_field)(robot, direction, sign0)
     y0 = jnp.concatenate([family.join_state(robot, joints, coords), jnp.zeros((1,), dtype)])
-    return start_lane(field, y0, max_step, {"direction": direction, "sign0": sign0}, rolled=family.straight_field_loops)
+    params = {"direction": direction, "sign0": sign0}
+    return start_lane(field, y0, max_step, params, rolled=family.straight_field_loops, aux=aux)
 
 
-def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_steps, *, tableau):
+def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, tip_tol, max_steps, *, tableau):
     family = family_of(robot)
     n = family.joint_count(robot)
     dtype = lane["y"].dtype
-    field = _straight_field(robot, lane["direction"], lane["sign0"])
+    field = (_ends_field if "aux" in lane else _straight_field)(robot, lane["direction"], lane["sign0"])
     lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
     upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
     return step_lane(
@@ -248,6 +294,7 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, max_step
         rtol=rtol,
         sing_rate=sing_rate,
         max_steps=max_steps,
+        tip_tol=tip_tol,
         tableau=tableau,
         rolled=family.straight_field_loops,
     )
@@ -264,6 +311,7 @@ def _straight_flat(
     tol,
     rtol,
     sing_rate,
+    tip_tol,
     max_steps,
     real,
     robot_batched,
@@ -279,11 +327,13 @@ def _straight_flat(
 
     start = jax.vmap(_lane_start, in_axes=(robot_axis, 0, 0, 0, None))
     step = jax.vmap(
-        functools.partial(_lane_step, tableau=tableau), in_axes=(robot_axis, 0, 0, None, None, None, None, None)
+        functools.partial(_lane_step, tableau=tableau), in_axes=(robot_axis, 0, 0, None, None, None, None, None, None)
     )
     results = run_queue(
         lambda index: start(robot_for(index), joints[index], coords[index], direction[index], max_step),
-        lambda index, lane: step(robot_for(index), lane, max_length[index], max_step, tol, rtol, sing_rate, max_steps),
+        lambda index, lane: step(
+            robot_for(index), lane, max_length[index], max_step, tol, rtol, sing_rate, tip_tol, max_steps
+        ),
         count,
         min(lanes, count),
         real,
@@ -352,6 +402,7 @@ def straight_tip_path(
     lanes: int | None = None,
     base_rotation: jax.Array | None = None,
     sing_rate: float | None = None,
+    tip_tol: float | None = None,
 ):
     """Move the tip along a straight inertial line until J* loses rank (Fig. 3a), any family.
 
@@ -388,6 +439,10 @@ def straight_tip_path(
             advances less than this per radian of joint motion, m/rad (None: 1e-6; the
             minimum-norm flow of a redundant arm may approach rank loss only
             asymptotically). Planar paths have no such stall event.
+        tip_tol: spatial redundant arms: the path also ends (singular) once ds/dsigma is
+            flat and the tip travel it predicts up to the next joint limit is below this,
+            m (None: 1e-3; `spacearm.motion.lanes.step_lane`): the UR5 can creep there
+            for thousands of steps, moved only by the bus reaction to its last joint.
 
     Returns:
         `StraightPath` (planar) or `SpatialStraightPath` (spatial) with batch shape ``(...)``.
@@ -411,6 +466,7 @@ def straight_tip_path(
     rtol = option(rtol, "rtol", default_tol)
     max_step = option(max_step, "max_step")
     sing_rate = option(sing_rate, "sing_rate")
+    tip_tol = option(tip_tol, "tip_tol", -np.inf)
     max_steps = option(max_steps, "max_steps")
     if tableau not in ("dop853", "rk4"):
         raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
@@ -431,6 +487,7 @@ def straight_tip_path(
         _as_array(tol, dtype),
         _as_array(rtol, dtype),
         _as_array(sing_rate, dtype),
+        _as_array(tip_tol, dtype),
         np.int32(max_steps),
         np.int32(count),
         batched,

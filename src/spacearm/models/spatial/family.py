@@ -37,6 +37,7 @@ from .primitives import (
     mass_matrix,
     momentum_map,
     posture_quantities,
+    straight_maps_and_ends,
     straight_path_maps,
     tip,
     tip_and_fixed_base_jacobian,
@@ -85,6 +86,7 @@ class SpatialFamily(RobotFamily):
         "posture_quantities": posture_quantities,
         "tip_and_generalized_jacobian": tip_and_generalized_jacobian,
         "tip_and_fixed_base_jacobian": tip_and_fixed_base_jacobian,
+        "straight_maps_and_ends": straight_maps_and_ends,
     }
     fields = spatial_fields
 
@@ -95,6 +97,7 @@ class SpatialFamily(RobotFamily):
         "tol": 1e-11,
         "rtol": 1e-12,
         "sing_rate": 1e-6,
+        "tip_tol": 1e-3,
         "max_steps": 4000,
     }
 

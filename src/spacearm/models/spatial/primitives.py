@@ -58,6 +58,7 @@ __all__ = [
     "momentum_map",
     "posture_quantities",
     "rpy_to_matrix",
+    "straight_maps_and_ends",
     "straight_path_maps",
     "tip",
     "tip_and_fixed_base_jacobian",
@@ -470,6 +471,18 @@ def _straight_maps_minor(robot, q):
     return _rows(v_star, _scale(-1.0, solved))
 
 
+def _straight_ends_minor(robot, q):
+    """`_straight_maps_minor`'s rows, then the fixed-base J_v (rows 6-8) and the tip about
+    the centroid (rows 9-11, the same in every column), from the same ONE chain pass."""
+    state = _chain_pass(robot, q)
+    _, solved = _coupling(state)
+    v, _ = _fixed_columns(state)
+    r_t = _sub(state.tip, state.centroid)
+    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    tip_rows = tuple(jnp.broadcast_to(component, q.shape) for component in r_t)
+    return _rows(v_star, _scale(-1.0, solved), v, tip_rows)
+
+
 def _outer(a, b):
     """``(n, n, *batch)``: a_j . b_k for 3-tuples of ``(n, *batch)``."""
     return sum(a[c][:, None] * b[c][None, :] for c in range(3))
@@ -567,6 +580,16 @@ rows 3-5 C_w (bus angular velocity per joint rate), bus axes, from one pass over
 (the rows of `generalized_jacobian` and `base_twist_map` a straight tip path needs)."""
 
 _jstar_tip = batched(_jstar_tip_minor, 2)
+_straight_ends = batched(_straight_ends_minor, 2)
+
+
+def straight_maps_and_ends(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """`straight_path_maps` ``(..., 6, n)``, the fixed-base J_v ``(..., 3, n)`` and the tip about
+    the system centroid ``(..., 3)``, bus axes, from one chain pass per posture: a straight
+    path's field and its end quantities (equal to `straight_path_maps`,
+    `fixed_base_jacobian` rows 0-2 and `tip`)."""
+    stacked = _straight_ends(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:9, :], stacked[..., 9:, 0]
 
 
 def tip_and_generalized_jacobian(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:

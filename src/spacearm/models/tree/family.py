@@ -159,6 +159,7 @@ class TreeFamily(RobotFamily):
         "tol": 1e-11,
         "rtol": 1e-12,
         "sing_rate": 1e-6,
+        "tip_tol": 1e-3,
         "max_steps": 4000,
     }
 
