@@ -425,22 +425,27 @@ def _fixed_minor(robot, q):
     return _rows(*_fixed_columns(_chain_pass(robot, q, with_momentum=False)))
 
 
-def _jstar_minor(robot, q):
-    state = _chain_pass(robot, q)
+def _generalized_columns(state: _Pass):
+    """From one chain pass: the bus rotation per joint rate A (``solved``), the fixed-base
+    columns (v, w), the tip about the system centroid r_t, and J*'s translational columns
+    v* = v - P/M + r_t x A (the bus reaction, eq. 5's spatial form)."""
     _, solved = _coupling(state)
     v, w = _fixed_columns(state)
     r_t = _sub(state.tip, state.centroid)
     v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    return solved, v, w, r_t, v_star
+
+
+def _jstar_minor(robot, q):
+    state = _chain_pass(robot, q)
+    solved, _, w, _, v_star = _generalized_columns(state)
     return _rows(v_star, _sub(w, solved))
 
 
 def _jstar_tip_minor(robot, q):
     """J* (rows 0-5) and the tip about the centroid (rows 6-8, the same in every column) from ONE chain pass."""
     state = _chain_pass(robot, q)
-    _, solved = _coupling(state)
-    v, w = _fixed_columns(state)
-    r_t = _sub(state.tip, state.centroid)
-    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    solved, _, w, r_t, v_star = _generalized_columns(state)
     tip_rows = tuple(jnp.broadcast_to(component, q.shape) for component in r_t)
     return _rows(v_star, _sub(w, solved), tip_rows)
 
@@ -464,10 +469,7 @@ def _base_twist_minor(robot, q):
 def _straight_maps_minor(robot, q):
     """J*_v and C_w rows from ONE chain pass: what a straight-path field needs per evaluation."""
     state = _chain_pass(robot, q)
-    _, solved = _coupling(state)
-    v, _ = _fixed_columns(state)
-    r_t = _sub(state.tip, state.centroid)
-    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    solved, _, _, _, v_star = _generalized_columns(state)
     return _rows(v_star, _scale(-1.0, solved))
 
 
@@ -475,10 +477,7 @@ def _straight_ends_minor(robot, q):
     """`_straight_maps_minor`'s rows, then the fixed-base J_v (rows 6-8) and the tip about
     the centroid (rows 9-11, the same in every column), from the same ONE chain pass."""
     state = _chain_pass(robot, q)
-    _, solved = _coupling(state)
-    v, _ = _fixed_columns(state)
-    r_t = _sub(state.tip, state.centroid)
-    v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+    solved, v, _, r_t, v_star = _generalized_columns(state)
     tip_rows = tuple(jnp.broadcast_to(component, q.shape) for component in r_t)
     return _rows(v_star, _scale(-1.0, solved), v, tip_rows)
 
@@ -671,9 +670,7 @@ def _posture_quantities_minor(robot, q, needs):
     coupling, solved = _coupling(state)
     parts = []
     if "jacobian" in needs:
-        v, w = _fixed_columns(state)
-        r_t = _sub(state.tip, state.centroid)
-        v_star = _add(_sub(v, _scale(1.0 / state.mass, state.momentum)), _cross(r_t, solved))
+        _, _, w, _, v_star = _generalized_columns(state)
         parts.append(_rows(v_star, _sub(w, solved)))
     if "base_rate" in needs:
         r_g = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
