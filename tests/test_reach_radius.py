@@ -7,10 +7,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import spacearm as sa
 from spacearm import design
 from spacearm._core.errors import ConfigError
 from spacearm.analysis import singularities
+from spacearm.analysis.spatial_workspaces import singular_radius
 from spacearm.design.hybrid import HybridSettings, hybrid_search
 from spacearm.design.objectives import RADIUS_OPTIONS
 from spacearm.design.spatial_problem import load_design_problem
@@ -47,13 +47,13 @@ def ur5_radius():
 
 @pytest.mark.slow
 def test_reach_radius_equals_the_radius_kernel_spatial(ur5_radius):
-    """(a) The objective is sa.path_independent_radius with the problem's options (the same
+    """(a) The objective is the polished singular_radius with the problem's options (the same
     search, here batched and compiled inside the problem's program; two compiles of the
     radius search, ~25 s of CPU)."""
     problem, batch = ur5_radius
     values = np.asarray(batch(jnp.asarray(UR5_DESIGNS)))[:, 0]
     for x, value in zip(UR5_DESIGNS, values, strict=True):
-        kernel = float(sa.path_independent_radius(problem.robot(jnp.asarray(x)), **RADIUS_OPTIONS))
+        kernel = float(singular_radius(problem.robot(jnp.asarray(x)), **RADIUS_OPTIONS, polish=True)[0])
         np.testing.assert_allclose(value, kernel, rtol=1e-10, atol=1e-12)  # batched vs single: rounding
     # The radii of the analysis defaults (2^14 samples) at these designs: the same minima.
     np.testing.assert_allclose(values, [0.0109377753, 0.0022230301, 0.0689811532], rtol=1e-8)

@@ -21,9 +21,10 @@ below is a spherical shell (planar: an annulus) described by radii.
 - Path-independent workspace (Papadopoulos & Dubowsky): the sphere about the centroid
   that no dynamic-singular tip position enters; its radius is min |tip| over the
   singular set, found by sampling, then descent of |tip|^2 along the singular set
-  (tangent steps, each followed by Newton projection back onto it), then Newton steps
-  on the KKT system at the best posture; differentiable in the design by the envelope
-  theorem of the constrained minimum (the set's motion enters through its multipliers).
+  (tangent steps, each followed by Newton projection back onto it), optionally Newton
+  steps on the KKT system at the best posture; differentiable in the design by the
+  envelope theorem of the constrained minimum (the set's motion enters through its
+  multipliers).
 - Guaranteed Workspace (Area 5) in 3-D: the shell between the inner reachable radius
   and the path-independent radius (empty if the first exceeds the second). Beside it
   the analogue of eq. (8): the same search over the *kinematic* singular set (the
@@ -539,9 +540,9 @@ def _kkt_polish(robot, best, free, jacobian, lower, upper, wraps, steps: int = 3
     return jnp.where(accepted, q, best), jnp.where(accepted, u, u0), jnp.where(accepted, lam, lam0), accepted
 
 
-def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps):
+def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: bool):
     """The smallest radius over the rows of ``q`` (``radius_sq`` their |tip|^2, inf off the set),
-    differentiable in the design, and its posture."""
+    differentiable in the design, and its posture (``polish``: `_polished_value`, static)."""
     q = jax.lax.stop_gradient(q)
     k = jnp.argmin(radius_sq)
     best = q[k]
@@ -550,6 +551,33 @@ def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps):
     at_lower = ~wraps & (best <= lower + 1e-6 * span)
     at_upper = ~wraps & (best >= upper - 1e-6 * span)
     free = ~(at_lower | at_upper)
+    if polish:
+        value, best = _polished_value(robot, best, free, at_lower, at_upper, jacobian, lower, upper, wraps)
+        return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
+    posture = jnp.where(at_upper, upper, jnp.where(at_lower, lower, best))
+    value = jnp.sqrt(_tip_radius_sq(robot, posture))
+    if best.shape[-1] == family_of(robot).translational_rows:
+        # A minimum of |tip| on the hypersurface s = 0 moves with the design: by the
+        # envelope theorem for the constrained minimum, d radius / d design =
+        # d r / d design - lambda d s / d design at the fixed posture, with the Lagrange
+        # multiplier lambda = (grad_F r . grad_F s) / |grad_F s|^2 over the free joints F
+        # (stationarity grad_F r = lambda grad_F s; the joints on a limit carry their own
+        # multipliers, accounted for by moving them with the limit above). The value is
+        # unchanged (s = 0 at the posture to rounding).
+        fixed = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
+        J, tip, dJ, dtip = _jet(fixed, best[None], jacobian)
+        grad_r = jnp.einsum("d,dn->n", tip[0], dtip[0]) / jnp.sqrt(jnp.sum(tip[0] * tip[0]))
+        grad_s = jax.vmap(lambda d: jax.jvp(_measure_of, (J[0],), (d,))[1], in_axes=-1)(dJ[0])
+        grad_r, grad_s = jnp.where(free, grad_r, 0.0), jnp.where(free, grad_s, 0.0)
+        multiplier = jax.lax.stop_gradient(jnp.dot(grad_r, grad_s) / jnp.maximum(jnp.dot(grad_s, grad_s), 1e-300))
+        constraint = singularity_measure(robot, posture, jacobian)
+        value = value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
+    return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
+
+
+def _polished_value(robot, best, free, at_lower, at_upper, jacobian, lower, upper, wraps):
+    """The radius at ``best`` after `_kkt_polish`, with the envelope-theorem gradient of the
+    constrained minimum for square and redundant J_v alike, and the polished posture."""
     # A minimum of |tip| on the singular set moves with the design: by the envelope theorem
     # for the constrained minimum, d radius / d design = d r / d design - mu . d(J_v^T u) /
     # d design at the fixed (q, u), with the Lagrange multipliers mu of the polished KKT
@@ -565,11 +593,13 @@ def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps):
     constraint = _translational(robot, posture, jacobian).T @ jax.lax.stop_gradient(u)
     mu = jax.lax.stop_gradient(jnp.where(jnp.all(jnp.isfinite(multipliers)), multipliers[:n], 0.0))  # no set found
     value = value - jnp.dot(mu, constraint - jax.lax.stop_gradient(constraint))
-    return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
+    return value, best
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "candidates"))
-def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, projection_steps, newton_steps, seed):
+@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "candidates", "polish"))
+def _singular_radius(
+    robot, jacobian, samples, keep, candidates, descent_steps, projection_steps, newton_steps, seed, polish
+):
     """Sampling, projection and descent in ONE loop whose body holds the only evaluation (`_refine`).
 
     ``candidates`` rows at a time: iterations 0..S-1 evaluate s on the Sobol samples;
@@ -659,7 +689,7 @@ def _singular_radius(robot, jacobian, samples, keep, candidates, descent_steps, 
     state = jax.lax.fori_loop(0, descend + jnp.maximum(descent_steps, 1), body, state)
     q, q_radius_sq = state[4], state[5]
     lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
-    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps)
+    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps, polish)
 
 
 def singular_radius(
@@ -672,6 +702,7 @@ def singular_radius(
     descent_steps: int = 150,
     newton_steps: int = 4,
     seed: int = 0,
+    polish: bool = False,
 ) -> tuple[jax.Array, jax.Array]:
     """The closest approach to the system centroid of the tip over a singular set.
 
@@ -688,16 +719,23 @@ def singular_radius(
     Returns:
         ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
         ``inf`` when no sampled posture converged onto the set (none in the box).
-        The minimizing posture is polished by Newton steps on the KKT system of the
-        constrained minimum (`_kkt_polish`). The radius is differentiable in the design
-        by the envelope theorem of the constrained minimum, square and redundant J_v
-        alike (the Lagrange multipliers of J_v^T u = 0; tested against the planar closed
-        form and against central differences on the UR5, tests/test_reach_radius.py).
-        Joints at a limit at the minimum move with the limit.
+        The radius is differentiable in the design by the envelope theorem of the
+        constrained minimum: for a square J_v (n = 3 spatial, n = 2 planar) through the
+        Lagrange multiplier of s = 0 (tested against the planar closed form); for
+        redundant arms, without ``polish``, with the singular posture held fixed (the
+        motion of the set is left out: 4e-4 to 3e-3 relative off on the UR5). Joints at
+        a limit at the minimum move with the limit.
+
+    ``polish=True`` (static; the design objective ``reach_radius`` sets it) adds Newton
+    steps on the KKT system of the constrained minimum at the best posture
+    (`_kkt_polish`), which moves the radius by ~1e-10 m and makes the gradient exact for
+    redundant arms too (the multipliers of J_v^T u = 0; central differences on the UR5
+    to ~1e-8 relative, tests/test_reach_radius.py). It costs a second Jacobian jet and
+    a least-squares solve: the UR5 radius's first call takes ~11 s of CPU instead of ~6.
     """
     check_joint_box(robot)
     return _singular_radius(
-        robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed
+        robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed, bool(polish)
     )
 
 

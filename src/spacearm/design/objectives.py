@@ -135,13 +135,14 @@ def reach_radius(robot, **options) -> jax.Array:
     whatever the base attitude. ``inf`` where no sampled posture reached the singular
     set (the search then counts the design as infeasible).
 
-    Its gradient (envelope theorem for a constrained minimum): the derivative of |tip|
+    Its gradient (envelope theorem for a constrained minimum, with the minimizer polished
+    by Newton steps on its KKT system, ``polish=True``): the derivative of |tip|
     at the minimizing posture held fixed, minus the Lagrange multipliers times the
     derivative of the singular-set equation there; no derivative flows through the
     sampling, descent or Newton iterations (tests/test_reach_radius.py checks it against
     central differences of the radius recomputed from scratch).
     """
-    return singular_radius(robot, "generalized", **{**RADIUS_OPTIONS, **options})[0]
+    return singular_radius(robot, "generalized", **{**RADIUS_OPTIONS, **options}, polish=True)[0]
 
 
 _TIP_OBJECTIVE = re.compile(r"^(\w+)\[(.+)\]$")
