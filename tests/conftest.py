@@ -162,12 +162,11 @@ def pytest_runtest_protocol(item, nextitem):
 # default, and XLA then aborts or segfaults). Between files, and after a test that took
 # more than 5 s, the compiled programs are dropped once the count passes a third of the
 # limit; the next test compiles what it needs again.
-_MAPS = "/proc/self/maps"
 
 
 def _memory_map_count() -> int:
     try:
-        with open(_MAPS, "rb") as maps:
+        with open("/proc/self/maps", "rb") as maps:
             return sum(chunk.count(b"\n") for chunk in iter(lambda: maps.read(1 << 20), b""))
     except OSError:  # not Linux
         return 0
@@ -181,8 +180,11 @@ def _map_limit() -> int:
         return 65530
 
 
+_MAP_LIMIT = _map_limit()
+
+
 def _release_programs_near_map_limit() -> None:
-    if _memory_map_count() > _map_limit() // 3:
+    if _memory_map_count() > _MAP_LIMIT // 3:
         jax.clear_caches()
 
 

@@ -153,6 +153,7 @@ JACOBIANS = ("auto", "reverse", "differences")
 STEP_RULES = ("auto", "per_variable", "armijo")
 # Where an evaluated design came from (the evaluations of each are reported).
 SOURCES = ("start", "differences", "steps", "offspring", "densified")
+_START, _DIFFERENCES, _STEPS, _OFFSPRING, _DENSIFIED = range(len(SOURCES))
 # Forward differences cost d values per gradient; a vector-Jacobian product through the
 # joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
 # about 2.5 times as long as the values'.
@@ -419,7 +420,7 @@ def hybrid_search(
 
     # 1. Space-filling start: two populations of a Latin hypercube sample.
     start_designs = qmc.LatinHypercube(d, seed=settings.seed).random(2 * population)
-    f_start = value_of(start_designs, 0)
+    f_start = value_of(start_designs, _START)
     if reference is None:
         reference = reference_from_population(f_start, settings.reference_margin)
         reference_from = (
@@ -496,7 +497,7 @@ def hybrid_search(
             children = filled(stepping * d)
             f_both = value_of(
                 np.concatenate([shifted.reshape(-1, d), children]),
-                np.repeat([1, 3], [stepping * d, children.shape[0]]),
+                np.repeat([_DIFFERENCES, _OFFSPRING], [stepping * d, children.shape[0]]),
             )
             f_shifted = f_both[: stepping * d].reshape(stepping, d, m)
             new_z.append(children)
@@ -525,7 +526,9 @@ def hybrid_search(
         z_stepped = np.clip(z_step + move, 0.0, 1.0)
         # 2b. Exploration: NSGA-II offspring fill the stepped designs' batch.
         children = filled(stepping, least=population // 2)
-        f_both = value_of(np.concatenate([z_stepped, children]), np.repeat([2, 3], [stepping, children.shape[0]]))
+        f_both = value_of(
+            np.concatenate([z_stepped, children]), np.repeat([_STEPS, _OFFSPRING], [stepping, children.shape[0]])
+        )
         f_stepped = f_both[:stepping]
         new_z.append(children)
         new_f.append(f_both[stepping:])
@@ -553,11 +556,11 @@ def hybrid_search(
                 z_dense = np.clip(_densify(front_f[order], front_z[order], population), 0.0, 1.0)
                 z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
                 new_z.append(z_dense)
-                new_f.append(value_of(z_dense, 4))
+                new_f.append(value_of(z_dense, _DENSIFIED))
             else:
                 # Archive only: in the population these near-front designs would crowd
                 # the members being refined out (pareto-ur5-arm ended lower with them).
-                value_of(_neighbour_designs(rng, front_f, front_z, population), 4)
+                value_of(_neighbour_designs(rng, front_f, front_z, population), _DENSIFIED)
         z_all, f_all = np.concatenate([z, *new_z]), np.concatenate([f, *new_f])
         fresh = z_all.shape[0] - population
         steps_all = np.concatenate([steps, np.full((fresh, *steps.shape[1:]), settings.initial_step)])

@@ -485,12 +485,12 @@ def problem_from_mapping(
     if len(objectives) < 2 or len(set(objectives)) != len(objectives):
         raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
     averaged = any(split_objective(name)[0] in AVERAGE_OBJECTIVES for name in objectives)
-    radius_options = _radius_options(source, config.get("radius"), objectives)
+    with_radius = any(name in RADIUS_OBJECTIVES for name in objectives)
+    radius_options = _radius_options(source, config.get("radius"), with_radius)
     # Optional where an objective has no natural zero: absent, the search takes it below
     # the nadir of its first population (and writes it to the summary). The radius is
     # positive, but a few mm on a UR5: a zero reference would dwarf its differences.
-    searched = averaged or any(name in RADIUS_OBJECTIVES for name in objectives)
-    reference = config.get("reference_point", None if searched else [0.0] * len(objectives))
+    reference = config.get("reference_point", None if averaged or with_radius else [0.0] * len(objectives))
     if reference is not None:
         if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
             raise ConfigError(
@@ -525,7 +525,7 @@ def problem_from_mapping(
     if averaged:
         check_joint_box(base)
         fixed_summary.update(samples=samples, randomizations=randomizations, seed=seed)
-    if any(name in RADIUS_OBJECTIVES for name in objectives):
+    if with_radius:
         check_joint_box(base)
         fixed_summary.update(radius={**RADIUS_OPTIONS, **radius_options})
 
@@ -555,11 +555,11 @@ def problem_from_mapping(
     )
 
 
-def _radius_options(source: str, section: Any, objectives: Sequence[str]) -> dict[str, int]:
+def _radius_options(source: str, section: Any, with_radius: bool) -> dict[str, int]:
     """The ``radius:`` section (options of the ``reach_radius`` search), checked; only with that objective."""
     if section is None:
         return {}
-    if not any(name in RADIUS_OBJECTIVES for name in objectives):
+    if not with_radius:
         raise ConfigError(f"{source}: radius: options of the reach_radius objective, which objectives does not list")
     if not isinstance(section, Mapping):
         raise ConfigError(f"{source}: radius: must be a mapping ({', '.join(RADIUS_OPTIONS)})")

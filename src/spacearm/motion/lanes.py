@@ -177,12 +177,9 @@ def step_lane(
         # A fresh lane's step is the start's probe: with f = 0 and h = PROBE the second
         # stage is field(y) = f0 and the last field(y + PROBE * (sum of b_i k_i, i > 1)).
         h = jnp.where(fresh, PROBE, h)
-        if "aux" in lane:  # the aux vector at y_new (last stage), at y for a fresh lane (second)
-            y_new, slopes, auxes = rk_step(
-                field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True, aux=lane["aux"]
-            )
-        else:
-            y_new, slopes = rk_step(field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True)
+        # With an aux vector: its value at y_new (last stage), at y for a fresh lane (second).
+        stepped = rk_step(field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True, aux=lane.get("aux"))
+        y_new, slopes, auxes = stepped if "aux" in lane else (*stepped, None)
         f_new = slopes[-1]
     else:
         y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, first_slope=f)

@@ -147,7 +147,7 @@ def _attitude_in_posture(robot, results):
 def _attitude_beside_posture(robot, results, robot_batched):
     """Ends of a family whose attitude is a rotation beside the joints (spatial)."""
     family = family_of(robot)
-    if "aux" in results:  # the fixed-base J_v and the tip from the field's last pass (_ends_field)
+    if "aux" in results:  # the fixed-base J_v and the tip from the field's last pass (``ends``)
         n = family.joint_count(robot)
         joints, coords = jax.vmap(lambda y: family.split_state(robot, y[:-1]))(results["y"])
         R = family.attitude.from_coords(coords)
@@ -186,23 +186,34 @@ def _attitude_beside_posture(robot, results, robot_batched):
 # The field ---------------------------------------------------------------------------------
 
 
-def generic_straight_field(robot, direction: jax.Array, sign0):
+def generic_straight_field(robot, direction: jax.Array, sign0, *, ends: bool = False):
     """The regularized straight-path field y' = f(y), y = [family state, s], of any family.
 
     Derivatives are with respect to the joint-space arc length sigma: the joint rates
     have unit norm, the attitude follows the family's attitude-rate map (eq. 5), the last
     entry is ds/dsigma. J*_v and the attitude-rate map come from one evaluation of the
     family's ``straight_maps`` (one pass over a spatial chain).
+
+    ``ends`` (families with the fast path ``straight_maps_and_ends``): the field returns
+    ``(slope, [fixed-base J_v (3 n), tip about the centroid (3)])``, bus axes, the end
+    quantities of the path at y from the same chain pass, so the ends need no pass of
+    their own (~0.6 s of CPU to compile for the UR5).
     """
     family = family_of(robot)
     group = family.attitude
+    rows = family.translational_rows
 
     def field(y):
         joints, coords = family.split_state(robot, y[:-1])
-        J, A = family.straight_maps(robot, joints)
+        if ends:
+            maps, fixed_v, tip = family.fast_paths["straight_maps_and_ends"](robot, joints)
+            J, A = maps[:rows], maps[rows:]
+        else:
+            J, A = family.straight_maps(robot, joints)
         dq, ds = straight_path_rates(J, group.coords_matrix(coords).T @ direction, sign0)
         dg = group.rate(coords, A @ dq)
-        return jnp.concatenate([family.join_state(robot, dq, dg), ds[None]])
+        slope = jnp.concatenate([family.join_state(robot, dq, dg), ds[None]])
+        return (slope, jnp.concatenate([fixed_v.ravel(), tip])) if ends else slope
 
     return field
 
@@ -214,32 +225,12 @@ def _straight_field(robot, direction: jax.Array, sign0):
 
 
 def _ends_size(robot) -> int:
-    """The aux vector of `_ends_field` (3 n: the fixed-base J_v, 3: the tip), or 0 where the
+    """The aux vector of the field with ``ends`` (3 n: the fixed-base J_v, 3: the tip), or 0 where the
     family has no one-pass kernel for it (its ends then take a pass of their own)."""
     family = family_of(robot)
     if "straight_maps_and_ends" not in family.fast_paths or not family.straight_field_loops:
         return 0
     return 3 * family.joint_count(robot) + 3
-
-
-def _ends_field(robot, direction: jax.Array, sign0):
-    """`generic_straight_field` that also returns, from the same chain pass, the end
-    quantities of the path at y: ``(slope, [fixed-base J_v (3 n), tip about the centroid
-    (3)])``, bus axes: the ends then need no chain pass of their own (~0.6 s of CPU to
-    compile for the UR5)."""
-    family = family_of(robot)
-    group = family.attitude
-    maps_and_ends = family.fast_paths["straight_maps_and_ends"]
-
-    def field(y):
-        joints, coords = family.split_state(robot, y[:-1])
-        maps, fixed_v, tip = maps_and_ends(robot, joints)
-        J, A = maps[: family.translational_rows], maps[family.translational_rows :]
-        dq, ds = straight_path_rates(J, group.coords_matrix(coords).T @ direction, sign0)
-        dg = group.rate(coords, A @ dq)
-        return jnp.concatenate([family.join_state(robot, dq, dg), ds[None]]), jnp.concatenate([fixed_v.ravel(), tip])
-
-    return field
 
 
 def _square(robot) -> bool:
@@ -268,7 +259,9 @@ def _lane_start(robot, joints, coords, direction, max_step):
     direction = direction / jnp.linalg.norm(direction)
     sign0 = _start_sign(robot, joints)
     aux = _ends_size(robot)
-    field = (_ends_field if aux else _straight_field)(robot, direction, sign0)
+    field = (
+        generic_straight_field(robot, direction, sign0, ends=True) if aux else _straight_field(robot, direction, sign0)
+    )
     y0 = jnp.concatenate([family.join_state(robot, joints, coords), jnp.zeros((1,), dtype)])
     params = {"direction": direction, "sign0": sign0}
     return start_lane(field, y0, max_step, params, rolled=family.straight_field_loops, aux=aux)
@@ -278,7 +271,11 @@ def _lane_step(robot, lane, max_length, max_step, tol, rtol, sing_rate, tip_tol,
     family = family_of(robot)
     n = family.joint_count(robot)
     dtype = lane["y"].dtype
-    field = (_ends_field if "aux" in lane else _straight_field)(robot, lane["direction"], lane["sign0"])
+    direction, sign0 = lane["direction"], lane["sign0"]
+    ends = "aux" in lane
+    field = (
+        generic_straight_field(robot, direction, sign0, ends=True) if ends else _straight_field(robot, direction, sign0)
+    )
     lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
     upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
     return step_lane(
