@@ -9,6 +9,7 @@ method uses the same objective code, so that choice does not favour any of them.
 
 import copy
 import csv
+import dataclasses
 import itertools
 import json
 from pathlib import Path
@@ -202,6 +203,19 @@ def test_load_problem_loads_both_families():
     robot = spatial.robot(jnp.array([0.1, -0.2, 0.3]))
     np.testing.assert_allclose(robot.mount_xyz[:2], [0.1, -0.2], rtol=1e-15)
     np.testing.assert_allclose(robot.mount_rpy[1], 0.3, rtol=1e-15)
+
+
+def test_closed_form_problems_are_those_without_averages_or_radius():
+    """The hybrid search steps every member and takes differences only for closed forms;
+    a per-tip average (``w_avg[left/tool0]``) is a joint-box average like ``w_avg``."""
+    planar = sa.load_problem(ROOT / "sweeps" / "pareto-attachment.yaml")
+    spatial = sa.load_problem(ROOT / "sweeps" / "pareto-mount-ur5.yaml")
+    tree = sa.load_problem(ROOT / "sweeps" / "pareto-dual-ur5.yaml")
+    assert planar.closed_form and not spatial.closed_form and not tree.closed_form
+    per_tip_and_mass = dataclasses.replace(tree, objectives=("w_avg[left/tool0]", "low_total_mass"))
+    assert not per_tip_and_mass.closed_form
+    assert dataclasses.replace(tree, objectives=("low_total_mass", "low_total_mass")).closed_form
+    assert not dataclasses.replace(planar, objectives=("reach_radius", "wbar")).closed_form
 
 
 def test_old_planar_names_are_aliases_of_the_design_fields():

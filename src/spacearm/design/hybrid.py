@@ -81,7 +81,6 @@ from .._core.errors import ConfigError
 from .._core.schema import check_keys, integer, number
 from .fronts import hypervolume, layer_face_areas, nondominated_mask, reference_from_population
 from .hypervolume import layer_hypervolume_gradients
-from .objectives import AVERAGE_OBJECTIVES, RADIUS_OBJECTIVES
 from .search import SearchResult, _densify
 
 __all__ = ["HybridSettings", "hybrid_search", "nondominated_ranks", "parse_hybrid", "reference_from_population"]
@@ -369,7 +368,7 @@ def hybrid_search(
     # Closed-form objectives (no joint-box average) make values cheap: a batch costs
     # 0.1-0.2 % of the value program's compile, against 3-4 % for the averages.
     # The radius (a search per value) is no closed form either.
-    closed_forms = not any(name in AVERAGE_OBJECTIVES or name in RADIUS_OBJECTIVES for name in problem.objectives)
+    closed_forms = problem.closed_form
     share = settings.gradient_share if settings.gradient_share is not None else (1.0 if closed_forms else 0.5)
     stepping = min(population, round(share * population))
     densifying = settings.densify

@@ -199,6 +199,15 @@ class DesignProblem(VariableBounds):
         """Joints of the arm (planar: links)."""
         return self.family.joint_count(self.base)
 
+    @property
+    def closed_form(self) -> bool:
+        """True when every objective is a closed form of the design: no joint-box average
+        (of any tip) and no radius search, so a value costs next to nothing against the
+        value program's compile."""
+        return not any(
+            split_objective(name)[0] in AVERAGE_OBJECTIVES or name in RADIUS_OBJECTIVES for name in self.objectives
+        )
+
     def fixed_summary(self) -> dict:
         """The fixed quantities, for the run's summary."""
         return dict(self.fixed)
