@@ -18,6 +18,9 @@ from spacearm.motion import attitude
 
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 
+# One program per map and shape instead of one per operation (the tests call it on concrete arrays).
+path_rotation = jax.jit(attitude.path_rotation, static_argnums=(0, 2, 3))
+
 
 @pytest.fixture(scope="module")
 def ur5():
@@ -32,6 +35,11 @@ def _loops(rng, count, n, segments=12, size=1.0):
     loops = q0[:, None, :] + np.einsum("cnk,sk->csn", basis, plane)
     loops[:, -1] = q0
     return loops
+
+
+def _skew(w):
+    """[w]x in NumPy, for the SciPy references."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 def _random_rotations(rng, count):
@@ -71,9 +79,7 @@ def test_constant_map_is_exact():
     for a, b in itertools.pairwise(waypoints):
         expected = expected @ Rotation.from_rotvec(C @ (b - a)).as_matrix()
     for order in (4, 6, "rkmk4"):
-        np.testing.assert_allclose(
-            attitude.path_rotation(omega_map, jnp.asarray(waypoints), 1, order), expected, atol=1e-14
-        )
+        np.testing.assert_allclose(path_rotation(omega_map, jnp.asarray(waypoints), 1, order), expected, atol=1e-14)
 
 
 def test_commuting_loop_turns_by_the_enclosed_area():
@@ -88,7 +94,7 @@ def test_commuting_loop_turns_by_the_enclosed_area():
     polygon = rng.normal(size=(7, 2))
     polygon = np.concatenate([polygon, polygon[:1]])
     area = 0.5 * np.sum(polygon[:-1, 0] * polygon[1:, 1] - polygon[1:, 0] * polygon[:-1, 1])
-    R = attitude.path_rotation(omega_map, jnp.asarray(polygon), 1, 6)
+    R = path_rotation(omega_map, jnp.asarray(polygon), 1, 6)
     np.testing.assert_allclose(R, Rotation.from_rotvec([0.0, 0.0, area]).as_matrix(), atol=1e-14)
 
 
@@ -101,14 +107,14 @@ def test_orders_on_a_smooth_map():
     R = np.eye(3)
     for a, b in itertools.pairwise(waypoints):
 
-        def rhs(t, y, a=a, d=b - a):
-            w = np.asarray(omega_map(jnp.asarray(a + t * d))) @ d
-            return (y.reshape(3, 3) @ np.asarray(attitude.hat(w))).ravel()
+        def rhs(t, y, a=a, d=b - a):  # the same map in NumPy (the reference runs no JAX)
+            w = (C + np.einsum("ijk,k->ij", B, np.sin(a + t * d))) @ d
+            return (y.reshape(3, 3) @ _skew(w)).ravel()
 
         R = solve_ivp(rhs, (0.0, 1.0), R.ravel(), method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1].reshape(3, 3)
     for order, expected in ((4, 16.0), (6, 64.0), ("rkmk4", 16.0)):
         errors = [
-            float(attitude.geodesic_distance(attitude.path_rotation(omega_map, jnp.asarray(waypoints), s, order), R))
+            float(attitude.geodesic_distance(path_rotation(omega_map, jnp.asarray(waypoints), s, order), R))
             for s in (8, 16)
         ]
         assert 0.6 * expected < errors[0] / errors[1] < 1.5 * expected, (order, errors)
@@ -123,7 +129,7 @@ def test_ur5_against_converged_reference_and_scipy(ur5):
     R0 = _random_rotations(rng, 6)
     R_end, q_end = sa.integrate_joint_path(ur5, loops[:, 0], loops, base_rotation=R0)
     reference = R0 @ np.asarray(
-        attitude.path_rotation(functools.partial(attitude.bus_rate_map, ur5), jnp.asarray(loops), 128, 6)
+        path_rotation(functools.partial(attitude.bus_rate_map, ur5), jnp.asarray(loops), 128, 6)
     )
     assert np.max(attitude.geodesic_distance(R_end, reference)) < 1e-10
     np.testing.assert_array_equal(q_end, loops[:, -1])
@@ -136,7 +142,7 @@ def test_ur5_against_converged_reference_and_scipy(ur5):
 
         def rhs(t, y, a=a, d=b - a):
             w = np.asarray(omega(a + t * d)) @ d
-            return (y.reshape(3, 3) @ np.asarray(attitude.hat(w))).ravel()
+            return (y.reshape(3, 3) @ _skew(w)).ravel()
 
         R = solve_ivp(rhs, (0.0, 1.0), R.ravel(), method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1].reshape(3, 3)
     assert float(attitude.geodesic_distance(R_end[0], R)) < 1e-11
@@ -206,11 +212,12 @@ def test_no_retrace_and_gradients(ur5):
     omega_map = functools.partial(attitude.bus_rate_map, arm3)
     loop = _loops(rng, 1, 3, segments=6)[0]
 
+    @jax.jit
     def angle(scale):
         wp = loop[0] + scale * (jnp.asarray(loop) - loop[0])
         return attitude.log(attitude.path_rotation(omega_map, wp, 1, 6))[2]
 
-    grad = jax.grad(angle)(1.0)
+    grad = jax.jit(jax.grad(angle))(1.0)
     step = 1e-5
     fd = (angle(1.0 + step) - angle(1.0 - step)) / (2 * step)
     np.testing.assert_allclose(grad, fd, rtol=1e-6)

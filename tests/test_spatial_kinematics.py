@@ -136,17 +136,26 @@ def test_fast_paths_equal_the_generic_path(name):
     robot = _load(name)
     rng = np.random.default_rng(4)
     q = rng.uniform(-3, 3, (8, robot.n_joints))
-    np.testing.assert_allclose(
-        kinematics.generic_generalized_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-13
+    # The internal paths are called on concrete arrays: one program each, not one per operation.
+    generic_jacobian, generic_tip, generic_manipulability, one_pass, one_pass_fixed = map(
+        jax.jit,
+        (
+            kinematics.generic_generalized_jacobian,
+            kinematics.generic_tip_position,
+            kinematics.generic_manipulability,
+            primitives.tip_and_generalized_jacobian,
+            primitives.tip_and_fixed_base_jacobian,
+        ),
     )
-    np.testing.assert_allclose(kinematics.generic_tip_position(robot, q), sa.tip_position(robot, q), atol=1e-13)
-    J, tip = primitives.tip_and_generalized_jacobian(robot, q)  # one chain pass for both
-    fixed, tip_too = primitives.tip_and_fixed_base_jacobian(robot, q)
+    np.testing.assert_allclose(generic_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-13)
+    np.testing.assert_allclose(generic_tip(robot, q), sa.tip_position(robot, q), atol=1e-13)
+    J, tip = one_pass(robot, q)  # one chain pass for both
+    fixed, tip_too = one_pass_fixed(robot, q)
     np.testing.assert_allclose(tip_too, tip, atol=1e-13)
     np.testing.assert_allclose(fixed, sa.fixed_base_jacobian(robot, q), atol=1e-13)
-    np.testing.assert_allclose(kinematics.generic_generalized_jacobian(robot, q), J, atol=1e-13)
-    np.testing.assert_allclose(kinematics.generic_tip_position(robot, q), tip, atol=1e-13)
-    np.testing.assert_allclose(kinematics.generic_manipulability(robot, q), sa.manipulability(robot, q), atol=1e-12)
+    np.testing.assert_allclose(generic_jacobian(robot, q), J, atol=1e-13)
+    np.testing.assert_allclose(generic_tip(robot, q), tip, atol=1e-13)
+    np.testing.assert_allclose(generic_manipulability(robot, q), sa.manipulability(robot, q), atol=1e-12)
     rates = rng.normal(size=q.shape)
     np.testing.assert_allclose(
         jnp.einsum("bij,bj->bi", sa.base_rate_matrix(robot, q), rates), sa.base_rate(robot, q, rates), atol=1e-13

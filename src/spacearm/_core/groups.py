@@ -9,7 +9,8 @@ axes for SO(3)): d coords / dt = `Group.rate` (g, w), i.e. phi0' = w and R' = R 
 
 SO(3) helpers (`hat`, `vee`, `expm` by Rodrigues' formula, `log`, `geodesic_distance`,
 `polar_rotation`) live here once, batched over leading axes and safe to differentiate
-at the identity.
+at the identity; each is jitted, so a call on concrete arrays is one program, not one
+per operation.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ __all__ = [
 # SO(3) -----------------------------------------------------------------------------------
 
 
+@jax.jit
 def hat(v: jax.Array) -> jax.Array:
     """``(..., 3) -> (..., 3, 3)`` the skew matrix [v]x with [v]x w = v x w."""
     v = jnp.asarray(v)
@@ -47,6 +49,7 @@ def hat(v: jax.Array) -> jax.Array:
     )
 
 
+@jax.jit
 def vee(W: jax.Array) -> jax.Array:
     """``(..., 3, 3) -> (..., 3)`` the vector of the skew part of W (inverse of `hat`)."""
     return 0.5 * jnp.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0], W[..., 1, 0] - W[..., 0, 1]], -1)
@@ -59,6 +62,7 @@ def safe_norm(v: jax.Array) -> tuple[jax.Array, jax.Array]:
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), 0.0), sq
 
 
+@jax.jit
 def expm(v: jax.Array) -> jax.Array:
     """Rotation matrix of a rotation vector, Rodrigues' formula: ``(..., 3) -> (..., 3, 3)``.
 
@@ -77,6 +81,7 @@ def expm(v: jax.Array) -> jax.Array:
     return eye + sinc[..., None, None] * K + cosc[..., None, None] * (K @ K)
 
 
+@jax.jit
 def log(R: jax.Array) -> jax.Array:
     """Rotation vector of a rotation matrix, angle in [0, pi]: ``(..., 3, 3) -> (..., 3)``.
 
@@ -108,6 +113,7 @@ def log(R: jax.Array) -> jax.Array:
     return jnp.where(near_pi[..., None], (sign * theta)[..., None] * u, regular)
 
 
+@jax.jit
 def geodesic_distance(R1: jax.Array, R2: jax.Array) -> jax.Array:
     """The angle of R1^T R2 in [0, pi], rad: the geodesic distance on SO(3), ``(...)``."""
     E = jnp.swapaxes(R1, -1, -2) @ R2
@@ -116,6 +122,7 @@ def geodesic_distance(R1: jax.Array, R2: jax.Array) -> jax.Array:
     return jnp.arctan2(s, c)
 
 
+@jax.jit
 def polar_rotation(M: jax.Array) -> jax.Array:
     """The rotation nearest to a ``(..., 3, 3)`` matrix close to one (polar factor by SVD)."""
     u, _, vt = jnp.linalg.svd(M)

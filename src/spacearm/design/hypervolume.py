@@ -17,7 +17,8 @@ points below the reference get zero.
   Barone & Huband, IEEE TEC 10(1), 2006). Written with masks and vmapped over k: O(N^2
   log N) for m = 3, O(N^3 log N) for m = 4, static shapes, no Python loop over points.
 
-Points outside the set (``mask`` False) and coordinates below the reference are moved to
+Each public function is jitted (one program per shape, not one per operation on
+concrete data). Points outside the set (``mask`` False) and coordinates below the reference are moved to
 the reference, where they add no volume; so a padded batch with a mask gives the
 hypervolume of its valid rows, and the gradient of a masked row is zero.
 """
@@ -61,6 +62,7 @@ def _hypervolume_sliced(points: jax.Array, reference: jax.Array) -> jax.Array:
     return jnp.sum(heights * jax.vmap(slab)(jnp.arange(order.size)))
 
 
+@jax.jit
 def exact_hypervolume(points: jax.Array, reference: jax.Array, mask: jax.Array | None = None) -> jax.Array:
     """Exact hypervolume of a point set (all objectives maximized); differentiable.
 
@@ -86,6 +88,7 @@ def exact_hypervolume(points: jax.Array, reference: jax.Array, mask: jax.Array |
     return _hypervolume_sliced(_clipped(points, reference, mask), reference)
 
 
+@jax.jit
 def hypervolume_gradient(points: jax.Array, reference: jax.Array, mask: jax.Array | None = None) -> jax.Array:
     """``(N, m)`` the derivative of `exact_hypervolume` with respect to every coordinate.
 
@@ -105,6 +108,7 @@ def hypervolume_gradient(points: jax.Array, reference: jax.Array, mask: jax.Arra
     return jnp.where(jnp.any(below, axis=1)[:, None], 0.0, gradient)
 
 
+@jax.jit
 def hypervolume_contributions(points: jax.Array, reference: jax.Array, mask: jax.Array | None = None) -> jax.Array:
     """``(N,)`` exclusive contributions: HV(set) - HV(set without point i).
 
@@ -120,6 +124,7 @@ def hypervolume_contributions(points: jax.Array, reference: jax.Array, mask: jax
     return jnp.where(mask, total - without, 0.0)
 
 
+@jax.jit
 def layer_hypervolume_gradients(points: jax.Array, reference: jax.Array, layer: jax.Array) -> jax.Array:
     """``(N, m)`` each point's hypervolume gradient within its own non-dominated layer.
 
