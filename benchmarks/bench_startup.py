@@ -6,9 +6,9 @@ Run: python benchmarks/bench_startup.py [--repeat 1] [--only reach,optimize] [--
 Every command runs as the console script does (``spacearm.cli.console_main``: one JAX
 device per core, float64, the persistent compilation cache) in a new Python process.
 "cold" points ``SPACEARM_CACHE_DIR`` at a fresh empty folder; "warm" runs the same
-command again with the folder the cold run filled (programs that compile in under
-``jax_persistent_cache_min_compile_time_secs`` are not stored, so a warm run still
-compiles those). Each run reports its wall time, its CPU time (user + sys of the child,
+command again with the folder the cold run filled (``enable_compilation_cache`` keeps
+every program by default; with a ``min_compile_seconds`` above 0 a warm run still
+compiles the programs below it). Each run reports its wall time, its CPU time (user + sys of the child,
 which does not depend on how busy the machine is as much as wall time does), and from
 ``jax.monitoring`` the number of XLA compilations, the seconds spent tracing, lowering
 and compiling, and the compile share (those seconds over the wall time).

@@ -170,14 +170,15 @@ def _start_points(robot, starts: int, seed: int):
     return sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, starts, shift)[0]
 
 
-def _adam_search(objective, u0, wraps, steps: int, rate: float):
-    """Minimize ``objective(u)`` from each row of ``u0`` by projected Adam with a cosine-decaying rate."""
+def _adam_search(objective, u0, wraps, steps: int, rate: float, *rows):
+    """Minimize ``objective(u, *row)`` from each row of ``u0`` (with the matching rows of
+    ``rows``) by projected Adam with a cosine-decaying rate."""
     grad = jax.vmap(jax.grad(objective))
     b1, b2, eps = 0.9, 0.999, 1e-12
 
     def step(k, state):
         u, m, v = state
-        g = grad(u)
+        g = grad(u, *rows)
         m = b1 * m + (1 - b1) * g
         v = b2 * v + (1 - b2) * g * g
         t = (k + 1).astype(u.dtype)
@@ -202,20 +203,20 @@ def _reachable(robot, starts: int, steps, seed, rate):
         return jnp.sum(tip_position(fixed, box_postures(fixed, u)) ** 2)
 
     lower, upper = joint_box(robot)
-    results = []
-    for sign in (-1.0, 1.0):  # inner: minimize |tip|^2; outer: maximize
-        u = _adam_search(lambda u, sign=sign: -sign * radius_sq(u), u0, wraps, steps, rate)
-        values = jax.vmap(radius_sq)(u)
-        best = jax.lax.stop_gradient(u[jnp.argmax(sign * values)])
-        # Envelope theorem: the radius at the optimizer's box coordinates, differentiable
-        # in the design and the limits (through the box map).
-        p = tip_position(robot, box_postures(robot, best))
-        squared = jnp.sum(p * p)
-        positive = squared > 0
-        radius = jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
-        results.append((radius, lower + (upper - lower) * best))
-    (inner, j_in), (outer, j_out) = results
-    return ReachableRadii(inner, outer, j_in, j_out)
+    # Both searches in one loop (one copy of the chain pass and its gradient to compile):
+    # the first ``starts`` rows minimize |tip|^2 (inner), the others maximize it (outer).
+    signs = jnp.repeat(jnp.array([-1.0, 1.0], u0.dtype), starts)
+    u = _adam_search(lambda u, sign: -sign * radius_sq(u), jnp.concatenate([u0, u0]), wraps, steps, rate, signs)
+    values = (signs * jax.vmap(radius_sq)(u)).reshape(2, starts)
+    best = jax.lax.stop_gradient(u.reshape(2, starts, -1)[jnp.arange(2), jnp.argmax(values, axis=1)])
+    # Envelope theorem: the radii at the optimizers' box coordinates, differentiable in the
+    # design and the limits (through the box map).
+    p = tip_position(robot, box_postures(robot, best))
+    squared = jnp.sum(p * p, axis=-1)
+    positive = squared > 0
+    radius = jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
+    joints = lower + (upper - lower) * best
+    return ReachableRadii(radius[0], radius[1], joints[0], joints[1])
 
 
 def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0, rate: float = 0.05) -> ReachableRadii:
