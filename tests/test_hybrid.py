@@ -163,6 +163,9 @@ def test_parse_hybrid_checks_its_section():
     assert parse_hybrid("f.yaml", {"step_rule": "armijo"}).step_rule == "armijo"
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.step_rule: must be one of auto, per_variable, armijo"):
         parse_hybrid("f.yaml", {"step_rule": "newton"})
+    assert parse_hybrid("f.yaml", {"settled_fill": 0}).settled_fill == 0
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.settled_fill"):
+        parse_hybrid("f.yaml", {"settled_fill": -1})
 
 
 def test_neighbour_designs_lie_on_chords_between_near_front_designs_and_fill_gaps():

@@ -53,8 +53,9 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    and offspring, in geometric mean) the steps stop, and each generation evaluates
    half a population of offspring and ``settled_fill`` populations at the centroids of
    the largest triangles of the archive front (`_simplex_designs`). On pareto-mount-ur5
-   (its Pareto set a patch of the face pitch = 0.8 rad) this settles after about 10
-   generations and leaves a third to a fifth of the shortfall after 19,000 evaluations;
+   (its Pareto set a patch of the face pitch = 0.8 rad) this settled after 14
+   generations (31 with seed 1) and left a third of the shortfall after 19,000
+   evaluations (2.2e-5 against 7.2e-5 of the best known; seed 1: 2.0e-5 against 6.5e-5);
    on pareto-ur5-arm, whose population keeps refining weak variables, the fill gained
    0.25-0.57 of the rest per evaluation (5-generation geometric means) and the search
    never switched in 100 generations.
@@ -343,9 +344,9 @@ def _simplex_designs(front_f: np.ndarray, front_z: np.ndarray, count: int, tried
     simplices already filled, so one whose centroid fell off the front is not drawn
     again). Where the Pareto set is flat in design space (a face of the box, as on
     pareto-mount-ur5) the centroid of three designs on it lies on it exactly. On
-    pareto-mount-ur5, after the switch of `HybridSettings.settled_fill`, this fill left
-    2.6e-5 (relative) of the best known hypervolume missing after 19,000 evaluations,
-    the same budget of random chords 16.6e-5 (docs/explanation/pareto.md).
+    pareto-mount-ur5, switched by `HybridSettings.settled_fill` at the same generation,
+    this fill ended 3.5e-5 (relative) short of the best known hypervolume after 19,296
+    evaluations, the same budget of random chords 17.5e-5 (docs/explanation/pareto.md).
 
     Args:
         front_f: ``(n, m)`` the archive front's objectives, n > m.
