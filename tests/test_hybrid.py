@@ -10,13 +10,21 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 import yaml
+from scipy.spatial import Delaunay
 
 import spacearm as sa
 from spacearm import design
 from spacearm._core.errors import ConfigError
 from spacearm.cli import main as cli_main
 from spacearm.design.fronts import hypervolume, nondominated_mask, reference_from_population
-from spacearm.design.hybrid import HybridSettings, _neighbour_designs, hybrid_search, nondominated_ranks, parse_hybrid
+from spacearm.design.hybrid import (
+    HybridSettings,
+    _neighbour_designs,
+    _simplex_designs,
+    hybrid_search,
+    nondominated_ranks,
+    parse_hybrid,
+)
 from spacearm.design.spatial_problem import load_design_problem
 from spacearm.models import load_robot
 from spacearm.models.spatial import fields
@@ -155,6 +163,9 @@ def test_parse_hybrid_checks_its_section():
     assert parse_hybrid("f.yaml", {"step_rule": "armijo"}).step_rule == "armijo"
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.step_rule: must be one of auto, per_variable, armijo"):
         parse_hybrid("f.yaml", {"step_rule": "newton"})
+    assert parse_hybrid("f.yaml", {"settled_fill": 0}).settled_fill == 0
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.settled_fill"):
+        parse_hybrid("f.yaml", {"settled_fill": -1})
 
 
 def test_neighbour_designs_lie_on_chords_between_near_front_designs_and_fill_gaps():
@@ -181,6 +192,73 @@ def test_neighbour_designs_lie_on_chords_between_near_front_designs_and_fill_gap
     # drawn uniformly it would be 1 in 41.
     far = np.sum(new[:, 0] > 0.5)
     assert far > 0.3 * new.shape[0]
+
+
+def test_simplex_designs_fill_the_largest_triangles_of_the_front_once():
+    """The settled fill: centroids of the front's triangles (triangulated in the scaled
+    objectives along (1, 1, 1)), the largest first, each triangle once; on a front whose
+    designs lie in one face of the box the centroids stay on that face exactly."""
+    rng = np.random.default_rng(0)
+    u = np.concatenate([rng.uniform(0.0, 0.3, size=(40, 2)), [[0.9, 0.05]]])  # one isolated design
+    z = np.column_stack([u, np.ones(u.shape[0])])  # on the face z3 = 1
+    f = np.column_stack([u, 1.0 - u.sum(axis=1)])  # a linear front: f is the design's (u, v)
+    tried = set()
+    first = _simplex_designs(f, z, 5, tried)
+    assert first.shape == (5, 3) and np.all(first[:, 2] == 1.0) and len(tried) == 5
+    # The largest triangle reaches the isolated design and is drawn first.
+    assert first[0, 0] > 0.3
+    spread = np.ptp(f, axis=0)
+    scaled = (f - f.min(axis=0)) / spread
+    basis = np.linalg.svd(np.ones((1, 3)))[2][1:]
+    simplices = Delaunay(scaled @ basis.T).simplices
+    area = 0.5 * np.linalg.norm(
+        np.cross(*(scaled[simplices[:, 1:]] - scaled[simplices[:, :1]]).transpose(1, 0, 2)), axis=1
+    )
+    np.testing.assert_allclose(first[0], z[simplices[np.argmax(area)]].mean(axis=0), atol=1e-15)
+    # A second call skips the triangles already filled; all of them: nothing left.
+    second = _simplex_designs(f, z, 5, tried)
+    assert not np.any(np.all(np.isclose(second[:, None], first[None]), axis=2))
+    rest = _simplex_designs(f, z, 10**6, tried)
+    assert rest.shape[0] == simplices.shape[0] - 10 and _simplex_designs(f, z, 5, tried).shape == (0, 3)
+
+
+class _FaceFront:
+    """Three closed-form objectives of three unit-box variables whose Pareto set is the
+    face z3 = 1: f = (z1 + z3, z2 + z3, z3 - z1 - z2), a linear front there."""
+
+    variables = ("z1", "z2", "z3")
+    objectives = ("a", "b", "c")
+    lower, upper = np.zeros(3), np.ones(3)
+    closed_form = True
+    reference_point = (-0.1, -0.1, -2.1)
+
+    def batch_function(self):
+        return jax.jit(lambda x: jnp.stack([x[:, 0] + x[:, 2], x[:, 1] + x[:, 2], x[:, 2] - x[:, 0] - x[:, 1]], axis=1))
+
+
+def test_hybrid_settles_into_filling_the_front():
+    """Once the population's hypervolume stalls and the fill gains more per evaluation than
+    the rest, the steps stop and each generation evaluates ``settled_fill`` populations of
+    simplex centroids beside half a population of offspring; with ``settled_fill: 0`` the
+    search never switches (steps and chords to the end)."""
+    generations = 30
+    settings = HybridSettings(population=8, generations=generations, seed=1, tolerance=0.0)
+    result = hybrid_search(_FaceFront(), settings)
+    settled = result.extra["settled_at_generation"]
+    assert settled is not None and settled < generations
+    by_source = result.extra["evaluations_by_source"]
+    after = generations - settled
+    assert by_source["densified"] == 8 * settled + 3 * 8 * after
+    assert by_source["offspring"] >= 4 * after
+    never = hybrid_search(
+        _FaceFront(), HybridSettings(population=8, generations=generations, seed=1, tolerance=0.0, settled_fill=0)
+    )
+    assert never.extra["settled_at_generation"] is None
+    assert never.extra["evaluations_by_source"]["densified"] == 8 * generations
+    # Filling pays here: a higher hypervolume from fewer evaluations (11.37 from 1,264
+    # against 11.15 from 1,456 when written).
+    assert result.evaluations < never.evaluations
+    assert result.checkpoints[-1]["hypervolume"] > never.checkpoints[-1]["hypervolume"]
 
 
 @pytest.fixture(scope="module")

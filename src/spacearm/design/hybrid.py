@@ -47,6 +47,18 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    their gap to near neighbours (`_neighbour_designs`; archive only, as in the population
    they crowd the refined members out). The archive's hypervolume counts every evaluated
    design, and once the population sits on the front it grows by filling the front in.
+   So, for three or more objectives, once the search has settled (the population's
+   hypervolume rose no higher in ``population_patience`` generations, and over them the
+   densified designs gained the archive more per evaluation than the steps, differences
+   and offspring, in geometric mean) the steps stop, and each generation evaluates
+   half a population of offspring and ``settled_fill`` populations at the centroids of
+   the largest triangles of the archive front (`_simplex_designs`). On pareto-mount-ur5
+   (its Pareto set a patch of the face pitch = 0.8 rad) this settled after 14
+   generations (31 with seed 1) and left a third of the shortfall after 19,000
+   evaluations (2.2e-5 against 7.2e-5 of the best known; seed 1: 2.0e-5 against 6.5e-5);
+   on pareto-ur5-arm, whose population keeps refining weak variables, the fill gained
+   0.25-0.57 of the rest per evaluation (5-generation geometric means) and the search
+   never switched in 100 generations.
 4. **Stopping** from the front's own convergence: the archive's hypervolume gained less
    than ``tolerance`` (relative) over the last ``patience`` generations; or, without
    densification, the population's own hypervolume rose no higher in the last
@@ -74,7 +86,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy.spatial import cKDTree
+from scipy.spatial import Delaunay, QhullError, cKDTree
 from scipy.stats import qmc
 
 from .._core.errors import ConfigError
@@ -118,6 +130,14 @@ class HybridSettings:
             share of the first population's front range below its nadir.
         densify: also evaluate a population of designs interpolated between neighbouring
             archive-front designs every generation.
+        settled_fill: three or more objectives, with densification: once the search has
+            settled (the population's hypervolume rose no higher in
+            ``population_patience`` generations, and over them the densified designs
+            gained the archive more hypervolume per evaluation than the rest, in
+            geometric mean), the gradient steps stop and every generation fills the
+            front with this many populations of designs at the centroids of its largest
+            simplices (`_simplex_designs`) beside half a population of offspring.
+            0: never (chords and steps to the end).
         step_rule: ``"per_variable"`` (a step length per variable, Rprop),
             ``"armijo"`` (one length per member along the normalized gradient) or
             ``"auto"`` (per variable for joint-box averages over more than 4 variables,
@@ -143,6 +163,7 @@ class HybridSettings:
     max_step: float = 0.3
     reference_margin: float = 0.1
     densify: bool = True
+    settled_fill: int = 3
     crossover_eta: float = 15.0
     mutation_eta: float = 20.0
     seed: int = 0
@@ -170,6 +191,7 @@ _INTEGER_KEYS = {
     "max_evaluations": 1,
     "patience": 1,
     "population_patience": 0,
+    "settled_fill": 0,
     "seed": 0,
 }
 
@@ -309,6 +331,54 @@ def _neighbour_designs(
     return np.clip(front_z[chosen] + t * (front_z[mates] - front_z[chosen]), 0.0, 1.0)
 
 
+def _simplex_designs(front_f: np.ndarray, front_z: np.ndarray, count: int, tried: set) -> np.ndarray:
+    """Up to ``count`` unit-box designs at the centroids of the largest simplices of the front.
+
+    A non-dominated set of m objectives meets each line along (1, ..., 1) at most once,
+    so its projection on the hyperplane normal to that line (after scaling each
+    objective by the front's range) is one-to-one: a Delaunay triangulation there is a
+    triangulation of the front's surface (for three objectives; its (m-1)-simplices for
+    more). Its simplices are ranked by their (m-1)-volume in the scaled objectives (the
+    gap a missing design leaves grows with it) and the design-space centroid of each of
+    the largest is returned, each simplex once (``tried`` holds the vertex designs of the
+    simplices already filled, so one whose centroid fell off the front is not drawn
+    again). Where the Pareto set is flat in design space (a face of the box, as on
+    pareto-mount-ur5) the centroid of three designs on it lies on it exactly. On
+    pareto-mount-ur5, switched by `HybridSettings.settled_fill` at the same generation,
+    this fill ended 3.5e-5 (relative) short of the best known hypervolume after 19,296
+    evaluations, the same budget of random chords 17.5e-5 (docs/explanation/pareto.md).
+
+    Args:
+        front_f: ``(n, m)`` the archive front's objectives, n > m.
+        front_z: ``(n, d)`` its designs in the unit box.
+        count: most designs returned.
+        tried: keys of the simplices filled before (updated in place).
+
+    Returns:
+        ``(k, d)`` designs, k <= count (fewer when fewer simplices are left untried or
+        the triangulation fails, as for a degenerate front).
+    """
+    m = front_f.shape[1]
+    spread = np.ptp(front_f, axis=0)
+    scaled = (front_f - front_f.min(axis=0)) / np.where(spread > 0, spread, 1.0)
+    basis = np.linalg.svd(np.ones((1, m)))[2][1:]  # (m-1, m): orthonormal, normal to (1, ..., 1)
+    try:
+        simplices = Delaunay(scaled @ basis.T).simplices  # (T, m)
+    except QhullError:
+        return np.zeros((0, front_z.shape[1]))
+    edges = scaled[simplices[:, 1:]] - scaled[simplices[:, :1]]  # (T, m-1, m)
+    volume = np.sqrt(np.maximum(np.linalg.det(np.einsum("tik,tjk->tij", edges, edges)), 0.0))
+    chosen = []
+    for index in np.argsort(-volume):
+        if len(chosen) == count:
+            break
+        key = tuple(sorted(front_z[i].tobytes() for i in simplices[index]))
+        if key not in tried:
+            tried.add(key)
+            chosen.append(index)
+    return np.clip(front_z[simplices[np.asarray(chosen, dtype=np.int64)]].mean(axis=1), 0.0, 1.0)
+
+
 def _pull_program(problem):
     """The vmapped vector-Jacobian product: ``(z, w) -> J(z)^T w`` per design, unit box."""
     objective = problem.objective_function()
@@ -436,6 +506,10 @@ def hybrid_search(
     per_variable = step_rule == "per_variable"
     steps = np.full((population, d) if per_variable else population, settings.initial_step)
     signs = np.zeros((population, d))  # the last gradient's sign per variable (per_variable)
+    # Three or more objectives: once settled (see `HybridSettings.settled_fill`), the
+    # steps stop and the fill takes the evaluations; the log ratios of the fill's archive
+    # gain per evaluation to the rest's decide when.
+    settled_at, gain_ratios, tried = None, [], set()
     first_front = nondominated_mask(f_start)
     front_f, front_z = f_start[first_front], start_designs[first_front]
 
@@ -470,12 +544,13 @@ def hybrid_search(
     record()
     accepted_total, generation = 0, 0
     stop_reason = "generations"
-    for generation in range(1, settings.generations + 1):  # noqa: B007 (the count is reported after the loop)
+    for generation in range(1, settings.generations + 1):
         new_z, new_f = [], []
         ranks = nondominated_ranks(f)
+        stepping_now = 0 if settled_at is not None else stepping
         # 2a. Refinement: a hypervolume-gradient step for `stepping` members (the front
         # first, at random within a layer), each along its own layer's gradient.
-        chosen = np.lexsort((rng.random(population), ranks))[:stepping]
+        chosen = np.lexsort((rng.random(population), ranks))[:stepping_now]
         weights = np.nan_to_num(_layer_gradients(f, reference, ranks)[chosen], nan=0.0, posinf=0.0, neginf=0.0)
         flat = ~np.any(weights != 0, axis=1)
         if flat.any():
@@ -483,24 +558,24 @@ def hybrid_search(
             spread = np.ptp(f, axis=0)
             weights[flat] = 1.0 / np.where(spread > 0, spread, 1.0)
         z_step = z[chosen]
-        if stepping == 0:
+        if stepping_now == 0:
             grad = np.zeros((0, d))
         elif jacobian == "reverse":
             grad = np.asarray(pulls(jnp.asarray(z_step), jnp.asarray(weights)))
-            counts["value_and_gradient"] += stepping
+            counts["value_and_gradient"] += stepping_now
         else:
             # Forward differences, inward at the upper bound, evaluated with offspring
             # filling the batch (they join the union below).
             h = np.where(z_step > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (stepping, d)
             shifted = z_step[:, None, :] + h[:, :, None] * np.eye(d)[None]  # (stepping, d, d)
-            children = filled(stepping * d)
+            children = filled(stepping_now * d)
             f_both = value_of(
                 np.concatenate([shifted.reshape(-1, d), children]),
-                np.repeat([_DIFFERENCES, _OFFSPRING], [stepping * d, children.shape[0]]),
+                np.repeat([_DIFFERENCES, _OFFSPRING], [stepping_now * d, children.shape[0]]),
             )
-            f_shifted = f_both[: stepping * d].reshape(stepping, d, m)
+            f_shifted = f_both[: stepping_now * d].reshape(stepping_now, d, m)
             new_z.append(children)
-            new_f.append(f_both[stepping * d :])
+            new_f.append(f_both[stepping_now * d :])
             jac = (f_shifted - f[chosen][:, None, :]) / h[:, :, None]  # (stepping, d, m): dF_j/dz_k
             grad = np.einsum("skj,sj->sk", jac, weights)
         grad = np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
@@ -524,13 +599,13 @@ def hybrid_search(
             move = steps[chosen][:, None] * direction
         z_stepped = np.clip(z_step + move, 0.0, 1.0)
         # 2b. Exploration: NSGA-II offspring fill the stepped designs' batch.
-        children = filled(stepping, least=population // 2)
+        children = filled(stepping_now, least=population // 2)
         f_both = value_of(
-            np.concatenate([z_stepped, children]), np.repeat([_STEPS, _OFFSPRING], [stepping, children.shape[0]])
+            np.concatenate([z_stepped, children]), np.repeat([_STEPS, _OFFSPRING], [stepping_now, children.shape[0]])
         )
-        f_stepped = f_both[:stepping]
+        f_stepped = f_both[:stepping_now]
         new_z.append(children)
-        new_f.append(f_both[stepping:])
+        new_f.append(f_both[stepping_now:])
         # Armijo's test on the layer hypervolume, linearized at the old point: the step's
         # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
         gain = np.sum(weights * (f_stepped - f[chosen]), axis=1)
@@ -556,10 +631,36 @@ def hybrid_search(
                 z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
                 new_z.append(z_dense)
                 new_f.append(value_of(z_dense, _DENSIFIED))
-            else:
+            elif settled_at is None:
                 # Archive only: in the population these near-front designs would crowd
                 # the members being refined out (pareto-ur5-arm ended lower with them).
-                value_of(_neighbour_designs(rng, front_f, front_z, population), _DENSIFIED)
+                fill_at = len(values)
+                f_fill = value_of(_neighbour_designs(rng, front_f, front_z, population), _DENSIFIED)
+                wait = settings.population_patience
+                if settings.settled_fill and wait:
+                    # What each evaluation gained the archive this generation: the fill's
+                    # designs against the rest (offspring, steps, differences), each
+                    # added alone to the front as it stood before the generation.
+                    f_rest = np.concatenate(values[recorded[0] : fill_at])
+                    old = hypervolume(front_f, reference)
+                    fill_gain = (hypervolume(np.concatenate([front_f, f_fill]), reference) - old) / f_fill.shape[0]
+                    rest_gain = (hypervolume(np.concatenate([front_f, f_rest]), reference) - old) / f_rest.shape[0]
+                    gain_ratios.append(np.log(np.clip(fill_gain / max(rest_gain, 1e-300), 1e-12, 1e12)))
+                    population_hv = [c["population_hypervolume"] for c in checkpoints]
+                    if len(gain_ratios) >= wait and len(population_hv) > wait and np.mean(gain_ratios[-wait:]) > 0:
+                        best_before = max(population_hv[:-wait])
+                        if max(population_hv[-wait:]) <= best_before + settings.tolerance * abs(best_before):
+                            settled_at = generation
+            else:
+                # Settled: the population sits on the front; the archive grows by filling
+                # the front's largest gaps (chords make up any shortfall of simplices).
+                count = settings.settled_fill * population
+                z_fill = _simplex_designs(front_f, front_z, count, tried) if front_f.shape[0] > m else np.zeros((0, d))
+                if z_fill.shape[0] < count:
+                    z_fill = np.concatenate(
+                        [z_fill, _neighbour_designs(rng, front_f, front_z, count - z_fill.shape[0])]
+                    )
+                value_of(z_fill, _DENSIFIED)
         z_all, f_all = np.concatenate([z, *new_z]), np.concatenate([f, *new_f])
         fresh = z_all.shape[0] - population
         steps_all = np.concatenate([steps, np.full((fresh, *steps.shape[1:]), settings.initial_step)])
@@ -617,6 +718,7 @@ def hybrid_search(
             value_evaluations=counts["value"],
             value_and_gradient_evaluations=counts["value_and_gradient"],
             accepted_gradient_steps=accepted_total,
+            settled_at_generation=settled_at,
             evaluations_by_source={name: int(n) for name, n in zip(SOURCES, spent, strict=True)},
             compile_seconds_by_program={k: float(v) for k, v in compile_seconds.items()},
             settings=dataclasses.asdict(settings),
