@@ -496,10 +496,10 @@ def joint_averages(
     min_blocks = min(max_blocks, max(1, -(-min_samples // per_block)))
     points = max_blocks * block if min_blocks == max_blocks else None
     plan = _Plan(metrics, int(randomizations), int(block), points)
-    budget = _Budget(
-        jnp.asarray(tolerances, jnp.result_type(float)),
-        jnp.asarray(min_blocks, jnp.int32),
-        jnp.asarray(max_blocks, jnp.int32),
+    budget = _Budget(  # NumPy: traced by the program, no eager conversion programs
+        np.asarray(tolerances, jnp.result_type(float)),
+        np.asarray(min_blocks, np.int32),
+        np.asarray(max_blocks, np.int32),
     )
     shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
     out = _estimate_batched(robot, shifts, budget, plan, designs_per_chunk)

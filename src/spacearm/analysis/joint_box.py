@@ -30,6 +30,8 @@ error.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -130,8 +132,13 @@ def sobol_points(directions: jax.Array, start, count: int, shift: jax.Array) -> 
     return (shifted.astype(dtype) + 0.5) * (2.0**-_BITS)
 
 
+@functools.partial(jax.jit, static_argnums=(1, 2))
 def digital_shifts(seed: int, randomizations: int, dimension: int) -> jax.Array:
-    """``(randomizations, dimension)`` independent uniform uint32 words from ``seed``."""
+    """``(randomizations, dimension)`` independent uniform uint32 words from ``seed``.
+
+    Jitted (the seed traced): one program, not the random generator's operations one by
+    one on a concrete key.
+    """
     return jax.random.bits(jax.random.key(seed), (randomizations, dimension), jnp.uint32)
 
 
