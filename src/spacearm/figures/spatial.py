@@ -21,6 +21,7 @@ import dataclasses
 import os
 from pathlib import Path
 
+import jax
 import jax.numpy as jnp
 import matplotlib.pyplot as plt
 import numpy as np
@@ -104,15 +105,28 @@ class RobotDrawing:
     arm_names: tuple[str, ...]
 
 
+@jax.jit
+def _tree_points(robot, q):
+    """Body frames, tip origins and the centroid's offset of a tree in one program (not op by op)."""
+    axes, origins = tree_primitives.body_frames(robot, q)
+    return axes, origins, tree_primitives.tip_pose(robot, q)[1], tree_primitives.tip(robot, q)[0]
+
+
+@jax.jit
+def _chain_points(robot, q):
+    """A single arm's centroid, joint origins ``(3, n)`` and tip in one program."""
+    state = primitives._chain_pass(robot, q)  # one posture: (n,) batch-last
+    return jnp.stack(state.centroid), jnp.stack(state.origins), jnp.stack(state.tip)
+
+
 def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
     """The points drawn of ``robot`` at joints ``q (n,)`` and bus attitude ``rotation`` (3, 3)
     (identity by default), from the kernels' forward passes; see `RobotDrawing`."""
     R = np.eye(3) if rotation is None else np.asarray(rotation, float)
     q = np.asarray(q, float)
     if isinstance(robot, TreeRobot):
-        axes, origins = (np.asarray(x, float) for x in tree_primitives.body_frames(robot, q))
-        tips = np.asarray(tree_primitives.tip_pose(robot, q)[1], float)
-        centroid = tips[0] - np.asarray(tree_primitives.tip(robot, q)[0], float)
+        axes, origins, tips, offset = (np.asarray(x, float) for x in _tree_points(robot, q))
+        centroid = tips[0] - offset
         mounts = np.asarray(robot.mount_xyz, float)
         mount_axes = np.stack([rpy_matrix(np.asarray(rpy, float)) for rpy in robot.mount_rpy])
         segments, arm = [], []
@@ -135,10 +149,9 @@ def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
             arm.append(t)
         names = tuple(arm_names(robot))
     elif isinstance(robot, SpatialRobot):
-        state = primitives._chain_pass(robot, jnp.asarray(q))  # one posture: (n,) batch-last
-        centroid = np.array([float(x) for x in state.centroid])
-        origins = np.stack([np.asarray(c, float) for c in state.origins], axis=-1)
-        tips = np.array([[float(x) for x in state.tip]])
+        centroid, origins, tip = (np.asarray(x, float) for x in _chain_points(robot, q))
+        origins = origins.T
+        tips = tip[None]
         mounts = np.asarray(robot.mount_xyz, float)[None]
         mount_axes = rpy_matrix(np.asarray(robot.mount_rpy, float))[None]
         chain = np.vstack([mounts, origins, tips])

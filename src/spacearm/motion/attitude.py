@@ -98,11 +98,13 @@ def bus_rate_map(robot, q: jax.Array) -> jax.Array:
 def _prepare(robot, q_start, joint_waypoints, base_rotation):
     n = robot.n_joints
     dtype = jnp.result_type(float)
-    q_start = jnp.asarray(q_start, dtype)
-    joint_waypoints = jnp.asarray(joint_waypoints, dtype)
+    # Concrete inputs stay NumPy (jnp.asarray of one compiles a conversion program).
+    xp = jnp if is_traced(q_start, joint_waypoints, base_rotation) else np
+    q_start = xp.asarray(q_start, dtype)
+    joint_waypoints = xp.asarray(joint_waypoints, dtype)
     if base_rotation is None:
-        base_rotation = jnp.eye(3, dtype=dtype)
-    base_rotation = jnp.asarray(base_rotation, dtype)
+        base_rotation = xp.eye(3, dtype=dtype)
+    base_rotation = xp.asarray(base_rotation, dtype)
     if q_start.ndim < 1 or q_start.shape[-1] != n:
         raise ConfigError(f"q_start: expected shape (..., {n}) for a {n}-joint arm, got {q_start.shape}")
     if joint_waypoints.ndim < 2 or joint_waypoints.shape[-1] != n or joint_waypoints.shape[-2] < 2:
