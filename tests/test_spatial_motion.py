@@ -2,6 +2,7 @@
 
 import os
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -80,20 +81,33 @@ def test_straight_field_takes_one_chain_pass_and_equals_the_two_pass_field(ur5):
     the base twist map computed apart, and the field is the formula of the module docstring."""
     rng = np.random.default_rng(5)
     q = rng.uniform(-2, 2, (6, 6))
-    maps = np.asarray(primitives.straight_path_maps(ur5, q))
-    np.testing.assert_array_equal(maps[:, :3], np.asarray(primitives.generalized_jacobian(ur5, q))[:, :3])
-    np.testing.assert_allclose(maps[:, 3:], np.asarray(primitives.base_twist_map(ur5, q))[:, 3:], rtol=0, atol=1e-15)
+    # The internal kernels on concrete arrays: one program each, not one per operation.
+    maps_of, jstar, twist_map, maps_and_ends, fixed_base, tip_of = map(
+        jax.jit,
+        (
+            primitives.straight_path_maps,
+            primitives.generalized_jacobian,
+            primitives.base_twist_map,
+            primitives.straight_maps_and_ends,
+            primitives.fixed_base_jacobian,
+            primitives.tip,
+        ),
+    )
+    field = jax.jit(lambda d, y: generic_straight_field(ur5, d, jnp.asarray(1.0))(y))
+    maps = np.asarray(maps_of(ur5, q))
+    np.testing.assert_array_equal(maps[:, :3], np.asarray(jstar(ur5, q))[:, :3])
+    np.testing.assert_allclose(maps[:, 3:], np.asarray(twist_map(ur5, q))[:, 3:], rtol=0, atol=1e-15)
     # the same pass also gives a path's end quantities: fixed-base J_v and the tip
-    both, fixed_v, tip = (np.asarray(x) for x in primitives.straight_maps_and_ends(ur5, q))
+    both, fixed_v, tip = (np.asarray(x) for x in maps_and_ends(ur5, q))
     np.testing.assert_allclose(both, maps, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(fixed_v, np.asarray(primitives.fixed_base_jacobian(ur5, q))[:, :3], rtol=0, atol=1e-15)
-    np.testing.assert_allclose(tip, np.asarray(primitives.tip(ur5, q)), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(fixed_v, np.asarray(fixed_base(ur5, q))[:, :3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(tip, np.asarray(tip_of(ur5, q)), rtol=0, atol=1e-15)
     for qk in q:
-        R = np.asarray(attitude.expm(jnp.asarray(rng.normal(size=3))))
+        R = np.asarray(attitude.expm(rng.normal(size=3)))
         d = rng.normal(size=3)
         d /= np.linalg.norm(d)
         y = np.concatenate([qk, R.reshape(9), [0.2]])
-        f = np.asarray(generic_straight_field(ur5, jnp.asarray(d), jnp.asarray(1.0))(jnp.asarray(y)))
+        f = np.asarray(field(d, y))
         J = np.asarray(sa.generalized_jacobian(ur5, qk))[:3]
         rates = J.T @ np.linalg.solve(J @ J.T, R.T @ d)  # minimum-norm rates, unit tip speed
         scale = np.linalg.norm(rates)
