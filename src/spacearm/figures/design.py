@@ -165,10 +165,19 @@ def _pairwise_front(problem, results: Mapping[str, SearchResult], summary: Mappi
         third = next(k for k in range(m) if k not in (i, j))
         if "nsga2" in results:
             other = results["nsga2"].objectives[results["nsga2"].front()]
-            ax.plot(other[:, i], other[:, j], "x", ms=3, color="0.6", label=f"NSGA-II front ({other.shape[0]})")
-        points = ax.scatter(
-            front[:, i], front[:, j], c=front[:, third], s=9, cmap="viridis", label=f"{main} front ({front.shape[0]})"
+            ax.plot(
+                other[:, i], other[:, j], "x", ms=3, color="0.6", zorder=1, label=f"NSGA-II front ({other.shape[0]})"
+            )
+        points = ax.scatter(  # above the crosses (a line's default z-order is above a scatter's)
+            front[:, i],
+            front[:, j],
+            c=front[:, third],
+            s=9,
+            cmap="viridis",
+            zorder=2,
+            label=f"{main} front ({front.shape[0]})",
         )
+        ax.locator_params(nbins=4)  # a narrow front's long tick labels would overlap
         fig.colorbar(points, ax=ax, label=_LABELS.get(names[third], names[third]))
         ax.set_xlabel(_LABELS.get(names[i], names[i]))
         ax.set_ylabel(_LABELS.get(names[j], names[j]))
