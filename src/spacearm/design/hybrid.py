@@ -379,6 +379,30 @@ def _simplex_designs(front_f: np.ndarray, front_z: np.ndarray, count: int, tried
     return np.clip(front_z[simplices[np.asarray(chosen, dtype=np.int64)]].mean(axis=1), 0.0, 1.0)
 
 
+# Unit-box lengths of the extrapolations past each end of a two-objective front.
+END_LENGTHS = (1e-4, 1e-3, 1e-2, 1e-1)
+
+
+def _end_designs(front_z: np.ndarray) -> np.ndarray:
+    """Designs past both ends of a two-objective front, along its Pareto set's curve.
+
+    ``front_z``: ``(n, d)`` the front's unit-box designs, sorted along the front.
+    For each end and each length in `END_LENGTHS`, the design ``length`` beyond the end
+    along the chord from the first front design at least ``length`` inward (the last
+    one when none is that far). Returns ``(2 * len(END_LENGTHS), d)`` designs, clipped
+    to the box, shortest length first, the two ends alternating.
+    """
+    rows = []
+    for length in END_LENGTHS:
+        for ordered in (front_z, front_z[::-1]):
+            end = ordered[-1]
+            far = np.flatnonzero(np.linalg.norm(ordered - end, axis=1) >= length)
+            chord = end - (ordered[far[-1]] if far.size else ordered[0])
+            norm = np.linalg.norm(chord)
+            rows.append(end + (length / norm) * chord if norm > 0 else end)
+    return np.clip(np.asarray(rows), 0.0, 1.0)
+
+
 def _pull_program(problem):
     """The vmapped vector-Jacobian product: ``(z, w) -> J(z)^T w`` per design, unit box."""
     objective = problem.objective_function()
@@ -627,7 +651,10 @@ def hybrid_search(
             # on chords to near neighbours for more.
             if m == 2:
                 order = np.argsort(front_f[:, 0])
-                z_dense = np.clip(_densify(front_f[order], front_z[order], population), 0.0, 1.0)
+                # A quarter of them at most past the front's ends, the rest in its gaps.
+                z_ends = _end_designs(front_z[order])[: population // 4]
+                z_dense = np.clip(_densify(front_f[order], front_z[order], population - z_ends.shape[0]), 0.0, 1.0)
+                z_dense = np.concatenate([z_ends, z_dense])
                 z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
                 new_z.append(z_dense)
                 new_f.append(value_of(z_dense, _DENSIFIED))
