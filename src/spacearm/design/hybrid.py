@@ -711,14 +711,7 @@ def hybrid_search(
         signs_all = np.concatenate([signs, np.zeros((fresh, d))])
         jacobians_all = np.concatenate([jacobians, np.zeros((fresh, d, m))])
         known_all = np.concatenate([jacobian_known, np.zeros(fresh, dtype=bool)])
-        # A design twice in the union (an offspring equal to its parent, a padding copy)
-        # survives once: copies would step, and take differences, in lockstep.
-        f_finite = np.where(np.isfinite(f_all), f_all, -np.inf)
-        unique = np.sort(np.unique(z_all, axis=0, return_index=True)[1])
-        if unique.size >= population:
-            keep = unique[_survivors(f_finite[unique], population)]
-        else:
-            keep = _survivors(f_finite, population)
+        keep = _survivors(np.where(np.isfinite(f_all), f_all, -np.inf), population)
         z, f, steps, signs = z_all[keep], f_all[keep], steps_all[keep], signs_all[keep]
         jacobians, jacobian_known = jacobians_all[keep], known_all[keep]
         record()
