@@ -20,6 +20,8 @@ from spacearm.design.fronts import hypervolume, nondominated_mask, reference_fro
 from spacearm.design.hybrid import (
     HybridSettings,
     _neighbour_designs,
+    END_LENGTHS,
+    _end_designs,
     _simplex_designs,
     hybrid_search,
     nondominated_ranks,
@@ -192,6 +194,22 @@ def test_neighbour_designs_lie_on_chords_between_near_front_designs_and_fill_gap
     # drawn uniformly it would be 1 in 41.
     far = np.sum(new[:, 0] > 0.5)
     assert far > 0.3 * new.shape[0]
+
+
+def test_end_designs_extend_a_two_objective_front_along_its_curve():
+    """Past each end of a front whose designs lie on a line, the extrapolations stay on
+    that line at the set lengths beyond the end (the shortest first, the ends
+    alternating), and are clipped to the box."""
+    t = np.linspace(0.2, 0.6, 50)
+    direction = np.array([3.0, 1.0, 0.0]) / np.sqrt(10.0)
+    z = np.array([0.1, 0.3, 1.0]) + t[:, None] * direction
+    ends = _end_designs(z)
+    assert ends.shape == (2 * len(END_LENGTHS), 3)
+    for k, length in enumerate(END_LENGTHS):
+        high, low = ends[2 * k], ends[2 * k + 1]
+        np.testing.assert_allclose(high, np.clip(z[-1] + length * direction, 0.0, 1.0), atol=1e-12)
+        np.testing.assert_allclose(low, np.clip(z[0] - length * direction, 0.0, 1.0), atol=1e-12)
+    assert np.all(ends[:, 2] == 1.0)
 
 
 def test_simplex_designs_fill_the_largest_triangles_of_the_front_once():
