@@ -18,10 +18,10 @@ from spacearm._core.errors import ConfigError
 from spacearm.cli import main as cli_main
 from spacearm.design.fronts import hypervolume, nondominated_mask, reference_from_population
 from spacearm.design.hybrid import (
-    HybridSettings,
-    _neighbour_designs,
     END_LENGTHS,
+    HybridSettings,
     _end_designs,
+    _neighbour_designs,
     _simplex_designs,
     hybrid_search,
     nondominated_ranks,
