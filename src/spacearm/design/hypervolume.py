@@ -18,9 +18,9 @@ points below the reference get zero.
   log N) for m = 3, O(N^3 log N) for m = 4, static shapes, no Python loop over points.
 
 Each public function is jitted (one program per shape, not one per operation on
-concrete data). Points outside the set (``mask`` False) and coordinates below the reference are moved to
-the reference, where they add no volume; so a padded batch with a mask gives the
-hypervolume of its valid rows, and the gradient of a masked row is zero.
+concrete data). Points outside the set (``mask`` False) and coordinates below the
+reference are moved to the reference, where they add no volume; so a padded batch with a
+mask gives the hypervolume of its valid rows, and the gradient of a masked row is zero.
 """
 
 from __future__ import annotations
