@@ -83,10 +83,10 @@ def rerun(first, tmp_path):
 
 
 _HOOKED = """
-import os, signal, sys
+import signal, sys
 from spacearm.cli import main
 from spacearm.design import run
-run._BEFORE_SWAP = lambda staging: os.kill(os.getpid(), getattr(signal, sys.argv[1]))
+run._BEFORE_SWAP = lambda staging: signal.raise_signal(getattr(signal, sys.argv[1]))
 sys.exit(main(sys.argv[2:]))
 """
 
