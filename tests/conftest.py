@@ -22,6 +22,8 @@ compile options and the JAX version, so an edited kernel never loads a stale pro
 The same kept folder records each test's CPU seconds in its last run
 (``test-cpu-seconds.json``); ``--fast`` leaves out the tests marked ``slow`` and those
 that took more than ``--fast-limit`` (5 s) there, for the edit-test loop. CI runs all.
+Under pytest-xdist the same record orders the files, costliest first, so that the two
+workers finish together.
 """
 
 import collections
