@@ -64,6 +64,7 @@ def bench(
     generations: int | None = None,
     jacobian: str | None = None,
     gradient_share: float | None = None,
+    seed: int | None = None,
 ) -> dict:
     path = ROOT / "sweeps" / f"{name}.yaml"
     config = read_yaml(path, what="design problem file")
@@ -81,6 +82,8 @@ def bench(
         settings = dataclasses.replace(settings, jacobian=jacobian)
     if gradient_share is not None:
         settings = dataclasses.replace(settings, gradient_share=gradient_share)
+    if seed is not None:
+        settings = dataclasses.replace(settings, seed=seed)
     print(f"== {name}: {len(problem.variables)} variables, objectives {', '.join(problem.objectives)}", flush=True)
     print(f"  load average {' '.join(f'{v:.1f}' for v in os.getloadavg())}", flush=True)
     cpu = cpu_seconds()
@@ -155,6 +158,7 @@ def main() -> None:
     parser.add_argument("--generations", type=int, default=None, help="the hybrid's most generations")
     parser.add_argument("--jacobian", choices=JACOBIANS, default=None, help="the hybrid's design-space gradients")
     parser.add_argument("--gradient-share", type=float, default=None, help="the hybrid's stepping share")
+    parser.add_argument("--seed", type=int, default=None, help="the hybrid's seed (default: the file's)")
     parser.add_argument("--factor", type=float, default=3.0, help="NSGA-II's wall time / the hybrid's (default 3)")
     args = parser.parse_args()
     rows = [
@@ -167,6 +171,7 @@ def main() -> None:
             args.generations,
             args.jacobian,
             args.gradient_share,
+            args.seed,
         )
         for name in args.problems
     ]

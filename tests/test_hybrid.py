@@ -2,6 +2,7 @@
 and objectives it searches over (``links.<name>.length``, ``low_total_mass``)."""
 
 import csv
+import dataclasses
 import json
 from pathlib import Path
 
@@ -166,6 +167,11 @@ def test_parse_hybrid_checks_its_section():
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.step_rule: must be one of auto, per_variable, armijo"):
         parse_hybrid("f.yaml", {"step_rule": "newton"})
     assert parse_hybrid("f.yaml", {"settled_fill": 0}).settled_fill == 0
+    assert parse_hybrid("f.yaml", {"bound_refresh": 0, "common_ascent": False}).common_ascent is False
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.common_ascent: must be true or false"):
+        parse_hybrid("f.yaml", {"common_ascent": 1})
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.bound_refresh"):
+        parse_hybrid("f.yaml", {"bound_refresh": -1})
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.settled_fill"):
         parse_hybrid("f.yaml", {"settled_fill": -1})
 
@@ -279,6 +285,40 @@ def test_hybrid_settles_into_filling_the_front():
     assert result.checkpoints[-1]["hypervolume"] > never.checkpoints[-1]["hypervolume"]
 
 
+class _BoundedTrade:
+    """Two closed-form objectives of three unit-box variables whose Pareto set is the
+    segment z2 = 0.5, z3 = 0 (the lower bound, where moving inward lowers both):
+    f = (z1 - q - z3, 1 - z1^2 - q - z3) with q = (z2 - 0.5)^2."""
+
+    variables = ("z1", "z2", "z3")
+    objectives = ("a", "b")
+    lower, upper = np.zeros(3), np.ones(3)
+    closed_form = True
+    reference_point = (-1.0, -1.0)
+
+    def batch_function(self):
+        def f(x):
+            q = (x[:, 1] - 0.5) ** 2
+            return jnp.stack([x[:, 0] - q - x[:, 2], 1.0 - x[:, 0] ** 2 - q - x[:, 2]], axis=1)
+
+        return jax.jit(f)
+
+
+def test_hybrid_skips_blocked_bound_differences_and_tries_common_ascent():
+    """Two objectives: a variable at a bound where moving inward lowered both objectives
+    is not differenced between refreshes, and front members that are not Pareto-critical
+    try designs along their common ascent direction; deterministic for a seed; both off:
+    neither."""
+    settings = HybridSettings(population=8, generations=12, seed=2, tolerance=0.0)
+    result = hybrid_search(_BoundedTrade(), settings)
+    again = hybrid_search(_BoundedTrade(), settings)
+    np.testing.assert_array_equal(result.designs, again.designs)
+    assert result.extra["skipped_differences"] > 0
+    assert result.extra["evaluations_by_source"]["common_ascent"] > 0
+    off = hybrid_search(_BoundedTrade(), dataclasses.replace(settings, bound_refresh=0, common_ascent=False))
+    assert off.extra["skipped_differences"] == 0 and off.extra["evaluations_by_source"]["common_ascent"] == 0
+
+
 @pytest.fixture(scope="module")
 def planar_hybrid():
     problem = design.problem_from_mapping(reference_config(wbar=CHEAP_WBAR))
@@ -293,9 +333,12 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     f = result.objectives
     # Every evaluated design is in the box and archived, with the values batch_function gives.
     assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
-    assert (
-        result.extra["value_evaluations"] == f.shape[0] == 2 * 16 + 6 * 5 * 16
-    )  # start, then per generation: every member's 2 differences, its step, 16 children, 16 densified
+    by_source = result.extra["evaluations_by_source"]
+    assert result.extra["value_evaluations"] == f.shape[0] == sum(by_source.values())
+    # Start, then per generation every member's step and 16 densified designs; offspring
+    # fill the batches of the differences and of the steps with the common-ascent trials.
+    assert by_source["start"] == 2 * 16 and by_source["steps"] == by_source["densified"] == 6 * 16
+    assert f.shape[0] % 16 == 0 and by_source["offspring"] >= 6 * 8
     np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
     hv = [c["hypervolume"] for c in result.checkpoints]
     assert np.all(np.diff(hv) >= 0)
@@ -323,6 +366,8 @@ def test_hybrid_reverse_jacobian_steps_like_the_differences():
             densify=False,
             population_patience=3,
             population_tolerance=1e-2,
+            bound_refresh=0,  # the gradients alone: what only the differences add is off
+            common_ascent=False,
         )
         with count_compiles() as compiles:
             runs[jacobian] = hybrid_search(problem, settings)

@@ -19,7 +19,15 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    closed-form objectives (d values, no other program to compile), else from one
    vmapped vector-Jacobian product; a member that has not moved since its last
    differences reuses their Jacobian (on pareto-6var 37 % of the differences had been
-   such repeats).
+   such repeats); for two objectives, a variable at a bound where moving inward lowered
+   both objectives at the last differences is not differenced (``bound_refresh``).
+   Two objectives: from every front member that is not Pareto-critical (its projected
+   objective gradients not opposite), three designs along the direction that raises both
+   objectives (the min-norm convex combination of the normalized gradients: Fliege &
+   Svaiter 2000, Desideri 2012; ``common_ascent``). On pareto-6var, without them, 30 %
+   of the archive front in its steep end (w-bar above 0.161) was dominated by a design
+   1e-6 away along one variable (NSGA-II's front after 17 s: 41 %); with them the
+   search ended higher at each of three seeds (docs/explanation/pareto.md).
    Dominated points follow their layer's gradient towards the front instead of
    freezing; on the front the hypervolume gradient itself spreads the points (a
    hypervolume-maximal set is spread by the front's slope). For joint-box averages over
@@ -143,6 +151,19 @@ class HybridSettings:
             front with this many populations of designs at the centroids of its largest
             simplices (`_simplex_designs`) beside half a population of offspring.
             0: never (chords and steps to the end).
+        bound_refresh: two objectives, forward differences: a variable at a bound where,
+            at the last differences taken there, moving inward lowered both objectives for
+            every member at that bound is not differenced (its Jacobian row is zero: no
+            weights give it an inward projected gradient) except every ``bound_refresh``-th
+            generation, when every difference is taken again. 0: always difference.
+            (pareto-6var's Pareto set lies on a face of the box: 4 or 5 of its 6
+            variables at a bound; this saved 11,000 of 26,000 differences.)
+        common_ascent: two objectives, forward differences: each generation, from every
+            front member whose Jacobian is current and whose projected objective
+            gradients are not opposite (so it is not Pareto-critical), designs at
+            `COMMON_ASCENT_LENGTHS` along the direction that raises both objectives (the
+            min-norm convex combination of the normalized gradients), evaluated in the
+            steps' batch; they join the union.
         step_rule: ``"per_variable"`` (a step length per variable, Rprop),
             ``"armijo"`` (one length per member along the normalized gradient) or
             ``"auto"`` (per variable for joint-box averages over more than 4 variables,
@@ -169,6 +190,8 @@ class HybridSettings:
     reference_margin: float = 0.1
     densify: bool = True
     settled_fill: int = 3
+    bound_refresh: int = 10
+    common_ascent: bool = True
     crossover_eta: float = 15.0
     mutation_eta: float = 20.0
     seed: int = 0
@@ -177,8 +200,8 @@ class HybridSettings:
 JACOBIANS = ("auto", "reverse", "differences")
 STEP_RULES = ("auto", "per_variable", "armijo")
 # Where an evaluated design came from (the evaluations of each are reported).
-SOURCES = ("start", "differences", "steps", "offspring", "densified")
-_START, _DIFFERENCES, _STEPS, _OFFSPRING, _DENSIFIED = range(len(SOURCES))
+SOURCES = ("start", "differences", "steps", "offspring", "densified", "common_ascent")
+_START, _DIFFERENCES, _STEPS, _OFFSPRING, _DENSIFIED, _ASCENT = range(len(SOURCES))
 # Forward differences cost d values per gradient; a vector-Jacobian product through the
 # joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
 # about 2.5 times as long as the values'.
@@ -189,6 +212,13 @@ DIFFERENCES_UP_TO = 4
 # Forward-difference step in the unit box (the objectives are smooth float64 averages on a
 # fixed rule: truncation ~1e-6 relative, rounding ~1e-10).
 DIFFERENCE_STEP = 1e-6
+# Common-ascent trials (two objectives): unit-box lengths along the direction that raises
+# both objectives, tried from each front member with a current Jacobian whose projected,
+# normalized objective gradients are not opposite (the norm of their min-norm convex
+# combination above COMMON_ASCENT_LEAST). On pareto-6var other ladders, (1e-5, 1e-4, 1e-3),
+# (3e-5, 3e-4, 3e-3), (1e-4, 1e-3), (3e-4, 3e-3), ended within one seed's noise of it.
+COMMON_ASCENT_LENGTHS = (1e-4, 1e-3, 1e-2)
+COMMON_ASCENT_LEAST = 1e-3
 
 _INTEGER_KEYS = {
     "population": 4,
@@ -197,6 +227,7 @@ _INTEGER_KEYS = {
     "patience": 1,
     "population_patience": 0,
     "settled_fill": 0,
+    "bound_refresh": 0,
     "seed": 0,
 }
 
@@ -222,7 +253,7 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
             if value not in allowed:
                 raise ConfigError(f"{where}: must be one of {', '.join(allowed)}, got {value!r}")
             changes[key] = value
-        elif key == "densify":
+        elif key in ("densify", "common_ascent"):
             if not isinstance(value, bool):
                 raise ConfigError(f"{where}: must be true or false, got {value!r}")
             changes[key] = value
@@ -537,6 +568,9 @@ def hybrid_search(
     signs = np.zeros((population, d))  # the last gradient's sign per variable (per_variable)
     # Forward differences: each member's Jacobian dF_j/dz_k, kept while it does not move.
     jacobians, jacobian_known = np.zeros((population, d, m)), np.zeros(population, dtype=bool)
+    blocked = np.zeros((d, 2), dtype=bool)  # (variable, lower/upper bound): inward lowers every objective
+    skipped_differences = 0
+    bound_refresh = settings.bound_refresh if m == 2 else 0  # measured on two objectives only
     # Three or more objectives: once settled (see `HybridSettings.settled_fill`), the
     # steps stop and the fill takes the evaluations; the log ratios of the fill's archive
     # gain per evaluation to the rest's decide when.
@@ -601,21 +635,36 @@ def hybrid_search(
             # deterministic): on pareto-6var 37 % of the differences were such repeats.
             need = ~jacobian_known[chosen]
             z_need = z_step[need]
-            rows = z_need.shape[0] * d
-            h = np.where(z_need > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (needed, d)
+            h = np.where(z_need > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (needed, d), inward at a bound
+            # A variable at a bound where, at the last differences, moving inward lowered
+            # every objective (for every member there) has no inward projected gradient
+            # for any weights: its difference is skipped (row zero) until the next refresh.
+            at_bound = np.stack([z_need <= 0.0, z_need >= 1.0], axis=-1)  # (needed, d, 2)
+            refresh = not bound_refresh or (generation - 1) % bound_refresh == 0
+            skip = np.zeros(z_need.shape, dtype=bool) if refresh else np.any(at_bound & blocked[None], axis=-1)
+            take = ~skip  # (needed, d)
+            rows = int(take.sum())
             shifted = z_need[:, None, :] + h[:, :, None] * np.eye(d)[None]  # (needed, d, d)
             children = filled(rows)
             if rows + children.shape[0]:
                 f_both = value_of(
-                    np.concatenate([shifted.reshape(-1, d), children]),
+                    np.concatenate([shifted[take], children]),
                     np.repeat([_DIFFERENCES, _OFFSPRING], [rows, children.shape[0]]),
                 )
                 new_z.append(children)
                 new_f.append(f_both[rows:])
-                f_shifted = f_both[:rows].reshape(-1, d, m)
+                f_shifted = np.repeat(f[chosen[need]][:, None, :], d, axis=1)  # skipped: zero difference
+                f_shifted[take] = f_both[:rows]
                 # (needed, d, m): dF_j/dz_k
                 jacobians[chosen[need]] = (f_shifted - f[chosen[need]][:, None, :]) / h[:, :, None]
                 jacobian_known[chosen[need]] = True
+                if bound_refresh:
+                    lowered = np.all(f_shifted <= f[chosen[need]][:, None, :], axis=-1) & take  # (needed, d)
+                    for side in range(2):
+                        seen = at_bound[..., side] & take
+                        counted = seen.any(axis=0)
+                        blocked[counted, side] = np.all(lowered | ~seen, axis=0)[counted]
+                    skipped_differences += int(skip.sum())
             jac = jacobians[chosen]
             grad = np.einsum("skj,sj->sk", jac, weights)
         grad = np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
@@ -638,13 +687,37 @@ def hybrid_search(
             direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
             move = steps[chosen][:, None] * direction
         z_stepped = np.clip(z_step + move, 0.0, 1.0)
-        # 2b. Exploration: NSGA-II offspring fill the stepped designs' batch.
-        children = filled(stepping_now, least=population // 2)
+        trials = np.zeros((0, d))
+        if settings.common_ascent and jacobian != "reverse" and m == 2:
+            # 2b. Common ascent (Fliege & Svaiter 2000; Desideri 2012): an unmoved front
+            # member whose projected objective gradients are not opposite is not
+            # Pareto-critical; along the min-norm convex combination of the normalized
+            # gradients both objectives rise. Its Jacobian is the one its differences
+            # gave, so each trial costs one value (in the steps' batch); the trials join
+            # the union.
+            on = np.flatnonzero(jacobian_known & nondominated_mask(f))
+            g = np.transpose(jacobians[on], (0, 2, 1))  # (k, m, d): dF_j/dz
+            at = z[on][:, None, :]
+            g = np.where(((at <= 0.0) & (g < 0)) | ((at >= 1.0) & (g > 0)), 0.0, g)  # projected
+            g = g / np.maximum(np.linalg.norm(g, axis=2, keepdims=True), 1e-300)
+            between = g[:, 0] - g[:, 1]
+            t = np.sum(g[:, 0] * between, axis=1) / np.maximum(np.sum(between * between, axis=1), 1e-300)
+            direction = g[:, 0] - np.clip(t, 0.0, 1.0)[:, None] * between
+            length = np.linalg.norm(direction, axis=1)
+            ascent = length > COMMON_ASCENT_LEAST
+            if ascent.any():
+                lengths = np.asarray(COMMON_ASCENT_LENGTHS)[None, :, None]
+                unit = direction[ascent] / length[ascent, None]
+                trials = np.clip(z[on[ascent]][:, None, :] + lengths * unit[:, None, :], 0.0, 1.0).reshape(-1, d)
+        # 2c. Exploration: NSGA-II offspring fill the batch of the stepped designs and trials.
+        tried_count = trials.shape[0]
+        children = filled(stepping_now + tried_count, least=population // 2)
         f_both = value_of(
-            np.concatenate([z_stepped, children]), np.repeat([_STEPS, _OFFSPRING], [stepping_now, children.shape[0]])
+            np.concatenate([z_stepped, trials, children]),
+            np.repeat([_STEPS, _ASCENT, _OFFSPRING], [stepping_now, tried_count, children.shape[0]]),
         )
         f_stepped = f_both[:stepping_now]
-        new_z.append(children)
+        new_z.extend([trials, children])
         new_f.append(f_both[stepping_now:])
         # Armijo's test on the layer hypervolume, linearized at the old point: the step's
         # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
@@ -663,7 +736,7 @@ def hybrid_search(
         accepted_total += int(better.sum())
         jacobian_known[chosen[better]] = False  # moved
         if densifying and front_f.shape[0] >= 2:
-            # 2c. Designs interpolated between neighbouring archive-front designs, where the
+            # 2d. Designs interpolated between neighbouring archive-front designs, where the
             # gaps lose the most hypervolume: along the front's curve for two objectives,
             # on chords to near neighbours for more.
             if m == 2:
@@ -769,5 +842,6 @@ def hybrid_search(
             evaluations_by_source={name: int(n) for name, n in zip(SOURCES, spent, strict=True)},
             compile_seconds_by_program={k: float(v) for k, v in compile_seconds.items()},
             settings=dataclasses.asdict(settings),
+            skipped_differences=skipped_differences,
         ),
     )
