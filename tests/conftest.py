@@ -22,8 +22,6 @@ compile options and the JAX version, so an edited kernel never loads a stale pro
 The same kept folder records each test's CPU seconds in its last run
 (``test-cpu-seconds.json``); ``--fast`` leaves out the tests marked ``slow`` and those
 that took more than ``--fast-limit`` (5 s) there, for the edit-test loop. CI runs all.
-Under pytest-xdist the same record orders the files, costliest first, so that the two
-workers finish together.
 """
 
 import collections
@@ -94,10 +92,6 @@ def pytest_configure(config):
     folder = _record_folder
     os.makedirs(folder, exist_ok=True)
     os.environ["SPACEARM_CACHE_DIR"] = folder  # subprocesses and CLI runs share the cache
-    if hasattr(config.option, "loadscopereorder"):
-        # pytest-xdist would reorder the files by their number of tests; the workers order
-        # them by their recorded cost instead (`_costliest_files_first`).
-        config.option.loadscopereorder = False
     # SPACEARM_TEST_IN_PROCESS_CACHE=0: the test processes compile everything themselves
     # (short-lived subprocesses still use the cache), to tell a cache problem from others.
     if os.environ.get("SPACEARM_TEST_IN_PROCESS_CACHE", "1") == "0":
@@ -135,46 +129,8 @@ def _write_record(path: str, record: dict[str, float]) -> None:
     os.replace(scratch, path)
 
 
-def _file_costs() -> dict[str, float]:
-    """Each test file's CPU seconds in the kept record (read even for a fresh cache: costs, not programs)."""
-    costs: dict[str, float] = collections.defaultdict(float)
-    for nodeid, seconds in _read_record(os.path.join(suite_cache_dir(False), _CPU_RECORD)).items():
-        costs[nodeid.split("::", 1)[0]] += seconds
-    return dict(costs)
-
-
-@pytest.hookimpl(optionalhook=True)
-def pytest_configure_node(node):
-    """pytest-xdist controller: every worker orders the files by the same costs, read once here
-    (two workers reading the record apart could collect in different orders)."""
-    node.workerinput["spacearm_file_costs"] = json.dumps(_file_costs())
-
-
-def _costliest_files_first(items, costs: dict[str, float]) -> None:
-    """Order ``items`` file by file, the costliest file first (the order of a file's own tests kept).
-
-    pytest-xdist's ``--dist loadfile`` hands out whole files in collection order; with the
-    longest first, the run does not end on one worker finishing a long file while the other
-    idles. A file with no record (new) is costed at the record's mean per test times its tests.
-    """
-    files: dict[str, list] = {}
-    for item in items:
-        files.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
-    known = [name for name in files if name in costs]
-    per_test = sum(costs[name] for name in known) / max(1, sum(len(files[name]) for name in known)) or 1.0
-
-    def cost(name: str) -> float:
-        return costs[name] if name in costs else per_test * len(files[name])
-
-    items[:] = [item for name in sorted(files, key=cost, reverse=True) for item in files[name]]
-
-
 def pytest_collection_modifyitems(config, items):
-    """``--fast``: deselect the slow-marked tests and those over ``--fast-limit`` CPU seconds last time.
-    Under pytest-xdist, the files come costliest first (`_costliest_files_first`)."""
-    workerinput = getattr(config, "workerinput", None)
-    if workerinput is not None and "spacearm_file_costs" in workerinput:
-        _costliest_files_first(items, json.loads(workerinput["spacearm_file_costs"]))
+    """``--fast``: deselect the slow-marked tests and those over ``--fast-limit`` CPU seconds last time."""
     if not config.getoption("--fast"):
         return
     path = _record_path(config)
