@@ -439,6 +439,33 @@ def _end_designs(front_z: np.ndarray) -> np.ndarray:
     return np.clip(np.asarray(rows), 0.0, 1.0)
 
 
+def _projected(gradient: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``gradient`` (ascent, unit box) with the components that would leave the box at ``z`` zeroed."""
+    return np.where(((z <= 0.0) & (gradient < 0)) | ((z >= 1.0) & (gradient > 0)), 0.0, gradient)
+
+
+def _common_ascent_designs(z: np.ndarray, jacobians: np.ndarray) -> np.ndarray:
+    """Two objectives: designs along the direction that raises both, from each of ``z``.
+
+    ``z``: ``(k, d)`` unit-box designs; ``jacobians``: ``(k, d, 2)`` their dF_j/dz_k.
+    The direction is the min-norm convex combination of the two projected, normalized
+    gradients (Fliege & Svaiter 2000; Desideri 2012); where its norm is at most
+    `COMMON_ASCENT_LEAST` the gradients are (nearly) opposite and the design is
+    Pareto-critical: no trial. Returns ``(k' * len(COMMON_ASCENT_LENGTHS), d)`` designs
+    at those unit-box lengths along it, clipped to the box.
+    """
+    g = _projected(np.transpose(jacobians, (0, 2, 1)), z[:, None, :])  # (k, 2, d)
+    g = g / np.maximum(np.linalg.norm(g, axis=2, keepdims=True), 1e-300)
+    between = g[:, 0] - g[:, 1]
+    t = np.sum(g[:, 0] * between, axis=1) / np.maximum(np.sum(between * between, axis=1), 1e-300)
+    direction = g[:, 0] - np.clip(t, 0.0, 1.0)[:, None] * between
+    length = np.linalg.norm(direction, axis=1)
+    ascent = length > COMMON_ASCENT_LEAST
+    lengths = np.asarray(COMMON_ASCENT_LENGTHS)[None, :, None]
+    unit = direction[ascent] / length[ascent, None]
+    return np.clip(z[ascent][:, None, :] + lengths * unit[:, None, :], 0.0, 1.0).reshape(-1, z.shape[1])
+
+
 def _pull_program(problem):
     """The vmapped vector-Jacobian product: ``(z, w) -> J(z)^T w`` per design, unit box."""
     objective = problem.objective_function()
@@ -668,7 +695,7 @@ def hybrid_search(
             jac = jacobians[chosen]
             grad = np.einsum("skj,sj->sk", jac, weights)
         grad = np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
-        grad = np.where(((z_step <= 0.0) & (grad < 0)) | ((z_step >= 1.0) & (grad > 0)), 0.0, grad)  # projected
+        grad = _projected(grad, z_step)
         norm = np.linalg.norm(grad, axis=1, keepdims=True)
         if per_variable:
             # Each variable its own step (Rprop: Riedmiller & Braun, ICNN 1993): longer while
@@ -696,19 +723,7 @@ def hybrid_search(
             # gave, so each trial costs one value (in the steps' batch); the trials join
             # the union.
             on = np.flatnonzero(jacobian_known & nondominated_mask(f))
-            g = np.transpose(jacobians[on], (0, 2, 1))  # (k, m, d): dF_j/dz
-            at = z[on][:, None, :]
-            g = np.where(((at <= 0.0) & (g < 0)) | ((at >= 1.0) & (g > 0)), 0.0, g)  # projected
-            g = g / np.maximum(np.linalg.norm(g, axis=2, keepdims=True), 1e-300)
-            between = g[:, 0] - g[:, 1]
-            t = np.sum(g[:, 0] * between, axis=1) / np.maximum(np.sum(between * between, axis=1), 1e-300)
-            direction = g[:, 0] - np.clip(t, 0.0, 1.0)[:, None] * between
-            length = np.linalg.norm(direction, axis=1)
-            ascent = length > COMMON_ASCENT_LEAST
-            if ascent.any():
-                lengths = np.asarray(COMMON_ASCENT_LENGTHS)[None, :, None]
-                unit = direction[ascent] / length[ascent, None]
-                trials = np.clip(z[on[ascent]][:, None, :] + lengths * unit[:, None, :], 0.0, 1.0).reshape(-1, d)
+            trials = _common_ascent_designs(z[on], jacobians[on])
         # 2c. Exploration: NSGA-II offspring fill the batch of the stepped designs and trials.
         tried_count = trials.shape[0]
         children = filled(stepping_now + tried_count, least=population // 2)
