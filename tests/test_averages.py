@@ -7,7 +7,7 @@ import pytest
 
 import spacearm as sa
 from spacearm.analysis import averages, manipulability_average
-from spacearm.analysis.joint_box import joint_box, sobol_direction_numbers
+from spacearm.analysis.joint_box import digital_shifts, joint_box, sobol_direction_numbers
 
 from .conftest import random_robot
 
@@ -33,6 +33,20 @@ def test_sobol_directions_match_scipy():
             engine.reset()
             engine.fast_forward(2 ** (j + 1) - 1)
             np.testing.assert_array_equal(np.round(engine.random(1)[0] * 2.0**32).astype(np.uint64), V[:, j])
+
+
+def test_digital_shifts_on_the_host_equal_jax_random_bits():
+    """A concrete seed draws the shifts in NumPy (no program to compile): the same words as
+    JAX's Threefry ``jax.random.bits``, which a traced seed uses inside a compiled search."""
+    for seed in (0, 1, 12345, 2**31 - 1, 2**33 + 5, -3):
+        for shape in ((8, 6), (1, 9), (3, 2)):
+            host = digital_shifts(seed, *shape)
+            assert isinstance(host, np.ndarray) and host.dtype == np.uint32
+            expected = jax.random.bits(jax.random.key(seed), shape, jnp.uint32)
+            np.testing.assert_array_equal(host, np.asarray(expected))
+            np.testing.assert_array_equal(
+                np.asarray(jax.jit(digital_shifts, static_argnums=(1, 2))(seed, *shape)), host
+            )
 
 
 def test_joint_box_one_turn_and_limits():

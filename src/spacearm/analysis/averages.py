@@ -423,17 +423,22 @@ def _estimate_one(plan: _Plan, robot, shifts, budget: _Budget):
 
 @functools.partial(jax.jit, static_argnames=("plan", "designs_per_chunk"))
 def _estimate_batched(robot, shifts, budget: _Budget, plan: _Plan, designs_per_chunk: int):
+    """One `JointAverage` per metric of ``plan`` (split inside the program: no eager slicing)."""
     batch = robot.batch_shape
     if not batch:
-        return _estimate_one(plan, robot, shifts, budget)
-    size = 1
-    for s in batch:
-        size *= s
-    flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch) :])), robot)
-    out = jax.lax.map(
-        lambda design: _estimate_one(plan, design, shifts, budget), flat, batch_size=min(designs_per_chunk, size)
+        out = _estimate_one(plan, robot, shifts, budget)
+    else:
+        size = 1
+        for s in batch:
+            size *= s
+        flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch) :])), robot)
+        out = jax.lax.map(
+            lambda design: _estimate_one(plan, design, shifts, budget), flat, batch_size=min(designs_per_chunk, size)
+        )
+        out = jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch + y.shape[1:]), out)
+    return tuple(
+        JointAverage(out.value[..., i], out.error[..., i], out.samples[..., i]) for i in range(len(plan.metrics))
     )
-    return jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch + y.shape[1:]), out)
 
 
 def joint_averages(
@@ -503,10 +508,7 @@ def joint_averages(
     )
     shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
     out = _estimate_batched(robot, shifts, budget, plan, designs_per_chunk)
-    return {
-        metric: JointAverage(out.value[..., i], out.error[..., i], out.samples[..., i])
-        for i, metric in enumerate(metrics)
-    }
+    return dict(zip(metrics, out, strict=True))
 
 
 def joint_average(

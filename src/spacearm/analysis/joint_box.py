@@ -132,14 +132,51 @@ def sobol_points(directions: jax.Array, start, count: int, shift: jax.Array) -> 
     return (shifted.astype(dtype) + 0.5) * (2.0**-_BITS)
 
 
+_THREEFRY_ROTATIONS = ((13, 15, 26, 6), (17, 29, 16, 24))
+
+
+def _threefry_2x32(key: tuple[int, int], x0: np.ndarray, x1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The Threefry-2x32 hash (20 rounds; Salmon et al., SC 2011) of counter pairs, in NumPy uint32."""
+    k0, k1 = np.uint32(key[0]), np.uint32(key[1])
+    ks = (k0, k1, k0 ^ k1 ^ np.uint32(0x1BD11BDA))
+    x0, x1 = x0 + ks[0], x1 + ks[1]
+    for group in range(5):
+        for r in _THREEFRY_ROTATIONS[group % 2]:
+            x0 = x0 + x1
+            x1 = x0 ^ ((x1 << np.uint32(r)) | (x1 >> np.uint32(32 - r)))
+        x0 = x0 + ks[(group + 1) % 3]
+        x1 = x1 + ks[(group + 2) % 3] + np.uint32(group + 1)
+    return x0, x1
+
+
+def _host_shifts(seed: int, randomizations: int, dimension: int) -> np.ndarray:
+    """`digital_shifts` for a concrete seed, in NumPy: equal to ``jax.random.bits(jax.random.key(seed),
+    (randomizations, dimension), uint32)`` (the partitionable Threefry counters, JAX's default),
+    with no program to compile."""
+    word = int(np.int64(seed).view(np.uint64))
+    index = np.arange(randomizations * dimension, dtype=np.uint64)
+    with np.errstate(over="ignore"):
+        high, low = _threefry_2x32(
+            (word >> 32, word & 0xFFFFFFFF), (index >> 32).astype(np.uint32), (index & 0xFFFFFFFF).astype(np.uint32)
+        )
+    return (high ^ low).reshape(randomizations, dimension)
+
+
 @functools.partial(jax.jit, static_argnums=(1, 2))
-def digital_shifts(seed: int, randomizations: int, dimension: int) -> jax.Array:
+def _traced_shifts(seed, randomizations: int, dimension: int) -> jax.Array:
+    return jax.random.bits(jax.random.key(seed), (randomizations, dimension), jnp.uint32)
+
+
+def digital_shifts(seed, randomizations: int, dimension: int):
     """``(randomizations, dimension)`` independent uniform uint32 words from ``seed``.
 
-    Jitted (the seed traced): one program, not the random generator's operations one by
-    one on a concrete key.
+    JAX's Threefry bits of ``jax.random.key(seed)``: a traced seed (inside a compiled
+    search) draws them in the program; a concrete one in NumPy on the host, the same
+    words with no program to compile.
     """
-    return jax.random.bits(jax.random.key(seed), (randomizations, dimension), jnp.uint32)
+    if isinstance(seed, (int, np.integer)):
+        return _host_shifts(int(seed), randomizations, dimension)
+    return _traced_shifts(seed, randomizations, dimension)
 
 
 def joint_kinds(robot) -> tuple[str, ...]:
