@@ -206,13 +206,16 @@ def _reachable(robot, starts: int, steps, seed, rate):
     # Both searches in one loop (one copy of the chain pass and its gradient to compile):
     # the first ``starts`` rows minimize |tip|^2 (inner), the others maximize it (outer).
     signs = jnp.repeat(jnp.array([-1.0, 1.0], u0.dtype), starts)
-    u = _adam_search(lambda u, sign: -sign * radius_sq(u), jnp.concatenate([u0, u0]), wraps, steps, rate, signs)
-    values = (signs * jax.vmap(radius_sq)(u)).reshape(2, starts)
-    best = jax.lax.stop_gradient(u.reshape(2, starts, -1)[jnp.arange(2), jnp.argmax(values, axis=1)])
+    u = jax.lax.stop_gradient(
+        _adam_search(lambda u, sign: -sign * radius_sq(u), jnp.concatenate([u0, u0]), wraps, steps, rate, signs)
+    )
     # Envelope theorem: the radii at the optimizers' box coordinates, differentiable in the
-    # design and the limits (through the box map).
-    p = tip_position(robot, box_postures(robot, best))
-    squared = jnp.sum(p * p, axis=-1)
+    # design and the limits (through the box map). One tip evaluation of every end point
+    # both picks the best start and gives the radii (one more copy of the chain pass, not two).
+    ends = jnp.sum(tip_position(robot, box_postures(robot, u)) ** 2, axis=-1).reshape(2, starts)
+    pick = jnp.argmax(signs.reshape(2, starts) * jax.lax.stop_gradient(ends), axis=1)
+    squared = ends[jnp.arange(2), pick]
+    best = u.reshape(2, starts, -1)[jnp.arange(2), pick]
     positive = squared > 0
     radius = jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
     joints = lower + (upper - lower) * best
