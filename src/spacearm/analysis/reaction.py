@@ -45,6 +45,7 @@ from .._core.batching import bucket_size, pad_leading
 from .._core.errors import ConfigError
 from ..models.family import family_of
 from ..motion import dop853
+from ..motion.batching import is_traced
 
 __all__ = [
     "DisturbanceMap",
@@ -197,6 +198,7 @@ def _reaction_free_flat(robot, q0, R0, direction, length, steps):
             return reaction_free_rates(robot, q, d_bus)[0]
 
         h = length / steps
+        target = jnp.broadcast_to(jnp.concatenate([jnp.zeros(3, q0.dtype), d_bus]), (steps + 1, 6))
 
         def step(q, _):
             # The field holds a scan over the chain: the stages run in a loop (one copy
@@ -206,8 +208,13 @@ def _reaction_free_flat(robot, q0, R0, direction, length, steps):
 
         _, qs = jax.lax.scan(step, q0, None, length=steps)
         joints = jnp.concatenate([q0[None], qs], axis=0)
-        _, residual, bus = jax.vmap(lambda q: reaction_free_rates(robot, q, d_bus))(joints)
-        maps = jax.vmap(lambda q: jnp.concatenate(family.straight_maps(robot, q))[:, moving])(joints)
+        # The samples' checks from one pass over the chain per sample: the maps give the
+        # rates (as `reaction_free_rates`), their residuals and the singular values.
+        J, C = jax.vmap(lambda q: family.straight_maps(robot, q))(joints)
+        rates = jnp.einsum("snk,sk->sn", jnp.linalg.pinv(jnp.concatenate([C, J], axis=1), rtol=1e-12), target)
+        residual = jnp.linalg.norm(jnp.einsum("skn,sn->sk", J, rates) - d_bus, axis=-1)
+        bus = jnp.linalg.norm(jnp.einsum("skn,sn->sk", C, rates), axis=-1)
+        maps = jnp.concatenate([J, C], axis=1)[:, :, moving]
         sv = jnp.linalg.svd(maps, compute_uv=False)[:, -1]  # (steps + 1,) of [J*_v; C_w] (moving joints)
         tip = jnp.einsum("ij,sj->si", R0, jax.vmap(lambda q: family.tip(robot, q))(joints))
         return ReactionFreePath(joints, tip, jnp.max(residual), jnp.max(bus), jnp.min(sv))
@@ -250,16 +257,20 @@ def reaction_free_tip_path(
     if robot.batch_shape:
         raise ConfigError("reaction_free_tip_path: one design at a time")
     dtype = jnp.result_type(float)
-    q_start = jnp.asarray(q_start, dtype)
-    direction = jnp.asarray(direction, dtype)
-    R0 = jnp.eye(3, dtype=dtype) if base_rotation is None else jnp.asarray(base_rotation, dtype)
-    length = jnp.asarray(length, dtype)
+    # Concrete inputs are prepared in NumPy (eager jnp would compile a program per operation).
+    xp = jnp if is_traced(robot, q_start, direction, length, base_rotation) else np
+    q_start = xp.asarray(q_start, dtype)
+    direction = xp.asarray(direction, dtype)
+    R0 = xp.eye(3, dtype=dtype) if base_rotation is None else xp.asarray(base_rotation, dtype)
+    length = xp.asarray(length, dtype)
     if q_start.shape[-1:] != (n,) or direction.shape[-1:] != (3,):
         raise ConfigError(f"q_start (..., {n}) and direction (..., 3) expected, got {q_start.shape}, {direction.shape}")
     batch = np.broadcast_shapes(q_start.shape[:-1], direction.shape[:-1], R0.shape[:-2], length.shape)
     count = math.prod(batch)
     padded = bucket_size(count)  # one program per power of two of paths, not per batch size
-    flat = lambda x, core: jnp.broadcast_to(x, batch + core).reshape((-1,) + core)
+    flat = lambda x, core: xp.broadcast_to(x, batch + core).reshape((-1,) + core)
     inputs = pad_leading((flat(q_start, (n,)), flat(R0, (3, 3)), flat(direction, (3,)), flat(length, ())), padded)
     out = _reaction_free_flat(robot, *inputs, int(steps))
-    return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), out)
+    if xp is jnp:
+        return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), out)
+    return jax.tree_util.tree_map(lambda x: jax.device_put(np.asarray(x)[:count].reshape(batch + x.shape[1:])), out)
