@@ -295,7 +295,8 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
         tip=p,
         tip_rotation=T,
     )
-    q_end, R_end, p_end, T_end = frame(y)
+    # The last row is the end (rows after the end hold it): its frame is the history's.
+    q_end, R_end, p_end, T_end = joints[-1], R[-1], p[-1], T[-1]
     return PosePath(
         end_joints=q_end,
         end_rotation=R_end,
@@ -387,13 +388,13 @@ def straight_pose_path(
     if not float(sing_threshold) >= 0:
         raise ConfigError(f"sing_threshold: expected a non-negative number, got {sing_threshold!r}")
     dtype = jnp.result_type(float)
-    path = _pose_path(
+    path = _pose_path(  # NumPy inputs: no eager conversion programs before the path's own
         robot,
-        jnp.asarray(q0, dtype),
-        jnp.asarray(R0, dtype),
-        jnp.asarray(p1, dtype),
-        jnp.asarray(T1, dtype),
-        jnp.asarray(sing_threshold, dtype),
+        np.asarray(q0, dtype),
+        np.asarray(R0, dtype),
+        np.asarray(p1, dtype),
+        np.asarray(T1, dtype),
+        np.asarray(sing_threshold, dtype),
         int(steps),
     )
     return path if history else dataclasses.replace(path, history=None)

@@ -42,7 +42,7 @@ from .primitives import (
     tip,
     tip_and_fixed_base_jacobian,
     tip_and_generalized_jacobian,
-    tip_pose,
+    tip_frame,
 )
 from .robot import SpatialRobot
 from .shell import tip_shell
@@ -126,8 +126,8 @@ class SpatialFamily(RobotFamily):
         return maps["jacobian"], maps["base_rate"][3:]
 
     def tip_frame(self, robot: SpatialRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
-        """Tip origin about the system centroid ``(3,)`` and tip axes ``(3, 3)``, bus axes."""
-        return tip(robot, joints), tip_pose(robot, joints)[0]
+        """Tip origin about the system centroid ``(3,)`` and tip axes ``(3, 3)``, bus axes (one chain pass)."""
+        return tip_frame(robot, joints)
 
     def jacobians(self, robot: SpatialRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
         return jacobians(robot, posture)

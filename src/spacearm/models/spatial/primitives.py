@@ -63,6 +63,7 @@ __all__ = [
     "tip",
     "tip_and_fixed_base_jacobian",
     "tip_and_generalized_jacobian",
+    "tip_frame",
     "tip_pose",
 ]
 
@@ -625,6 +626,14 @@ def tip_pose(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     cst = chain_constants(robot)
     state = _chain_pass(robot, jnp.asarray(q), with_momentum=False)
     return _pack(_matmul(state.last_rotation, _mat(cst.tip_rotation))), _pack(state.tip)
+
+
+def tip_frame(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """One posture: the tip origin about the system centroid ``(3,)`` and the tip axes
+    ``(3, 3)``, bus axes, from one chain pass (equal to `tip` and `tip_pose`'s axes)."""
+    cst = chain_constants(robot)
+    state = _chain_pass(robot, jnp.asarray(q))
+    return _pack(_sub(state.tip, state.centroid)), _pack(_matmul(state.last_rotation, _mat(cst.tip_rotation)))
 
 
 def _point_twist_map(point, base_com):
