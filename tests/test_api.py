@@ -33,6 +33,7 @@ PLANAR_ONLY = {
     "maximum_reachable_radii": lambda q: (),
     "straight_path_workspace": lambda q: (q, 4),
     "go_and_back": lambda q: (q, jnp.array([1.0, 0.0, 0.0]), 0.01),
+    "straight_tip_path_history": lambda q: (q, jnp.array([1.0, 0.0, 0.0])),
 }
 
 SPATIAL_ONLY = [

@@ -561,10 +561,13 @@ def straight_tip_path_history(
 
     Finds the end with `straight_tip_path` (``options`` are passed on), then
     samples the path at ``n_samples`` points equally spaced in joint-space arc length.
+    Planar arms only (another family raises TypeError; a spatial arm's samples come from
+    `spacearm.motion.spatial_go_and_back`).
 
     Returns:
         ``postures (..., n_samples, n+1)`` rad and ``tips (..., n_samples, 2)`` m, inertial.
     """
+    require_family(robot, "planar", "straight_tip_path_history")
     if n_samples < 2:
         raise ConfigError("n_samples: must be at least 2")
     path = straight_tip_path(robot, phi_start, direction, max_length=max_length, **options)
