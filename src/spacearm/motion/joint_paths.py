@@ -24,7 +24,7 @@ import numpy as np
 from .._core.errors import ConfigError
 from .._core.magnus import composite_gauss, line_integral
 from ..kinematics import tip_position
-from ..models.family import family_of
+from ..models.family import family_of, require_family
 from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
@@ -225,7 +225,8 @@ def joint_path_history(
 
     Each segment is sampled at ``samples_per_segment`` equally spaced points (the
     segment's end is the next segment's start); the base attitude between samples is
-    integrated with ``nodes`` Gauss-Legendre points.
+    integrated with ``nodes`` Gauss-Legendre points. Planar arms only (another family
+    raises TypeError; `integrate_joint_path` serves every family).
 
     Args:
         phi_start: ``(..., n+1)`` initial posture, rad.
@@ -236,6 +237,7 @@ def joint_path_history(
         S = (k - 1) * samples_per_segment + 1; the last posture equals
         `integrate_joint_path`'s result.
     """
+    require_family(robot, "planar", "joint_path_history")
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(robot, [(phi_start, 1), (joint_waypoints, 2)])
     postures, tips = _joint_history_flat(flat_robot, phi_flat, wp_flat, batched, int(samples_per_segment), nodes)
