@@ -43,7 +43,7 @@ from .primitives import (
     posture_quantities,
     straight_path_maps,
     tip,
-    tip_pose,
+    tip_frames,
 )
 from .robot import TreeRobot
 from .shell import tip_shell
@@ -198,7 +198,8 @@ class TreeFamily(RobotFamily):
     def tip_frame(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         """The active tip's origin about the system centroid ``(3,)`` and axes ``(3, 3)``, bus axes."""
         t = _require_tip(robot, "pose targets")
-        return _tip(robot, joints), tip_pose(robot, joints)[0][t]
+        origins, axes = tip_frames(robot, joints)  # one pass over the tree
+        return origins[t], axes[t]
 
     def tip_shell(self, robot: TreeRobot) -> tuple[float, float]:
         """The tree's virtual-manipulator shell of the active tip (`spacearm.models.tree.shell`)."""

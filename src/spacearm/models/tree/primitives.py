@@ -76,6 +76,7 @@ __all__ = [
     "segments",
     "straight_path_maps",
     "tip",
+    "tip_frames",
     "tip_pose",
     "tree_constants",
 ]
@@ -564,6 +565,14 @@ def tip_pose(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     state = _tree_pass(robot, jnp.asarray(q), with_momentum=False)
     rotation = jnp.moveaxis(_pack(state.tip_rotations), -1, 0)
     return rotation, jnp.stack(state.tips, axis=-1)
+
+
+def tip_frames(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """One posture: the tip origins about the system centroid ``(k, 3)`` and the tip axes
+    ``(k, 3, 3)``, bus axes, from one pass over the tree (equal to `tip` and `tip_pose`'s axes)."""
+    state = _tree_pass(robot, jnp.asarray(q))
+    origins = jnp.stack(_sub(state.tips, tuple(c[None] for c in state.centroid)), axis=1)
+    return origins, jnp.moveaxis(_pack(state.tip_rotations), -1, 0)
 
 
 def body_frames(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
