@@ -191,8 +191,11 @@ def integrate_spatial_joint_path(
     )
     check_order(order)
     R_end = _integrate_flat(flat_robot, wp_flat, R_flat, batched, choose_steps(joint_waypoints, steps), order)
-    q_end = jnp.broadcast_to(joint_waypoints[..., -1, :], batch + (robot.n_joints,))
-    return R_end.reshape(batch + (3, 3)), q_end
+    if is_traced(R_end, joint_waypoints):
+        return R_end.reshape(batch + (3, 3)), jnp.broadcast_to(joint_waypoints[..., -1, :], batch + (robot.n_joints,))
+    # Concrete results are shaped in NumPy (eager reshaping compiles a program per shape).
+    q_end = np.broadcast_to(joint_waypoints[..., -1, :], batch + (robot.n_joints,))
+    return jax.device_put(np.asarray(R_end).reshape(batch + (3, 3))), jax.device_put(q_end)
 
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "samples", "steps", "order"))
