@@ -30,8 +30,8 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    takes the least step of its solutions. On pareto-6var, whose Pareto set in its steep
    end (w-bar above 0.161) is a curve in two free variables, 30 % of the archive front
    there had been dominated by a design 1e-6 away (NSGA-II's front after 17 s: 41 %);
-   with the steps the search ends at 0.1577681349, 0.1577681323 and 0.1577681459
-   (seeds 0-2) in 41,000-42,000 evaluations, against 0.1577680594, 0.1577680251 and
+   with the steps the search ends at 0.1577681358, 0.1577681337 and 0.1577681460
+   (seeds 0-2) in 41,088-42,144 evaluations, against 0.1577680594, 0.1577680251 and
    0.1577680924 in 42,700-43,600 with the earlier trials along the direction raising
    both objectives (the min-norm convex combination of the normalized gradients:
    Fliege & Svaiter 2000, Desideri 2012; ``common_ascent``, now off by default).
@@ -524,8 +524,11 @@ def _newton_probes(z: np.ndarray, jacobians: np.ndarray) -> dict:
     q = np.einsum("skj,sj->sk", jacobians, np.stack([weight, 1.0 - weight], axis=1) / scale)  # (s, d)
     lower, upper = (z <= NEWTON_SNAP) & (q <= 0), (z >= 1.0 - NEWTON_SNAP) & (q >= 0)
     free = ~(lower | upper)
-    # The weight and the scales again, of the free variables' gradients alone.
+    # The weight and the scales again, of the free variables' gradients alone; where one
+    # of them vanishes the design is critical there (that objective's optimum): no step.
     _, weight, scale = _common_combination(z, np.where(free[:, :, None], jacobians, 0.0))
+    both = np.all(scale > 1e-300, axis=1)
+    members, z, weight, scale, lower, upper, free = (a[both] for a in (members, z, weight, scale, lower, upper, free))
     h = np.where(z > 0.5, -NEWTON_HESSIAN_STEP, NEWTON_HESSIAN_STEP)
     first, second = np.triu_indices(d)
     unit = np.eye(d)
