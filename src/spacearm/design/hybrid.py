@@ -172,7 +172,7 @@ class HybridSettings:
             min-norm convex combination of the normalized gradients), evaluated in the
             steps' batch; they join the union. Off by default: beside the Newton steps
             they cost pareto-6var 13,000 more evaluations (55,000 against 42,000) for
-            6e-9 to 1.2e-8 more hypervolume.
+            5e-9 to 1.2e-8 more hypervolume.
         newton: two objectives, forward differences: each generation the same members
             (front, current Jacobian, not Pareto-critical) take a Newton step onto the
             Pareto set (`_newton_probes`, `_newton_designs`): second differences on their
