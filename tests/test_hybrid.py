@@ -23,6 +23,8 @@ from spacearm.design.hybrid import (
     HybridSettings,
     _end_designs,
     _neighbour_designs,
+    _newton_designs,
+    _newton_probes,
     _simplex_designs,
     hybrid_search,
     nondominated_ranks,
@@ -170,6 +172,9 @@ def test_parse_hybrid_checks_its_section():
     assert parse_hybrid("f.yaml", {"bound_refresh": 0, "common_ascent": False}).common_ascent is False
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.common_ascent: must be true or false"):
         parse_hybrid("f.yaml", {"common_ascent": 1})
+    assert parse_hybrid("f.yaml", {"newton": False}).newton is False and HybridSettings().newton is True
+    with pytest.raises(ConfigError, match=r"f.yaml: hybrid.newton: must be true or false"):
+        parse_hybrid("f.yaml", {"newton": "yes"})
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.bound_refresh"):
         parse_hybrid("f.yaml", {"bound_refresh": -1})
     with pytest.raises(ConfigError, match=r"f.yaml: hybrid.settled_fill"):
@@ -271,6 +276,7 @@ def test_hybrid_settles_into_filling_the_front():
     settled = result.extra["settled_at_generation"]
     assert settled is not None and settled < generations
     by_source = result.extra["evaluations_by_source"]
+    assert by_source["newton_probes"] == by_source["newton"] == by_source["common_ascent"] == 0  # two objectives only
     after = generations - settled
     assert by_source["densified"] == 8 * settled + 3 * 8 * after
     assert by_source["offspring"] >= 4 * after
@@ -309,7 +315,7 @@ def test_hybrid_skips_blocked_bound_differences_and_tries_common_ascent():
     is not differenced between refreshes, and front members that are not Pareto-critical
     try designs along their common ascent direction; deterministic for a seed; both off:
     neither."""
-    settings = HybridSettings(population=8, generations=12, seed=2, tolerance=0.0)
+    settings = HybridSettings(population=8, generations=12, seed=2, tolerance=0.0, common_ascent=True)
     result = hybrid_search(_BoundedTrade(), settings)
     again = hybrid_search(_BoundedTrade(), settings)
     np.testing.assert_array_equal(result.designs, again.designs)
@@ -317,6 +323,88 @@ def test_hybrid_skips_blocked_bound_differences_and_tries_common_ascent():
     assert result.extra["evaluations_by_source"]["common_ascent"] > 0
     off = hybrid_search(_BoundedTrade(), dataclasses.replace(settings, bound_refresh=0, common_ascent=False))
     assert off.extra["skipped_differences"] == 0 and off.extra["evaluations_by_source"]["common_ascent"] == 0
+
+
+# Two concave quadratics of (z1, z2) with different metrics, both lowered by z3: the
+# Pareto set is the curve z(w) = (w A + (1 - w) B)^-1 (w A a + (1 - w) B b), z3 = 0.
+_METRICS = (np.array([[2.0, 0.5], [0.5, 1.0]]), np.array([[1.0, -0.3], [-0.3, 3.0]]))
+_CENTRES = (np.array([0.2, 0.3]), np.array([0.8, 0.6]))
+
+
+def _curved_objectives(z, xp=np):
+    u, v = z[:, :2] - _CENTRES[0], z[:, :2] - _CENTRES[1]
+    first = -xp.sum(u * (u @ _METRICS[0]), axis=1) - z[:, 2]
+    second = -xp.sum(v * (v @ _METRICS[1]), axis=1) - z[:, 2]
+    return xp.stack([first, second], axis=1)
+
+
+class _CurvedTrade:
+    """`_curved_objectives` as a closed-form design problem on the unit box."""
+
+    variables = ("z1", "z2", "z3")
+    objectives = ("a", "b")
+    lower, upper = np.zeros(3), np.ones(3)
+    closed_form = True
+    reference_point = (-2.0, -2.0)
+
+    def batch_function(self):
+        return jax.jit(lambda x: _curved_objectives(x, jnp))
+
+
+def test_newton_steps_put_designs_on_a_curved_pareto_set():
+    """From designs 3e-3 off a curved Pareto set (Jacobians by forward differences, as in
+    the search), one Newton step lands near it: the sine of the angle between the two
+    gradients (zero on the set) falls from 4e-3-0.06 to 2e-6-6e-4, each by at least 10
+    times; z3, 1e-5 above the bound where both objectives fall, goes to the bound; a
+    design on the set takes no step."""
+    weights = np.linspace(0.1, 0.9, 9)[:, None, None]
+    metric = weights * _METRICS[0] + (1 - weights) * _METRICS[1]
+    pull = weights[:, :, 0] * (_CENTRES[0] @ _METRICS[0]) + (1 - weights[:, :, 0]) * (_CENTRES[1] @ _METRICS[1])
+    on = np.linalg.solve(metric, pull[:, :, None])[:, :, 0]  # (9, 2): on the Pareto set
+    rng = np.random.default_rng(0)
+    off = rng.normal(size=on.shape)
+    z = np.concatenate([on + 3e-3 * off / np.linalg.norm(off, axis=1, keepdims=True), np.full((9, 1), 1e-5)], axis=1)
+    z = np.concatenate([z, [[*on[4], 0.0]]])  # the last one on the set
+    f = _curved_objectives(z)
+
+    def jacobians(z):
+        h = np.where(z > 0.5, -1e-6, 1e-6)
+        shifted = z[:, None, :] + h[:, :, None] * np.eye(3)
+        return (_curved_objectives(shifted.reshape(-1, 3)).reshape(-1, 3, 2) - _curved_objectives(z)[:, None]) / h[
+            :, :, None
+        ]
+
+    def sine(z):
+        g = jacobians(z)[:, :2]  # (n, 2 free, 2)
+        return np.abs(np.linalg.det(g)) / np.prod(np.linalg.norm(g, axis=1), axis=1)
+
+    probes = _newton_probes(z, jacobians(z))
+    np.testing.assert_array_equal(probes["members"], np.arange(9))  # not the one on the set
+    assert probes["free"][:, :2].all() and probes["lower"][:, 2].all()
+    assert probes["taken"].sum() == 9 * 3  # (z1, z1), (z1, z2), (z2, z2)
+    values = _curved_objectives(probes["probes"].reshape(-1, 3)).reshape(9, -1, 2)
+    stepped = _newton_designs(z[:9], f[:9], jacobians(z)[:9], probes, values)
+    assert stepped.shape == (9, 3) and np.all(stepped[:, 2] == 0.0)
+    assert np.all(sine(z[:9]) > 4e-3) and np.all(sine(stepped) < 0.1 * sine(z[:9]))
+    assert np.median(sine(stepped)) < 2e-5
+    assert np.all(np.linalg.norm(stepped[:, :2] - z[:9, :2], axis=1) < 1e-2)
+
+
+def test_hybrid_newton_steps_two_objectives_only():
+    """Two objectives: the search spends values on the probes and the Newton steps (the
+    steps in the densified batch: every batch a multiple of the population), the same
+    for a seed; ``newton: false`` spends none."""
+    settings = HybridSettings(population=8, generations=10, seed=0, tolerance=0.0)
+    result = hybrid_search(_CurvedTrade(), settings)
+    again = hybrid_search(_CurvedTrade(), settings)
+    np.testing.assert_array_equal(result.designs, again.designs)
+    by_source = result.extra["evaluations_by_source"]
+    assert by_source["newton_probes"] > 0 and by_source["newton"] > 0
+    assert result.extra["value_evaluations"] == sum(by_source.values()) and result.evaluations % 8 == 0
+    assert by_source["newton"] + by_source["densified"] >= 10 * 8
+    without = hybrid_search(_CurvedTrade(), dataclasses.replace(settings, newton=False))
+    assert without.extra["evaluations_by_source"]["newton_probes"] == 0
+    assert without.extra["evaluations_by_source"]["newton"] == 0
 
 
 @pytest.fixture(scope="module")
@@ -335,9 +423,11 @@ def test_hybrid_archive_front_and_hypervolume(planar_hybrid):
     assert np.all(result.designs >= problem.lower) and np.all(result.designs <= problem.upper)
     by_source = result.extra["evaluations_by_source"]
     assert result.extra["value_evaluations"] == f.shape[0] == sum(by_source.values())
-    # Start, then per generation every member's step and 16 densified designs; offspring
-    # fill the batches of the differences and of the steps with the common-ascent trials.
-    assert by_source["start"] == 2 * 16 and by_source["steps"] == by_source["densified"] == 6 * 16
+    # Start, then per generation every member's step, and the Newton steps with densified
+    # designs filling their batch (at least 16 of them); offspring fill the batches of the
+    # differences and of the steps with the Newton probes.
+    assert by_source["start"] == 2 * 16 and by_source["steps"] == 6 * 16
+    assert by_source["densified"] >= 6 * 16 and (by_source["densified"] + by_source["newton"]) % 16 == 0
     assert f.shape[0] % 16 == 0 and by_source["offspring"] >= 6 * 8
     np.testing.assert_allclose(f, np.asarray(problem.batch_function()(jnp.asarray(result.designs))), rtol=1e-12)
     hv = [c["hypervolume"] for c in result.checkpoints]
@@ -368,6 +458,7 @@ def test_hybrid_reverse_jacobian_steps_like_the_differences():
             population_tolerance=1e-2,
             bound_refresh=0,  # the gradients alone: what only the differences add is off
             common_ascent=False,
+            newton=False,
         )
         with count_compiles() as compiles:
             runs[jacobian] = hybrid_search(problem, settings)

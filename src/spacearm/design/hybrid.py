@@ -21,13 +21,20 @@ Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2
    differences reuses their Jacobian (on pareto-6var 37 % of the differences had been
    such repeats); for two objectives, a variable at a bound where moving inward lowered
    both objectives at the last differences is not differenced (``bound_refresh``).
-   Two objectives: from every front member that is not Pareto-critical (its projected
-   objective gradients not opposite), three designs along the direction that raises both
-   objectives (the min-norm convex combination of the normalized gradients: Fliege &
-   Svaiter 2000, Desideri 2012; ``common_ascent``). On pareto-6var, without them, 30 %
-   of the archive front in its steep end (w-bar above 0.161) was dominated by a design
-   1e-6 away along one variable (NSGA-II's front after 17 s: 41 %); with them the
-   search ended higher at each of three seeds (docs/explanation/pareto.md).
+   Two objectives: every front member that is not Pareto-critical (its projected
+   objective gradients not opposite) takes a Newton step onto the Pareto set
+   (``newton``): on its free variables (those not held at a bound that the combination
+   of the gradients pushes against) a critical point solves w g_0 + (1 - w) g_1 = 0 for
+   a weight w; the step solves the linearization in the design and the weight, with
+   Hessians from second differences (k (k + 1) / 2 values for k free variables), and
+   takes the least step of its solutions. On pareto-6var, whose Pareto set in its steep
+   end (w-bar above 0.161) is a curve in two free variables, 30 % of the archive front
+   there had been dominated by a design 1e-6 away (NSGA-II's front after 17 s: 41 %);
+   with the steps the search ends at 0.1577681358, 0.1577681337 and 0.1577681460
+   (seeds 0-2) in 41,088-42,144 evaluations, against 0.1577680594, 0.1577680251 and
+   0.1577680924 in 42,700-43,600 with the earlier trials along the direction raising
+   both objectives (the min-norm convex combination of the normalized gradients:
+   Fliege & Svaiter 2000, Desideri 2012; ``common_ascent``, now off by default).
    Dominated points follow their layer's gradient towards the front instead of
    freezing; on the front the hypervolume gradient itself spreads the points (a
    hypervolume-maximal set is spread by the front's slope). For joint-box averages over
@@ -163,7 +170,15 @@ class HybridSettings:
             gradients are not opposite (so it is not Pareto-critical), designs at
             `COMMON_ASCENT_LENGTHS` along the direction that raises both objectives (the
             min-norm convex combination of the normalized gradients), evaluated in the
-            steps' batch; they join the union.
+            steps' batch; they join the union. Off by default: beside the Newton steps
+            they cost pareto-6var 13,000 more evaluations (55,000 against 42,000) for
+            5e-9 to 1.2e-8 more hypervolume.
+        newton: two objectives, forward differences: each generation the same members
+            (front, current Jacobian, not Pareto-critical) take a Newton step onto the
+            Pareto set (`_newton_probes`, `_newton_designs`): second differences on their
+            free variables (k (k + 1) / 2 values for k free, none for one), evaluated in
+            the steps' batch, then the step, evaluated with the densified designs; both
+            join the union.
         step_rule: ``"per_variable"`` (a step length per variable, Rprop),
             ``"armijo"`` (one length per member along the normalized gradient) or
             ``"auto"`` (per variable for joint-box averages over more than 4 variables,
@@ -191,7 +206,8 @@ class HybridSettings:
     densify: bool = True
     settled_fill: int = 3
     bound_refresh: int = 10
-    common_ascent: bool = True
+    common_ascent: bool = False
+    newton: bool = True
     crossover_eta: float = 15.0
     mutation_eta: float = 20.0
     seed: int = 0
@@ -200,8 +216,8 @@ class HybridSettings:
 JACOBIANS = ("auto", "reverse", "differences")
 STEP_RULES = ("auto", "per_variable", "armijo")
 # Where an evaluated design came from (the evaluations of each are reported).
-SOURCES = ("start", "differences", "steps", "offspring", "densified", "common_ascent")
-_START, _DIFFERENCES, _STEPS, _OFFSPRING, _DENSIFIED, _ASCENT = range(len(SOURCES))
+SOURCES = ("start", "differences", "steps", "offspring", "densified", "common_ascent", "newton_probes", "newton")
+_START, _DIFFERENCES, _STEPS, _OFFSPRING, _DENSIFIED, _ASCENT, _PROBES, _NEWTON = range(len(SOURCES))
 # Forward differences cost d values per gradient; a vector-Jacobian product through the
 # joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
 # about 2.5 times as long as the values'.
@@ -219,6 +235,12 @@ DIFFERENCE_STEP = 1e-6
 # (3e-5, 3e-4, 3e-3), (1e-4, 1e-3), (3e-4, 3e-3), ended within one seed's noise of it.
 COMMON_ASCENT_LENGTHS = (1e-4, 1e-3, 1e-2)
 COMMON_ASCENT_LEAST = 1e-3
+# Pareto-Newton steps (two objectives): the unit-box step of the second differences, the
+# distance to a bound within which a variable pushed out of the box is held at it, and the
+# longest step (unit box).
+NEWTON_HESSIAN_STEP = 1e-3
+NEWTON_SNAP = 1e-3
+NEWTON_LONGEST = 0.05
 
 _INTEGER_KEYS = {
     "population": 4,
@@ -253,7 +275,7 @@ def parse_hybrid(source: str, section: Any) -> HybridSettings:
             if value not in allowed:
                 raise ConfigError(f"{where}: must be one of {', '.join(allowed)}, got {value!r}")
             changes[key] = value
-        elif key in ("densify", "common_ascent"):
+        elif key in ("densify", "common_ascent", "newton"):
             if not isinstance(value, bool):
                 raise ConfigError(f"{where}: must be true or false, got {value!r}")
             changes[key] = value
@@ -444,26 +466,144 @@ def _projected(gradient: np.ndarray, z: np.ndarray) -> np.ndarray:
     return np.where(((z <= 0.0) & (gradient < 0)) | ((z >= 1.0) & (gradient > 0)), 0.0, gradient)
 
 
+def _common_combination(z: np.ndarray, jacobians: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two objectives: the min-norm convex combination of the projected, normalized gradients.
+
+    ``z``: ``(k, d)`` unit-box designs; ``jacobians``: ``(k, d, 2)`` their dF_j/dz_k.
+    Returns ``(direction, weight, scale)``: the ``(k, d)`` combination (both objectives
+    rise along it; zero where the design is Pareto-critical: Fliege & Svaiter 2000;
+    Desideri 2012), the ``(k,)`` weight of objective 0 in it, and the ``(k, 2)`` norms
+    of the projected gradients it normalized by.
+    """
+    g = _projected(np.transpose(jacobians, (0, 2, 1)), z[:, None, :])  # (k, 2, d)
+    scale = np.maximum(np.linalg.norm(g, axis=2), 1e-300)
+    g = g / scale[:, :, None]
+    between = g[:, 0] - g[:, 1]
+    t = np.clip(np.sum(g[:, 0] * between, axis=1) / np.maximum(np.sum(between * between, axis=1), 1e-300), 0.0, 1.0)
+    return g[:, 0] - t[:, None] * between, 1.0 - t, scale
+
+
 def _common_ascent_designs(z: np.ndarray, jacobians: np.ndarray) -> np.ndarray:
     """Two objectives: designs along the direction that raises both, from each of ``z``.
 
     ``z``: ``(k, d)`` unit-box designs; ``jacobians``: ``(k, d, 2)`` their dF_j/dz_k.
-    The direction is the min-norm convex combination of the two projected, normalized
-    gradients (Fliege & Svaiter 2000; Desideri 2012); where its norm is at most
+    The direction is `_common_combination`; where its norm is at most
     `COMMON_ASCENT_LEAST` the gradients are (nearly) opposite and the design is
     Pareto-critical: no trial. Returns ``(k' * len(COMMON_ASCENT_LENGTHS), d)`` designs
     at those unit-box lengths along it, clipped to the box.
     """
-    g = _projected(np.transpose(jacobians, (0, 2, 1)), z[:, None, :])  # (k, 2, d)
-    g = g / np.maximum(np.linalg.norm(g, axis=2, keepdims=True), 1e-300)
-    between = g[:, 0] - g[:, 1]
-    t = np.sum(g[:, 0] * between, axis=1) / np.maximum(np.sum(between * between, axis=1), 1e-300)
-    direction = g[:, 0] - np.clip(t, 0.0, 1.0)[:, None] * between
+    direction = _common_combination(z, jacobians)[0]
     length = np.linalg.norm(direction, axis=1)
     ascent = length > COMMON_ASCENT_LEAST
     lengths = np.asarray(COMMON_ASCENT_LENGTHS)[None, :, None]
     unit = direction[ascent] / length[ascent, None]
     return np.clip(z[ascent][:, None, :] + lengths * unit[:, None, :], 0.0, 1.0).reshape(-1, z.shape[1])
+
+
+def _newton_probes(z: np.ndarray, jacobians: np.ndarray) -> dict:
+    """Two objectives: the second-difference probes of the Pareto-Newton step (`_newton_designs`).
+
+    ``z``: ``(k, d)`` unit-box designs; ``jacobians``: ``(k, d, 2)`` their dF_j/dz_k.
+    A design is stepped when it is not Pareto-critical (its `_common_combination` longer
+    than `COMMON_ASCENT_LEAST`). Its variables within `NEWTON_SNAP` of a bound where the
+    combination q = w g_0 + (1 - w) g_1 of the normalized (unprojected) gradients points
+    out of the box are held at that bound; the others are free. The probes are the
+    designs ``z + h e_i`` for free i and ``z + h (e_i + e_j)`` for free i < j, when two or
+    more are free (h = `NEWTON_HESSIAN_STEP`, inward past the middle of the box).
+
+    Returns a dict: ``members`` ``(s,)`` the indices of the stepped designs into ``z``;
+    ``free``, ``lower``, ``upper`` ``(s, d)`` bool; ``weight`` ``(s,)``; ``scale``
+    ``(s, 2)`` (see `_common_combination`); ``h`` ``(s, d)``; ``probes``
+    ``(s, d (d + 1) / 2, d)`` and ``taken`` ``(s, d (d + 1) / 2)``, the probes needed
+    (both variables free), pairs in ``np.triu_indices(d)`` order.
+    """
+    d = z.shape[1]
+    direction, weight, scale = _common_combination(z, jacobians)
+    members = np.flatnonzero(np.linalg.norm(direction, axis=1) > COMMON_ASCENT_LEAST)
+    z, jacobians, weight, scale = z[members], jacobians[members], weight[members], scale[members]
+    q = np.einsum("skj,sj->sk", jacobians, np.stack([weight, 1.0 - weight], axis=1) / scale)  # (s, d)
+    lower, upper = (z <= NEWTON_SNAP) & (q <= 0), (z >= 1.0 - NEWTON_SNAP) & (q >= 0)
+    free = ~(lower | upper)
+    # The weight and the scales again, of the free variables' gradients alone; where one
+    # of them vanishes the design is critical there (that objective's optimum): no step.
+    _, weight, scale = _common_combination(z, np.where(free[:, :, None], jacobians, 0.0))
+    both = np.all(scale > 1e-300, axis=1)
+    members, z, weight, scale, lower, upper, free = (a[both] for a in (members, z, weight, scale, lower, upper, free))
+    h = np.where(z > 0.5, -NEWTON_HESSIAN_STEP, NEWTON_HESSIAN_STEP)
+    first, second = np.triu_indices(d)
+    unit = np.eye(d)
+    probes = (
+        z[:, None, :]
+        + h[:, first, None] * unit[first]
+        + np.where((first != second)[None, :, None], h[:, second, None] * unit[second], 0.0)
+    )
+    # One free variable: its gradients are opposite (or the design would not be stepped
+    # without its held variables), so the step is zero: no probes.
+    taken = free[:, first] & free[:, second] & (free.sum(axis=1) >= 2)[:, None]
+    return dict(
+        members=members,
+        free=free,
+        lower=lower,
+        upper=upper,
+        weight=weight,
+        scale=scale,
+        h=h,
+        probes=probes,
+        taken=taken,
+    )
+
+
+def _newton_designs(
+    z: np.ndarray, f: np.ndarray, jacobians: np.ndarray, probes: dict, probe_values: np.ndarray
+) -> np.ndarray:
+    """Two objectives: each stepped design's Newton step onto the Pareto set.
+
+    ``z``, ``f``, ``jacobians``: ``(s, d)``, ``(s, 2)``, ``(s, d, 2)`` the stepped designs
+    (``probes["members"]`` of those `_newton_probes` took); ``probe_values``
+    ``(s, d (d + 1) / 2, 2)`` the objectives at its probes (any value where not taken).
+    On the free variables a Pareto-critical point solves q = w g_0 + (1 - w) g_1 = 0 for
+    some weight w (normalized gradients; the Karush-Kuhn-Tucker system whose solutions
+    Hillermeier's homotopy method follows, 2001). Linearized at the design, with the weight free
+    too: ``H_w dz + (g_0 - g_1) dw = -q``, H_w the same combination of the Hessians (from
+    the forward differences and the probes' second differences). Of its solutions the
+    step takes the least ``|dz|`` (the system projected normal to g_0 - g_1, solved by
+    pseudo-inverse), at most `NEWTON_LONGEST` long; the held variables go to their bound.
+    With one free variable the design is critical already: only the bounds move it.
+    Returns ``(s', d)`` the designs that differ from their start, clipped to the box.
+    """
+    s, d = z.shape
+    if s == 0:
+        return np.zeros((0, d))
+    first, second = np.triu_indices(d)
+    h, free, taken = probes["h"], probes["free"], probes["taken"]
+    hi, hj = h[:, first, None], h[:, second, None]  # (s, P, 1)
+    gi, gj = jacobians[:, first], jacobians[:, second]  # (s, P, 2)
+    # Second differences along one variable (the probe z + h e_i), then across two (z + h e_i + h e_j).
+    diagonal = 2.0 * (probe_values - f[:, None, :] - hi * gi) / hi**2  # (s, P, 2), valid where first == second
+    pure = diagonal[:, first == second]  # (s, d, 2): d^2 F / dz_i^2
+    across = (
+        probe_values - f[:, None, :] - hi * gi - hj * gj - 0.5 * (hi**2 * pure[:, first] + hj**2 * pure[:, second])
+    ) / (hi * hj)
+    values = np.where(taken[:, :, None], np.where((first == second)[None, :, None], diagonal, across), 0.0)
+    hessians = np.zeros((s, d, d, 2))
+    hessians[:, first, second] = values
+    hessians[:, second, first] = values
+    combination = np.stack([probes["weight"], 1.0 - probes["weight"]], axis=1) / probes["scale"]  # (s, 2)
+    mask = free[:, :, None] & free[:, None, :]
+    hessian = np.where(mask, np.einsum("sklj,sj->skl", hessians, combination), 0.0)  # (s, d, d)
+    q = np.where(free, np.einsum("skj,sj->sk", jacobians, combination), 0.0)
+    between = np.where(
+        free, (jacobians[:, :, 0] / probes["scale"][:, :1] - jacobians[:, :, 1] / probes["scale"][:, 1:]), 0.0
+    )
+    between /= np.maximum(np.linalg.norm(between, axis=1, keepdims=True), 1e-300)
+    normal = np.where(mask, np.eye(d)[None] - between[:, :, None] * between[:, None, :], 0.0)  # (s, d, d)
+    step = -np.einsum("skl,sl->sk", np.linalg.pinv(normal @ hessian, rcond=1e-10), np.einsum("skl,sl->sk", normal, q))
+    step = np.where(free, step, 0.0)
+    length = np.linalg.norm(step, axis=1, keepdims=True)
+    step *= np.minimum(1.0, NEWTON_LONGEST / np.maximum(length, 1e-300))
+    start = np.where(probes["lower"], 0.0, np.where(probes["upper"], 1.0, z))
+    designs = np.clip(start + step, 0.0, 1.0)
+    return designs[np.any(designs != z, axis=1)]
 
 
 def _pull_program(problem):
@@ -508,8 +648,7 @@ def hybrid_search(
     Returns:
         A `SearchResult` (method ``"hybrid"``) with every value-evaluated design in
         order; ``extra`` holds the reference point used, the evaluation counts (also by
-        source: start, differences, steps, offspring, densified) and the compile seconds
-        of each program.
+        source: `SOURCES`) and the compile seconds of each program.
     """
     settings = settings or HybridSettings()
     if reference is None:
@@ -714,26 +853,54 @@ def hybrid_search(
             direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
             move = steps[chosen][:, None] * direction
         z_stepped = np.clip(z_step + move, 0.0, 1.0)
-        trials = np.zeros((0, d))
-        if settings.common_ascent and jacobian != "reverse" and m == 2:
-            # 2b. Common ascent (Fliege & Svaiter 2000; Desideri 2012): an unmoved front
-            # member whose projected objective gradients are not opposite is not
-            # Pareto-critical; along the min-norm convex combination of the normalized
-            # gradients both objectives rise. Its Jacobian is the one its differences
-            # gave, so each trial costs one value (in the steps' batch); the trials join
-            # the union.
+        trials = probed = z_newton = np.zeros((0, d))
+        newton = None
+        # Two objectives with forward differences only (three or more, or reverse
+        # Jacobians, take neither 2b nor 2b').
+        if jacobian != "reverse" and m == 2 and (settings.common_ascent or settings.newton):
             on = np.flatnonzero(jacobian_known & nondominated_mask(f))
-            trials = _common_ascent_designs(z[on], jacobians[on])
-        # 2c. Exploration: NSGA-II offspring fill the batch of the stepped designs and trials.
-        tried_count = trials.shape[0]
-        children = filled(stepping_now + tried_count, least=population // 2)
+            if settings.common_ascent:
+                # 2b. Common ascent (Fliege & Svaiter 2000; Desideri 2012): an unmoved front
+                # member whose projected objective gradients are not opposite is not
+                # Pareto-critical; along the min-norm convex combination of the normalized
+                # gradients both objectives rise. Its Jacobian is the one its differences
+                # gave, so each trial costs one value (in the steps' batch); the trials join
+                # the union.
+                trials = _common_ascent_designs(z[on], jacobians[on])
+            if settings.newton:
+                # 2b'. Pareto-Newton: the same members' second differences on their free
+                # variables (in the steps' batch), then a Newton step onto the Pareto set
+                # (evaluated with the densified designs, 2d); probes and steps join the union.
+                newton = _newton_probes(z[on], jacobians[on])
+                probed = newton["probes"][newton["taken"]]
+        # 2c. Exploration: NSGA-II offspring fill the batch of the stepped designs, trials and probes.
+        tried_count, probed_count = trials.shape[0], probed.shape[0]
+        children = filled(stepping_now + tried_count + probed_count, least=population // 2)
         f_both = value_of(
-            np.concatenate([z_stepped, trials, children]),
-            np.repeat([_STEPS, _ASCENT, _OFFSPRING], [stepping_now, tried_count, children.shape[0]]),
+            np.concatenate([z_stepped, trials, probed, children]),
+            np.repeat(
+                [_STEPS, _ASCENT, _PROBES, _OFFSPRING], [stepping_now, tried_count, probed_count, children.shape[0]]
+            ),
         )
         f_stepped = f_both[:stepping_now]
-        new_z.extend([trials, children])
+        new_z.extend([trials, probed, children])
         new_f.append(f_both[stepping_now:])
+        if newton is not None and newton["members"].size:
+            members = on[newton["members"]]
+            probe_values = np.zeros((*newton["taken"].shape, m))
+            probe_values[newton["taken"]] = f_both[stepping_now + tried_count :][:probed_count]
+            z_newton = _newton_designs(z[members], f[members], jacobians[members], newton, probe_values)
+        if z_newton.shape[0] and not (densifying and front_f.shape[0] >= 2):
+            # No densified batch to join: offspring fill the Newton steps' batch.
+            children = filled(z_newton.shape[0])
+            new_z.extend([z_newton, children])
+            new_f.append(
+                value_of(
+                    np.concatenate([z_newton, children]),
+                    np.repeat([_NEWTON, _OFFSPRING], [z_newton.shape[0], children.shape[0]]),
+                )
+            )
+            z_newton = np.zeros((0, d))
         # Armijo's test on the layer hypervolume, linearized at the old point: the step's
         # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
         gain = np.sum(weights * (f_stepped - f[chosen]), axis=1)
@@ -758,11 +925,19 @@ def hybrid_search(
                 order = np.argsort(front_f[:, 0])
                 # A quarter of them at most past the front's ends, the rest in its gaps.
                 z_ends = _end_designs(front_z[order])[: population // 4]
-                z_dense = np.clip(_densify(front_f[order], front_z[order], population - z_ends.shape[0]), 0.0, 1.0)
+                # The Newton steps (2b') go first; densified designs fill the batch to a
+                # multiple of the population, at least one population of them.
+                dense = -(-(population + z_newton.shape[0]) // population) * population - z_newton.shape[0]
+                z_dense = np.clip(_densify(front_f[order], front_z[order], dense - z_ends.shape[0]), 0.0, 1.0)
                 z_dense = np.concatenate([z_ends, z_dense])
-                z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(population - z_dense.shape[0], axis=0)])
-                new_z.append(z_dense)
-                new_f.append(value_of(z_dense, _DENSIFIED))
+                z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(dense - z_dense.shape[0], axis=0)])
+                new_z.extend([z_newton, z_dense])
+                new_f.append(
+                    value_of(
+                        np.concatenate([z_newton, z_dense]),
+                        np.repeat([_NEWTON, _DENSIFIED], [z_newton.shape[0], dense]),
+                    )
+                )
             elif settled_at is None:
                 # Archive only: in the population these near-front designs would crowd
                 # the members being refined out (pareto-ur5-arm ended lower with them).
