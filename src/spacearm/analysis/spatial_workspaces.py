@@ -544,23 +544,49 @@ def _kkt_polish(robot, best, free, jacobian, lower, upper, wraps, steps: int = 3
     return jnp.where(accepted, q, best), jnp.where(accepted, u, u0), jnp.where(accepted, lam, lam0), accepted
 
 
-def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: bool):
+def _with_value(expression):
+    """``expression(robot, posture, constants)`` as a function of ``(robot, posture,
+    constants, value)`` whose value is ``value`` (the same number, computed already) and
+    whose derivatives in the robot and the posture are the expression's: the program
+    evaluates the expression (its passes over the chain) only where it is differentiated."""
+
+    @jax.custom_jvp
+    def function(robot, posture, constants, value):
+        return value
+
+    @function.defjvp
+    def function_jvp(primals, tangents):
+        robot, posture, constants, value = primals
+        d_robot, d_posture = tangents[:2]
+        _, tangent = jax.jvp(lambda r, p: expression(r, p, constants), (robot, posture), (d_robot, d_posture))
+        return value, tangent
+
+    return function
+
+
+def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: bool, posture_radius_sq=None):
     """The smallest radius over the rows of ``q`` (``radius_sq`` their |tip|^2, inf off the set),
-    differentiable in the design, and its posture (``polish``: `_polished_value`, static)."""
+    differentiable in the design, and its posture (``polish``: `_polished_value`, static).
+
+    ``posture_radius_sq``: |tip|^2 at the returned posture (the best row with its joints
+    near a limit moved onto it), when the search evaluated it already: the value is then
+    its square root, and the design derivatives alone evaluate the chain."""
     q = jax.lax.stop_gradient(q)
     k = jnp.argmin(radius_sq)
     best = q[k]
     # Joints resting on a limit follow the limit (a design leaf); the others stay put.
-    span = upper - lower
-    at_lower = ~wraps & (best <= lower + 1e-6 * span)
-    at_upper = ~wraps & (best >= upper - 1e-6 * span)
+    at_lower, at_upper = _at_limits(best, lower, upper, wraps)
     free = ~(at_lower | at_upper)
     if polish:
         value, best = _polished_value(robot, best, free, at_lower, at_upper, jacobian, lower, upper, wraps)
         return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
     posture = jnp.where(at_upper, upper, jnp.where(at_lower, lower, best))
-    value = jnp.sqrt(_tip_radius_sq(robot, posture))
-    if best.shape[-1] == family_of(robot).translational_rows:
+
+    def expression(robot, posture, constants):
+        best, free = constants
+        value = jnp.sqrt(_tip_radius_sq(robot, posture))
+        if best.shape[-1] != family_of(robot).translational_rows:
+            return value
         # A minimum of |tip| on the hypersurface s = 0 moves with the design: by the
         # envelope theorem for the constrained minimum, d radius / d design =
         # d r / d design - lambda d s / d design at the fixed posture, with the Lagrange
@@ -575,8 +601,21 @@ def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: b
         grad_r, grad_s = jnp.where(free, grad_r, 0.0), jnp.where(free, grad_s, 0.0)
         multiplier = jax.lax.stop_gradient(jnp.dot(grad_r, grad_s) / jnp.maximum(jnp.dot(grad_s, grad_s), 1e-300))
         constraint = singularity_measure(robot, posture, jacobian)
-        value = value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
+        return value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
+
+    if posture_radius_sq is None:
+        value = expression(robot, posture, (best, free))
+    else:
+        value = _with_value(expression)(
+            robot, posture, (best, free), jnp.sqrt(jax.lax.stop_gradient(posture_radius_sq))
+        )
     return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
+
+
+def _at_limits(best, lower, upper, wraps):
+    """Joints of ``best`` within 1e-6 of their range from the lower and the upper limit."""
+    span = upper - lower
+    return ~wraps & (best <= lower + 1e-6 * span), ~wraps & (best >= upper - 1e-6 * span)
 
 
 def _polished_value(robot, best, free, at_lower, at_upper, jacobian, lower, upper, wraps):
@@ -609,11 +648,13 @@ def _singular_radius(
     ``candidates`` rows at a time: iterations 0..S-1 evaluate s on the Sobol samples;
     S..S+P-1 project the ``keep`` samples nearest the set onto it (``projection_steps``
     Newton steps); S+P..S+P+D-1 are the descent steps on the ``candidates`` closest
-    to the centroid (a tangent step and ``newton_steps`` Newton steps each). So the
-    program holds one forward-mode pass over the chain (the costly part to compile),
-    not one per use. The step counts and the seed are traced: they change no shape.
-    The search runs on the design with its gradient stopped; the returned radius is
-    differentiable through `_closest_value` (envelope theorem).
+    to the centroid (a tangent step and ``newton_steps`` Newton steps each); without
+    ``polish``, one more evaluates the chosen posture, whose |tip| is the returned value.
+    So the program holds one forward-mode pass over the chain (the costly part to
+    compile), not one per use. The step counts and the seed are traced: they change no
+    shape. The search runs on the design with its gradient stopped; the returned radius
+    is differentiable through `_closest_value` (envelope theorem), whose passes over the
+    chain a program holds only where it differentiates the radius.
     """
     design = robot
     robot = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
@@ -644,9 +685,17 @@ def _singular_radius(
         _, best = jax.lax.top_k(-radius_sq, candidates)
         return buffer[best], radius_sq[best]
 
+    last = descend + jnp.maximum(descent_steps, 1)  # without polish: evaluates the chosen posture
+
+    def chosen_posture(q, q_radius_sq):
+        # As `_closest_value` picks it: the best row, its joints near a limit moved onto it.
+        best = q[jnp.argmin(q_radius_sq)]
+        at_lower, at_upper = _at_limits(best, lower, upper, wraps)
+        return jnp.broadcast_to(jnp.where(at_upper, upper, jnp.where(at_lower, lower, best)), q.shape)
+
     def body(t, state):
-        measures, buffer, buffer_radius_sq, tolerance, q, q_radius_sq = state
-        sampling, projecting = t < blocks, (t >= blocks) & (t < descend)
+        measures, buffer, buffer_radius_sq, tolerance, q, q_radius_sq, posture_radius_sq = state
+        sampling, projecting, final = t < blocks, (t >= blocks) & (t < descend), t == last
         buffer, tolerance = jax.lax.cond(t == blocks, lambda: nearest_samples(measures), lambda: (buffer, tolerance))
         q, q_radius_sq = jax.lax.cond(
             t == descend, lambda: candidates_of(buffer, buffer_radius_sq), lambda: (q, q_radius_sq)
@@ -656,12 +705,14 @@ def _singular_radius(
         chunk = jax.lax.dynamic_slice_in_dim(buffer, chunk_at, candidates)
         length = span * 0.02 * 0.5 ** (12.0 * (t - descend) / descent_steps)  # geometric: 2 % of the box to ~5e-6
         steps = jnp.where(sampling, 0, jnp.where(projecting, projection_steps, newton_steps))
+        rows = jnp.where(final, chosen_posture(q, q_radius_sq), q)
         moved, moved_s, moved_radius_sq = _refine(
             robot,
-            jnp.where(sampling, block, jnp.where(projecting, chunk, q)),
+            jnp.where(sampling, block, jnp.where(projecting, chunk, rows)),
             jacobian,
-            jnp.where(sampling, 1, jnp.where(projecting, 1, 0)),  # sampling: evaluate only; descent: tangent step first
-            steps,
+            # sampling and the chosen posture: evaluate only; descent: tangent step first
+            jnp.where(sampling | projecting | final, 1, 0),
+            jnp.where(final, 0, steps),
             length,
             lower,
             upper,
@@ -677,9 +728,18 @@ def _singular_radius(
             projecting, jax.lax.dynamic_update_slice_in_dim(buffer_radius_sq, refined, chunk_at, 0), buffer_radius_sq
         )
         # The step at t == descend exists only to pick the candidates when no descent is asked for.
-        accept = (t >= descend) & (descent_steps > 0) & (moved_radius_sq < q_radius_sq) & on_set
+        accept = (t >= descend) & ~final & (descent_steps > 0) & (moved_radius_sq < q_radius_sq) & on_set
         q = jnp.where(accept[:, None], moved, q)
-        return measures, buffer, buffer_radius_sq, tolerance, q, jnp.where(accept, moved_radius_sq, q_radius_sq)
+        posture_radius_sq = jnp.where(final, moved_radius_sq[0], posture_radius_sq)
+        return (
+            measures,
+            buffer,
+            buffer_radius_sq,
+            tolerance,
+            q,
+            jnp.where(accept, moved_radius_sq, q_radius_sq),
+            posture_radius_sq,
+        )
 
     dtype = joints.dtype
     state = (
@@ -689,11 +749,14 @@ def _singular_radius(
         jnp.zeros((), dtype),
         jnp.zeros((candidates, n), dtype),
         jnp.full((candidates,), jnp.inf, dtype),
+        jnp.zeros((), dtype),
     )
-    state = jax.lax.fori_loop(0, descend + jnp.maximum(descent_steps, 1), body, state)
+    # The polished value evaluates its own posture: no iteration for the chosen one.
+    state = jax.lax.fori_loop(0, last + (0 if polish else 1), body, state)
     q, q_radius_sq = state[4], state[5]
     lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
-    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps, polish)
+    posture_radius_sq = None if polish else state[6]
+    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps, polish, posture_radius_sq)
 
 
 def singular_radius(
