@@ -172,23 +172,26 @@ def _start_points(robot, starts: int, seed: int):
 
 def _adam_search(objective, u0, wraps, steps: int, rate: float, *rows):
     """Minimize ``objective(u, *row)`` from each row of ``u0`` (with the matching rows of
-    ``rows``) by projected Adam with a cosine-decaying rate."""
-    grad = jax.vmap(jax.grad(objective))
+    ``rows``) by projected Adam with a cosine-decaying rate.
+
+    Returns the end points and the objective there: one more pass of the loop evaluates
+    them (no step), so the program holds one copy of the objective and its gradient."""
+    value_and_grad = jax.vmap(jax.value_and_grad(objective))
     b1, b2, eps = 0.9, 0.999, 1e-12
 
     def step(k, state):
-        u, m, v = state
-        g = grad(u, *rows)
+        u, m, v, _ = state
+        f, g = value_and_grad(u, *rows)
         m = b1 * m + (1 - b1) * g
         v = b2 * v + (1 - b2) * g * g
         t = (k + 1).astype(u.dtype)
         lr = rate * (1e-4 + (1 - 1e-4) * 0.5 * (1 + jnp.cos(jnp.pi * k / steps)))
-        u = u - lr * (m / (1 - b1**t)) / (jnp.sqrt(v / (1 - b2**t)) + eps)
-        return _project(u, wraps), m, v
+        moved = _project(u - lr * (m / (1 - b1**t)) / (jnp.sqrt(v / (1 - b2**t)) + eps), wraps)
+        return jnp.where(k < steps, moved, u), m, v, f
 
     zeros = jnp.zeros_like(u0)
-    u, _, _ = jax.lax.fori_loop(0, steps, step, (u0, zeros, zeros))
-    return u
+    u, _, _, f = jax.lax.fori_loop(0, steps + 1, step, (u0, zeros, zeros, jnp.zeros(u0.shape[:1], u0.dtype)))
+    return u, f
 
 
 @functools.partial(jax.jit, static_argnames=("starts",))
@@ -206,16 +209,16 @@ def _reachable(robot, starts: int, steps, seed, rate):
     # Both searches in one loop (one copy of the chain pass and its gradient to compile):
     # the first ``starts`` rows minimize |tip|^2 (inner), the others maximize it (outer).
     signs = jnp.repeat(jnp.array([-1.0, 1.0], u0.dtype), starts)
-    u = jax.lax.stop_gradient(
-        _adam_search(lambda u, sign: -sign * radius_sq(u), jnp.concatenate([u0, u0]), wraps, steps, rate, signs)
-    )
-    # Envelope theorem: the radii at the optimizers' box coordinates, differentiable in the
-    # design and the limits (through the box map). One tip evaluation of every end point
-    # both picks the best start and gives the radii (one more copy of the chain pass, not two).
-    ends = jnp.sum(tip_position(robot, box_postures(robot, u)) ** 2, axis=-1).reshape(2, starts)
-    pick = jnp.argmax(signs.reshape(2, starts) * jax.lax.stop_gradient(ends), axis=1)
-    squared = ends[jnp.arange(2), pick]
+    u, f = _adam_search(lambda u, sign: -sign * radius_sq(u), jnp.concatenate([u0, u0]), wraps, steps, rate, signs)
+    u, ends = jax.lax.stop_gradient(u), jax.lax.stop_gradient(-signs * f).reshape(2, starts)  # |tip|^2 at the ends
+    pick = jnp.argmax(signs.reshape(2, starts) * ends, axis=1)
     best = u.reshape(2, starts, -1)[jnp.arange(2), pick]
+    # Envelope theorem: the radii at the optimizers' box coordinates, differentiable in the
+    # design and the limits (through the box map); the program evaluates the tip again
+    # only where the radii are differentiated (`_with_value`).
+    squared = _with_value(lambda r, p, _: jnp.sum(tip_position(r, box_postures(r, p)) ** 2, axis=-1))(
+        robot, best, (), ends[jnp.arange(2), pick]
+    )
     positive = squared > 0
     radius = jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
     joints = lower + (upper - lower) * best
