@@ -174,7 +174,7 @@ def _joint_rates(J, twist):
 
 def _pose_field(family, robot, twist_inertial):
     """y' = f(y), y = [joints, bus attitude coordinates], for the constant inertial tip
-    twist, and ``(1,)`` sigma_min of J* at y from the same pass (`_smallest_singular`)."""
+    twist, and ``(1,)`` sigma_min of J* at y from the same pass."""
     group = family.attitude
 
     def field(y):
@@ -187,11 +187,6 @@ def _pose_field(family, robot, twist_inertial):
         return family.join_state(robot, dq, group.rate(coords, A @ dq)), sigma[None]
 
     return field
-
-
-def _smallest_singular(family, robot, joints):
-    J, _ = family.pose_maps(robot, joints)
-    return jnp.linalg.svd(J, compute_uv=False)[-1]
 
 
 def _inertial_frame(family, robot, joints, R):
@@ -216,10 +211,11 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
     y0 = family.join_state(robot, q0, group.to_coords(R0))
 
     def step(y, h):
-        """The next state and sigma_min of J* there: a 13th stage evaluates the field at the
-        step's end inside the stage loop (one copy of the pass over the chain)."""
+        """The next state, and sigma_min of J* at the step's start (the first stage) and at
+        its end (a 13th stage evaluates the field there inside the stage loop): one copy
+        of the pass over the chain."""
         y_new, sigmas = rk_step(field, y, h, rolled=True, end_slope=True, aux=jnp.zeros((1,), dtype))
-        return y_new, sigmas[-1, 0]
+        return y_new, sigmas[0, 0], sigmas[-1, 0]
 
     def check(y, sigma):
         """(sigma_min of J*, singular, past a limit, the joints past a limit) at a state."""
@@ -236,7 +232,7 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
         y, mode = state["y"], state["mode"]
         locating = mode == LOCATING
         middle = 0.5 * (state["low"] + state["high"])
-        y_try, sigma_try = step(y, jnp.where(locating, middle, 1.0) * h)
+        y_try, sigma_start, sigma_try = step(y, jnp.where(locating, middle, 1.0) * h)
         sigma, singular, limit, outside = check(y_try, sigma_try)
         ok = ~(singular | limit)
         k = state["k"] + jnp.where(~locating & ok, 1, 0)
@@ -258,7 +254,10 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
             low=low,
             high=jnp.where(locating & ~ok, middle, state["high"]),
             halvings=halvings,
-            min_sigma=jnp.where(ok, jnp.minimum(state["min_sigma"], sigma), state["min_sigma"]),
+            # The current state's sigma (the start's at the first step), and the new one's.
+            min_sigma=jnp.minimum(
+                jnp.minimum(state["min_sigma"], sigma_start), jnp.where(ok, sigma, state["min_sigma"])
+            ),
         )
 
     def scan_body(state, _):
@@ -276,7 +275,7 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
         low=zero,
         high=jnp.ones((), dtype),
         halvings=jnp.asarray(0),
-        min_sigma=_smallest_singular(family, robot, q0),
+        min_sigma=jnp.asarray(jnp.inf, dtype),
     )
     end, outputs = jax.lax.scan(scan_body, start, None, length=steps + EVENT_BISECTIONS)
     k_end, reason, limit_joint, min_sigma = end["k"], end["reason"], end["limit_joint"], end["min_sigma"]
