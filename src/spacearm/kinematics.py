@@ -302,8 +302,21 @@ def relative_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None
 
 @jax.jit
 def _relative_jacobian(robot, posture, base_rotation, i, j):
+    family = family_of(robot)
+    fast = family.fast_paths.get("fixed_base_jacobian_and_tips")
+    if fast is not None:
+        # The bus twist drops out: the fixed-base twists and the tips (about the bus frame:
+        # only their differences enter) from one pass without momenta, turned by R.
+        J, p = fast(robot, posture)
+        J, p = _rotate_twist_rows(family, robot, J, base_rotation), _rotate_vector(family, robot, p, base_rotation)
+        return _relative_rows(J, p, i, j)
     J = generalized_jacobian(robot, posture, base_rotation)
     p = tip_position(robot, posture, base_rotation)
+    return _relative_rows(J, p, i, j)
+
+
+def _relative_rows(J, p, i, j):
+    """J_rel of tip j seen from tip i, from every tip's twists ``(..., k, 6, n)`` and origins ``(..., k, 3)``."""
     take = lambda x, index, axis: jnp.take(x, index, axis=axis)
     J_i, J_j = take(J, i, -3), take(J, j, -3)
     d = take(p, j, -2) - take(p, i, -2)

@@ -35,6 +35,7 @@ from .primitives import (
     arm_inertia,
     base_twist_map,
     fixed_base_jacobian,
+    fixed_base_jacobian_and_tips,
     generalized_jacobian,
     jacobians,
     manipulability,
@@ -83,6 +84,13 @@ def _base_rate_matrix(robot, posture):
 
 def _fixed_base_jacobian(robot, joints):
     return _one_tip(robot, _columns(robot, fixed_base_jacobian(robot, joints)), 2)
+
+
+def _fixed_base_jacobian_and_tips(robot, joints):
+    """Every tip's fixed-base twists ``(..., k, 6, n)`` (held joints' columns zero) and origins
+    ``(..., k, 3)`` about the bus frame, bus axes, one pass (the relative Jacobian's inputs)."""
+    J, tips = fixed_base_jacobian_and_tips(robot, joints)
+    return _columns(robot, J), tips
 
 
 def _manipulability(robot, posture):
@@ -150,6 +158,7 @@ class TreeFamily(RobotFamily):
         "fixed_base_jacobian": _fixed_base_jacobian,
         "fixed_base_manipulability": _fixed_base_manipulability,
         "posture_quantities": _posture_quantities,
+        "fixed_base_jacobian_and_tips": _fixed_base_jacobian_and_tips,
     }
     fields = tree_fields
     attitude = SO3

@@ -67,6 +67,7 @@ __all__ = [
     "base_twist_map",
     "body_frames",
     "fixed_base_jacobian",
+    "fixed_base_jacobian_and_tips",
     "generalized_jacobian",
     "jacobians",
     "manipulability",
@@ -427,6 +428,15 @@ def _fixed_minor(robot, q):
     return _tip_rows(*_fixed_columns(robot, _tree_pass(robot, q, with_momentum=False)))
 
 
+def _fixed_tips_minor(robot, q):
+    """Fixed-base twists of every tip (rows 0-5) and the tip origins about the bus frame
+    (rows 6-8, the same in every column), from one pass without momenta."""
+    state = _tree_pass(robot, q, with_momentum=False)
+    v, w = _fixed_columns(robot, state)
+    tips = tuple(jnp.broadcast_to(t[:, None], v[0].shape) for t in state.tips)
+    return _tip_rows(v, w, tips)
+
+
 def _jstar_minor(robot, q):
     return _jstar_from(robot, _tree_pass(robot, q))
 
@@ -493,6 +503,17 @@ tip.__doc__ = """``(..., k, 3)`` tip origins about the system centroid, bus axes
 fixed_base_jacobian = batched(_fixed_minor, 3)
 fixed_base_jacobian.__doc__ = """``(..., k, 6, n)`` tip twists [v; w] per joint rate, bus held fixed, bus axes
 (zero in the columns of joints off each tip's path)."""
+
+_fixed_tips = batched(_fixed_tips_minor, 3)
+
+
+def fixed_base_jacobian_and_tips(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """`fixed_base_jacobian` ``(..., k, 6, n)`` and the tip origins ``(..., k, 3)`` about the
+    bus frame origin, bus axes, from one pass over the tree without momenta (what the
+    relative Jacobian of two tips needs: the bus twist drops out of it)."""
+    stacked = _fixed_tips(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:, 0]
+
 
 generalized_jacobian = batched(_jstar_first, 0)
 generalized_jacobian.__doc__ = """``(..., k, 6, n)`` J* of every tip over all joints at zero momentum, bus axes.
