@@ -157,8 +157,13 @@ def reaction_free_rates(robot, q: jax.Array, tip_direction_bus: jax.Array):
         ``(q' (n,), tip residual ||J*_v q' - d|| (), bus rate ||C_w q'|| ())``.
     """
     J, C = family_of(robot).straight_maps(robot, q)  # one pass over the chain or tree
+    return _rates_from_maps(J, C, tip_direction_bus)
+
+
+def _rates_from_maps(J, C, tip_direction_bus):
+    """`reaction_free_rates` from J*_v and C_w at the posture."""
     A = jnp.concatenate([C, J], axis=0)
-    b = jnp.concatenate([jnp.zeros(3, q.dtype), tip_direction_bus])
+    b = jnp.concatenate([jnp.zeros(3, J.dtype), tip_direction_bus])
     rates = jnp.linalg.pinv(A, rtol=1e-12) @ b
     return rates, jnp.linalg.norm(J @ rates - tip_direction_bus), jnp.linalg.norm(C @ rates)
 
@@ -195,29 +200,28 @@ def _reaction_free_flat(robot, q0, R0, direction, length, steps):
         d_bus = R0.T @ (d / jnp.linalg.norm(d))
 
         def field(q):
-            return reaction_free_rates(robot, q, d_bus)[0]
+            # The rates, and from the same pass the checks (tip residual, bus rate, smallest
+            # singular value of [J*_v; C_w] over the moving joints) as the stage's aux.
+            J, C = family.straight_maps(robot, q)
+            rates, residual, bus = _rates_from_maps(J, C, d_bus)
+            sv = jnp.linalg.svd(jnp.concatenate([J, C])[:, moving], compute_uv=False)[-1]
+            return rates, jnp.stack([residual, bus, sv])
 
         h = length / steps
-        target = jnp.broadcast_to(jnp.concatenate([jnp.zeros(3, q0.dtype), d_bus]), (steps + 1, 6))
+        zero = jnp.zeros((3,), q0.dtype)
 
         def step(q, _):
-            # The field holds a scan over the chain: the stages run in a loop (one copy
-            # of the field in the program), as for spatial straight paths.
-            q_new = dop853.rk_step(field, q, h, rolled=True)
-            return q_new, q_new
+            # The field holds a scan over the chain: the stages run in a loop (one copy of
+            # the field in the program), as for spatial straight paths; a 13th stage at the
+            # step's end gives the checks at the next sample, the first at this one.
+            q_new, checks = dop853.rk_step(field, q, h, rolled=True, end_slope=True, aux=zero)
+            return q_new, (q_new, checks[0], checks[-1])
 
-        _, qs = jax.lax.scan(step, q0, None, length=steps)
+        _, (qs, at_start, at_end) = jax.lax.scan(step, q0, None, length=steps)
         joints = jnp.concatenate([q0[None], qs], axis=0)
-        # The samples' checks from one pass over the chain per sample: the maps give the
-        # rates (as `reaction_free_rates`), their residuals and the singular values.
-        J, C = jax.vmap(lambda q: family.straight_maps(robot, q))(joints)
-        rates = jnp.einsum("snk,sk->sn", jnp.linalg.pinv(jnp.concatenate([C, J], axis=1), rtol=1e-12), target)
-        residual = jnp.linalg.norm(jnp.einsum("skn,sn->sk", J, rates) - d_bus, axis=-1)
-        bus = jnp.linalg.norm(jnp.einsum("skn,sn->sk", C, rates), axis=-1)
-        maps = jnp.concatenate([J, C], axis=1)[:, :, moving]
-        sv = jnp.linalg.svd(maps, compute_uv=False)[:, -1]  # (steps + 1,) of [J*_v; C_w] (moving joints)
+        checks = jnp.concatenate([at_start[:1], at_end], axis=0)  # (steps + 1, 3), one row per sample
         tip = jnp.einsum("ij,sj->si", R0, jax.vmap(lambda q: family.tip(robot, q))(joints))
-        return ReactionFreePath(joints, tip, jnp.max(residual), jnp.max(bus), jnp.min(sv))
+        return ReactionFreePath(joints, tip, jnp.max(checks[:, 0]), jnp.max(checks[:, 1]), jnp.min(checks[:, 2]))
 
     return jax.vmap(one)(q0, R0, direction, length)
 
