@@ -567,13 +567,13 @@ def _with_value(expression):
     return function
 
 
-def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: bool, posture_radius_sq=None):
+def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: bool, posture_radius_sq):
     """The smallest radius over the rows of ``q`` (``radius_sq`` their |tip|^2, inf off the set),
     differentiable in the design, and its posture (``polish``: `_polished_value`, static).
 
-    ``posture_radius_sq``: |tip|^2 at the returned posture (the best row with its joints
-    near a limit moved onto it), when the search evaluated it already: the value is then
-    its square root, and the design derivatives alone evaluate the chain."""
+    ``posture_radius_sq``: |tip|^2 at the chosen posture (the best row with its joints
+    near a limit moved onto it) as the search evaluated it (unused with ``polish``): the
+    value is its square root, and only the design derivatives evaluate the chain again."""
     q = jax.lax.stop_gradient(q)
     k = jnp.argmin(radius_sq)
     best = q[k]
@@ -606,12 +606,7 @@ def _closest_value(robot, q, radius_sq, jacobian, lower, upper, wraps, polish: b
         constraint = singularity_measure(robot, posture, jacobian)
         return value - multiplier * (constraint - jax.lax.stop_gradient(constraint))
 
-    if posture_radius_sq is None:
-        value = expression(robot, posture, (best, free))
-    else:
-        value = _with_value(expression)(
-            robot, posture, (best, free), jnp.sqrt(jax.lax.stop_gradient(posture_radius_sq))
-        )
+    value = _with_value(expression)(robot, posture, (best, free), jnp.sqrt(jax.lax.stop_gradient(posture_radius_sq)))
     return jnp.where(jnp.isfinite(radius_sq[k]), value, jnp.inf), best
 
 
@@ -758,8 +753,7 @@ def _singular_radius(
     state = jax.lax.fori_loop(0, last + (0 if polish else 1), body, state)
     q, q_radius_sq = state[4], state[5]
     lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
-    posture_radius_sq = None if polish else state[6]
-    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps, polish, posture_radius_sq)
+    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps, polish, state[6])
 
 
 def singular_radius(
