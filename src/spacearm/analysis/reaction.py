@@ -45,7 +45,7 @@ from .._core.batching import bucket_size, pad_leading
 from .._core.errors import ConfigError
 from ..models.family import family_of
 from ..motion import dop853
-from ..motion.batching import is_traced
+from ..motion.batching import flatten_batch, is_traced, unpad
 
 __all__ = [
     "DisturbanceMap",
@@ -269,12 +269,7 @@ def reaction_free_tip_path(
     length = xp.asarray(length, dtype)
     if q_start.shape[-1:] != (n,) or direction.shape[-1:] != (3,):
         raise ConfigError(f"q_start (..., {n}) and direction (..., 3) expected, got {q_start.shape}, {direction.shape}")
-    batch = np.broadcast_shapes(q_start.shape[:-1], direction.shape[:-1], R0.shape[:-2], length.shape)
+    batch, _, _, flat = flatten_batch(robot, [(q_start, 1), (R0, 2), (direction, 1), (length, 0)])
     count = math.prod(batch)
-    padded = bucket_size(count)  # one program per power of two of paths, not per batch size
-    flat = lambda x, core: xp.broadcast_to(x, batch + core).reshape((-1,) + core)
-    inputs = pad_leading((flat(q_start, (n,)), flat(R0, (3, 3)), flat(direction, (3,)), flat(length, ())), padded)
-    out = _reaction_free_flat(robot, *inputs, int(steps))
-    if xp is jnp:
-        return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), out)
-    return jax.tree_util.tree_map(lambda x: jax.device_put(np.asarray(x)[:count].reshape(batch + x.shape[1:])), out)
+    inputs = pad_leading(tuple(flat), bucket_size(count))  # one program per power of two of paths
+    return unpad(_reaction_free_flat(robot, *inputs, int(steps)), count, batch)

@@ -54,7 +54,7 @@ from .._core.magnus import (
     step_nodes,
 )
 from ..models.family import family_of
-from .batching import flatten_batch, is_traced
+from .batching import flatten_batch, is_traced, unpad
 
 __all__ = [
     "DEFAULT_ORDER",
@@ -191,11 +191,8 @@ def integrate_spatial_joint_path(
     )
     check_order(order)
     R_end = _integrate_flat(flat_robot, wp_flat, R_flat, batched, choose_steps(joint_waypoints, steps), order)
-    if is_traced(R_end, joint_waypoints):
-        return R_end.reshape(batch + (3, 3)), jnp.broadcast_to(joint_waypoints[..., -1, :], batch + (robot.n_joints,))
-    # Concrete results are shaped in NumPy (eager reshaping compiles a program per shape).
-    q_end = np.broadcast_to(joint_waypoints[..., -1, :], batch + (robot.n_joints,))
-    return jax.device_put(np.asarray(R_end).reshape(batch + (3, 3))), jax.device_put(q_end)
+    # The joints at the end are the flattened last waypoints (NumPy when concrete).
+    return unpad((R_end, wp_flat[:, -1, :]), wp_flat.shape[0], batch)
 
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "samples", "steps", "order"))

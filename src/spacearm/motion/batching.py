@@ -10,7 +10,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 
-__all__ = ["check_arm_axis", "flatten_batch", "is_traced"]
+__all__ = ["check_arm_axis", "flatten_batch", "is_traced", "unpad"]
 
 
 def is_traced(*xs) -> bool:
@@ -51,6 +51,15 @@ def flatten_batch(robot, arrays: list[tuple[jax.Array, int]]):
 
         robot = jax.tree_util.tree_map(spread, robot)
     return batch, robot, bool(robot_batch), flat
+
+
+def unpad(tree, count: int, batch: tuple[int, ...]):
+    """The first ``count`` rows of each leaf of a flat (padded) result, reshaped to ``batch``;
+    in NumPy when concrete (eager slicing and reshaping would compile a small program per
+    shape), the inverse of `flatten_batch` and a padding to a bucket size."""
+    if is_traced(tree):
+        return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), tree)
+    return jax.tree_util.tree_map(lambda x: jax.device_put(np.asarray(x)[:count].reshape(batch + x.shape[1:])), tree)
 
 
 def check_arm_axis(robot, name: str, array, expected: int) -> None:

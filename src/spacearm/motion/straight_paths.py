@@ -47,7 +47,7 @@ from ..kinematics import (
     tip_position,
 )
 from ..models.family import family_of, require_family
-from .batching import check_arm_axis, flatten_batch, is_traced
+from .batching import check_arm_axis, flatten_batch, is_traced, unpad
 from .dop853 import rk_step
 from .lanes import PATH_BUCKET, lane_count, run_queue, start_lane, step_lane
 from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR, REASON_STEP_BUDGET
@@ -491,15 +491,7 @@ def straight_tip_path(
         lane_count(padded, lanes),
         tableau,
     )
-    return _unpad(out, count, batch)
-
-
-def _unpad(tree, count: int, batch: tuple[int, ...]):
-    """The first ``count`` rows of each leaf, reshaped to ``batch``; in NumPy when concrete
-    (eager slicing and reshaping would compile a small program per shape)."""
-    if is_traced(tree):
-        return jax.tree_util.tree_map(lambda x: x[:count].reshape(batch + x.shape[1:]), tree)
-    return jax.tree_util.tree_map(lambda x: jax.device_put(np.asarray(x)[:count].reshape(batch + x.shape[1:])), tree)
+    return unpad(out, count, batch)
 
 
 def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps, tableau):
@@ -590,7 +582,7 @@ def straight_tip_path_history(
         int(substeps),
         options.get("tableau", "dop853"),
     )
-    return _unpad((postures, tips), count, batch)
+    return unpad((postures, tips), count, batch)
 
 
 def go_and_back(
