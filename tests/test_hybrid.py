@@ -291,15 +291,19 @@ def test_hybrid_settles_into_filling_the_front():
     assert result.checkpoints[-1]["hypervolume"] > never.checkpoints[-1]["hypervolume"]
 
 
-class _BoundedTrade:
-    """Two closed-form objectives of three unit-box variables whose Pareto set is the
-    segment z2 = 0.5, z3 = 0 (the lower bound, where moving inward lowers both):
-    f = (z1 - q - z3, 1 - z1^2 - q - z3) with q = (z2 - 0.5)^2."""
+class _UnitBoxTrade:
+    """Two closed-form objectives ("a", "b") of three variables on the unit box."""
 
     variables = ("z1", "z2", "z3")
     objectives = ("a", "b")
     lower, upper = np.zeros(3), np.ones(3)
     closed_form = True
+
+
+class _BoundedTrade(_UnitBoxTrade):
+    """A Pareto set that is the segment z2 = 0.5, z3 = 0 (the lower bound, where moving
+    inward lowers both): f = (z1 - q - z3, 1 - z1^2 - q - z3) with q = (z2 - 0.5)^2."""
+
     reference_point = (-1.0, -1.0)
 
     def batch_function(self):
@@ -338,13 +342,9 @@ def _curved_objectives(z, xp=np):
     return xp.stack([first, second], axis=1)
 
 
-class _CurvedTrade:
+class _CurvedTrade(_UnitBoxTrade):
     """`_curved_objectives` as a closed-form design problem on the unit box."""
 
-    variables = ("z1", "z2", "z3")
-    objectives = ("a", "b")
-    lower, upper = np.zeros(3), np.ones(3)
-    closed_form = True
     reference_point = (-2.0, -2.0)
 
     def batch_function(self):
