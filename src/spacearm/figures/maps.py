@@ -32,8 +32,9 @@ def _plt():
     return plt
 
 
-def _save(fig, path: Path) -> Path:
-    save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
+def _save(fig, path: Path, *, tight: bool = True) -> Path:
+    """Save at 130 dpi; ``tight`` crops to the drawn content, at the price of a second draw."""
+    save_figure(fig, Path(path), dpi=130, bbox_inches="tight" if tight else None)
     _plt().close(fig)
     return path
 
@@ -180,7 +181,11 @@ def fig8(out_dir: Path) -> list[Path]:
 def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
     """Fig. 10: workspaces (inertial frame, top) and w*/L^2 x 40 maps (robot frame, bottom)."""
     plt = _plt()
-    fig, axes = plt.subplots(2, len(robots), figsize=(4.2 * len(robots), 8.4))
+    # A fixed layout, in inches, in place of a tight crop (which draws the figure twice): the
+    # plotting area of each column, then margins that hold the tick and axis labels.
+    columns, area, margins = len(robots), (3.255, 6.468), dict(left=0.72, right=0.12, bottom=0.17, top=0.18)
+    size = (area[0] * columns + margins["left"] + margins["right"], area[1] + margins["bottom"] + margins["top"])
+    fig, axes = plt.subplots(2, columns, figsize=size)
     axes = np.atleast_2d(axes).reshape(2, -1)
     filled = None
     for column, (robot, label) in enumerate(zip(robots, labels, strict=False)):
@@ -213,9 +218,16 @@ def draw_fig10(path: Path, robots: list, labels: list[str]) -> Path:
         _draw_base(axes[1, column], robot)
         if column == 0:
             axes[1, column].legend(loc="lower left", fontsize=6, framealpha=0.9)
-    fig.subplots_adjust(wspace=0.4, hspace=0.3)
+    fig.subplots_adjust(
+        left=margins["left"] / size[0],
+        right=1 - margins["right"] / size[0],
+        bottom=margins["bottom"] / size[1],
+        top=1 - margins["top"] / size[1],
+        wspace=0.4,
+        hspace=0.3,
+    )
     fig.colorbar(filled, ax=axes[1, :].tolist(), shrink=0.8, label="w*/L^2 x 40")
-    return _save(fig, Path(path))
+    return _save(fig, Path(path), tight=False)
 
 
 @figure("fig10")
