@@ -8,10 +8,7 @@ sigma_min of J* by NumPy's SVD of `sa.generalized_jacobian`.
 """
 
 import dataclasses
-import os
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -244,15 +241,11 @@ def test_reach_command_reports_a_path_that_stops(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-def test_reach_command_reaches_a_pose_end_to_end(ur5_case, tmp_path):
-    """One subprocess on the UR5 file: summary, reach.npz and reach.png (about 9 s: a new
-    process imports JAX and loads its programs from the session's compilation cache)."""
+def test_reach_command_reaches_a_pose_end_to_end(ur5_case, tmp_path, capsys):
+    """``spacearm reach`` on the UR5 file, to a pose: summary, reach.npz and reach.png."""
     p1 = ur5_case["p1"]
     rpy = Rotation.from_matrix(ur5_case["T1"]).as_euler("xyz", degrees=True)  # URDF rpy = extrinsic xyz
     args = [
-        sys.executable,
-        "-m",
-        "spacearm.cli",
         "reach",
         UR5,
         "--from=" + ",".join(map(str, Q_DEG)),
@@ -262,9 +255,10 @@ def test_reach_command_reaches_a_pose_end_to_end(ur5_case, tmp_path):
         "--out",
         str(tmp_path),
     ]
-    proc = subprocess.run(args, capture_output=True, text=True, env=dict(os.environ), timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    out = proc.stdout
+    code = main(args)
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    out = captured.out
     assert "mode           pose" in out
     saved = np.load(tmp_path / "reach.npz")
     k = saved["joints"].shape[0]

@@ -16,8 +16,6 @@ The two UR5 on a 400 kg servicer (configs/dual-ur5-servicer.yaml) need the test 
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 
 import jax
 import jax.numpy as jnp
@@ -354,15 +352,16 @@ def test_reach_refuses_an_unknown_tip_or_arm(tmp_path, capsys):
     assert "--tip: applies to robots with several arms" in capsys.readouterr().err
 
 
-@pytest.mark.slow  # one subprocess: load, compile and plan the 12-joint tree
-def test_reach_command_with_a_chosen_tip(dual, tmp_path):
+@pytest.mark.slow  # loads and plans the 12-joint tree
+def test_reach_command_with_a_chosen_tip(dual, tmp_path, capsys):
     target = np.asarray(sa.tip_position(dual, Q0))[1] + np.array([0.05, 0.05, -0.05])
     to = ",".join(f"{v:.12f}" for v in target)
-    command = [sys.executable, "-m", "spacearm.cli", "reach", DUAL, "--tip", "right/tool0", "--moving", "right"]
+    command = ["reach", DUAL, "--tip", "right/tool0", "--moving", "right"]
     command += ["--from=" + ",".join(map(str, Q_DEG)), f"--to={to}", "--out", str(tmp_path)]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert done.returncode == 0, done.stderr
-    assert "tip            right/tool0" in done.stdout and "held joints    6 of 12" in done.stdout
+    code = main(command)
+    done = capsys.readouterr()
+    assert code == 0, done.err
+    assert "tip            right/tool0" in done.out and "held joints    6 of 12" in done.out
     saved = np.load(tmp_path / "reach.npz")
     joints, R, tip = saved["joints"], saved["base_rotation"], saved["tip"]
     assert joints.shape[1] == 12 and R.shape == (len(joints), 3, 3) and tip.shape == (len(joints), 3)

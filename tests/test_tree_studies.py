@@ -10,8 +10,6 @@ import csv
 import dataclasses
 import json
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import jax
@@ -23,6 +21,7 @@ import yaml
 import spacearm as sa
 from spacearm._core.errors import ConfigError
 from spacearm.analysis.joint_box import box_postures, digital_shifts, sobol_direction_numbers, sobol_points
+from spacearm.cli import main
 from spacearm.cli.validate import validate_file
 from spacearm.io import read_csv
 from spacearm.models.spatial import fields as spatial_fields
@@ -399,11 +398,11 @@ def test_bad_tips_are_refused(small_tree_file, metrics, message):
     assert message in str(error.value)
 
 
-def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
-    """One subprocess: a 2-design sweep and a 2-variable optimize (population 4, one
-    generation) of a two-arm tree, and a bad field in each file (exit 2, the file and the
-    field named, nothing written). About 30 s: the subprocess compiles a sweep program and
-    the search's value and value-and-gradient programs (one process for all four runs)."""
+def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file, capsys, monkeypatch):
+    """The command line, from the files' folder: a 2-design sweep and a 2-variable optimize
+    (population 4, one generation) of a two-arm tree, and a bad field in each file (exit 2,
+    the file and the field named, nothing written). About 30 s cold: a sweep program and the
+    search's value and value-and-gradient programs."""
     sweep = {
         "name": "two-small-sweep",
         "robot": str(small_tree_file),
@@ -419,22 +418,21 @@ def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file):
     (tmp_path / "bad-sweep.yaml").write_text(yaml.safe_dump(bad_sweep))
     bad_problem = _problem_config(small_tree_file, variables={"links.left/forarm.mass": [1.0, 2.0]})
     (tmp_path / "bad-problem.yaml").write_text(yaml.safe_dump(bad_problem))
-    script = (
-        "import sys\nfrom spacearm.cli import main\n"
-        "codes = [main(['sweep', 'sweep.yaml', '--out', 'sweep-out']),"
-        " main(['optimize', 'problem.yaml', '--out', 'opt-out', '--no-baselines']),"
-        " main(['sweep', 'bad-sweep.yaml', '--out', 'bad1']), main(['optimize', 'bad-problem.yaml', '--out', 'bad2'])]\n"
-        "print('codes', codes)\n"
-    )
-    run = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert "codes [0, 0, 2, 2]" in run.stdout, run.stdout + run.stderr
+    monkeypatch.chdir(tmp_path)
+    codes = [
+        main(["sweep", "sweep.yaml", "--out", "sweep-out"]),
+        main(["optimize", "problem.yaml", "--out", "opt-out", "--no-baselines"]),
+        main(["sweep", "bad-sweep.yaml", "--out", "bad1"]),
+        main(["optimize", "bad-problem.yaml", "--out", "bad2"]),
+    ]
+    run = capsys.readouterr()
+    assert codes == [0, 0, 2, 2], run.out + run.err
     assert (
-        "bad-sweep.yaml: axes.z.field: arms.rigth.mount.xyz[2]: unknown arm 'rigth' (did you mean 'right'?)"
-        in run.stderr
+        "bad-sweep.yaml: axes.z.field: arms.rigth.mount.xyz[2]: unknown arm 'rigth' (did you mean 'right'?)" in run.err
     )
     assert (
         "bad-problem.yaml: variables.links.left/forarm.mass.field: links.left/forarm.mass: unknown link 'left/forarm' "
-        "(did you mean 'left/forearm'?)" in run.stderr
+        "(did you mean 'left/forearm'?)" in run.err
     )
     assert not (tmp_path / "bad1").exists() and not (tmp_path / "bad2").exists()
     table = read_csv(tmp_path / "sweep-out" / "table.csv")
