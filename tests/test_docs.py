@@ -3,6 +3,8 @@
 The site is built once per session into a scratch folder (``mkdocs build --strict``, the
 command CI runs); the checks then read the built HTML. Building takes ~15 s on a loaded
 2-core machine (~7 s of CPU: the API reference renders every docstring), hence ``slow``.
+CI builds the site with that command just before the tests and names the folder in
+``$SPACEARM_TEST_SITE``: the checks read that build instead of making a second one.
 The text checks (no citation of notes that are not shipped) and the formula hook's own
 checks are fast.
 """
@@ -75,19 +77,24 @@ class _Page(HTMLParser):
 
 @pytest.fixture(scope="session")
 def site(tmp_path_factory) -> dict[Path, _Page]:
-    """The site built strictly into a scratch folder, each page parsed."""
+    """The site built strictly into a scratch folder (or the one CI just built, module
+    docstring), each page parsed."""
     _load_hooks()
-    out = tmp_path_factory.mktemp("site")
-    env = dict(os.environ, DISABLE_MKDOCS_2_WARNING="true", NO_MKDOCS_2_WARNING="1")
-    run = subprocess.run(
-        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-        cwd=ROOT,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert run.returncode == 0, run.stderr[-4000:]
+    built = os.environ.get("SPACEARM_TEST_SITE", "")
+    if built and (Path(built) / "index.html").is_file():
+        out = Path(built)
+    else:
+        out = tmp_path_factory.mktemp("site")
+        env = dict(os.environ, DISABLE_MKDOCS_2_WARNING="true", NO_MKDOCS_2_WARNING="1")
+        run = subprocess.run(
+            [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+            cwd=ROOT,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        assert run.returncode == 0, run.stderr[-4000:]
     pages = {}
     for path in sorted(out.rglob("*.html")):
         parser = _Page()
