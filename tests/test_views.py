@@ -4,10 +4,10 @@ the library, and the pages themselves in headless Chromium.
 - The JavaScript forward kinematics of every page (fk.js, run with node on the scripts and
   data a written page holds) gives the tip and the joint origins that `spacearm.tip_position`
   and the matplotlib figures' outlines give, to 1e-9 m, at random postures and attitudes.
-- Each page opens in headless Chromium with every host name unresolvable: its screenshot
-  shows the arm's (or the front's) colours, and Chromium's network log holds no request
-  from the page to anything but the file itself. A control page with an external image
-  proves that check can fail.
+- Each page opens in headless Chromium with every host name unresolvable (one browser per
+  test process, a tab per page: tests/browser.py): its screenshot shows the arm's (or the
+  front's) colours, and the tab's network events hold no request from the page to anything
+  but the file itself. A control page with an external image proves that check can fail.
 - Without Plotly (the ``view`` extra) the command exits 2 with a message naming the extra.
 
 node and chromium are system programs: the tests that need one skip, saying so, without it.
@@ -15,9 +15,7 @@ node and chromium are system programs: the tests that need one skip, saying so, 
 
 from __future__ import annotations
 
-import html
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -36,6 +34,8 @@ from spacearm.figures.spatial import arm_points
 from spacearm.figures.views import replay_from_npz, write_arm_view, write_replay_view
 from spacearm.models.planar import PlanarRobot
 from spacearm.models.spatial.urdf import rpy_matrix
+
+from . import browser
 
 pytest.importorskip("plotly", reason="the 'view' extra (plotly) is not installed")
 
@@ -209,44 +209,13 @@ def test_view_without_plotly_names_the_extra(tmp_path, capsys, monkeypatch):
 
 # Headless Chromium ------------------------------------------------------------------------
 
-_OFFLINE = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--hide-scrollbars",
-    "--host-resolver-rules=MAP * ~NOTFOUND",  # no host name resolves: nothing can leave the machine
-    "--disable-background-networking",
-    "--no-first-run",
-    "--disable-extensions",
-]
-
 
 def _render(page: Path, tmp_path: Path) -> tuple[np.ndarray, list[str]]:
-    """Screenshot ``page`` (RGB array) and the URLs the page itself requested (Chromium's net log)."""
-    shot, netlog = tmp_path / f"{page.stem}.png", tmp_path / f"{page.stem}.netlog.json"
-    subprocess.run(
-        [
-            CHROMIUM,
-            *_OFFLINE,
-            f"--log-net-log={netlog}",
-            "--window-size=1000,700",
-            "--virtual-time-budget=8000",
-            f"--screenshot={shot}",
-            page.resolve().as_uri(),
-        ],
-        capture_output=True,
-        timeout=120,
-        check=False,
-        env={**os.environ, "HOME": str(tmp_path)},
-    )
+    """Screenshot ``page`` (RGB array) and the URLs the page itself requested, other than its
+    own files (the tab's network events)."""
+    shot = tmp_path / f"{page.stem}.png"
+    requested = browser.screenshot(CHROMIUM, page, shot)
     assert shot.exists(), f"chromium wrote no screenshot of {page}"
-    log = json.loads(netlog.read_text())
-    start = log["constants"]["logEventTypes"]["URL_REQUEST_START_JOB"]
-    requested = [
-        e["params"]["url"]
-        for e in log["events"]
-        if e["type"] == start and "file://" in e["params"].get("network_isolation_key", "")
-    ]  # requests of the page, not the browser's
     image = (matplotlib.image.imread(shot)[..., :3] * 255).round().astype(int)
     return image, [url for url in requested if not url.startswith(("file:", "data:", "blob:"))]
 
@@ -375,17 +344,7 @@ def _drive(page: Path, tmp_path: Path, script: str) -> dict:
     return the ``data-*`` attributes it left on <body> (``result``: JSON the script wrote)."""
     driven = tmp_path / f"driven-{page.name}"
     driven.write_text(page.read_text().replace("</body>", f"<script>{script}</script></body>"))
-    done = subprocess.run(
-        [CHROMIUM, *_OFFLINE, "--virtual-time-budget=8000", "--dump-dom", driven.resolve().as_uri()],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env={**os.environ, "HOME": str(tmp_path)},
-    )
-    body = re.search(r"<body([^>]*)>", done.stdout)
-    assert body, done.stderr[-2000:]
-    attributes = dict(re.findall(r'data-([a-z]+)="([^"]*)"', body.group(1)))
-    return {k: html.unescape(v) for k, v in attributes.items()}
+    return browser.body_data(CHROMIUM, driven)
 
 
 _READ_ARM = """
