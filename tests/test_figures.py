@@ -1,6 +1,7 @@
 """Defects of the review: figures leave the precision to the caller, and the reach GIF is
 written through the one atomic writer (spacearm.io)."""
 
+import itertools
 import subprocess
 import sys
 import types
@@ -12,6 +13,7 @@ import matplotlib.container
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 import spacearm as sa
 from spacearm.cli.sweep import format_table
@@ -125,6 +127,26 @@ def test_sweep_plots_draw_errors_as_bars_not_as_panels(tmp_path, monkeypatch):
         np.testing.assert_allclose(heights, 4 * table[f"{column}_error"], rtol=1e-9)  # +- 2 standard errors
         assert ax.get_ylabel() == sweep_figures.column_label(column)
     assert axes[0].get_xlabel() == "ratio = arm.mass_ratio"
+
+
+def test_line_plot_axis_labels_stay_in_their_panels(tmp_path, monkeypatch):
+    """Table 2's metrics.png: the long x label ("b0_over_B0 = base.attach, relative to the base
+    design") goes on two lines, so no panel's label runs into the next one's or off the figure."""
+    spec = load_sweep(SRC.parents[1] / "sweeps" / "table2.yaml")
+    n = len(spec.axes[0].values)
+    table = {"wbar": np.linspace(0.08, 0.1, n), "S_M": np.linspace(0.8, 2.2, n), "S_G": np.linspace(0.8, 0.1, n)}
+    drawn = []
+    monkeypatch.setattr(sweep_figures, "save_figure", lambda fig, path, **kw: drawn.append(fig) or path)
+    sweep_figures.sweep_figures(spec, tmp_path, table)
+    (fig,) = drawn
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)  # constrained layout places the panels
+    boxes = [ax.xaxis.label.get_window_extent(renderer) for ax in fig.axes]
+    for left, right in itertools.pairwise(boxes):
+        assert left.x1 < right.x0
+    assert boxes[0].x0 >= 0 and boxes[-1].x1 <= fig.bbox.width
+    assert fig.axes[0].get_xlabel() == "b0_over_B0 = base.attach,\nrelative to the base design"
+    plt.close(fig)
 
 
 def test_3d_figures_have_equal_scales_and_keep_the_bus_inside():

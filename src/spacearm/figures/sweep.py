@@ -82,6 +82,13 @@ def report_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarra
     ]
 
 
+def _fit_panel(label: str, width: int = 40) -> str:
+    """An axis label on two lines (at its first ", ") when it is too long for a 3.6-inch panel,
+    where it would run into the next panel's."""
+    name, comma, rest = label.partition(", ")
+    return f"{name},\n{rest}" if comma and len(label) > width else label
+
+
 def axis_label(axis: Axis) -> str:
     """The axis name, the design field it sets and its unit: SI for absolute values,
     'relative to the base design' otherwise (``x = mount.xyz[0], m``)."""
@@ -149,7 +156,7 @@ def sweep_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray
                 ax.legend(fontsize=7)
             else:
                 ax.plot(x, flat, "o-", ms=4)
-            ax.set_xlabel(axis_label(axis) + (" (axes zipped)" if len(spec.axes) > 1 else ""))
+            ax.set_xlabel(_fit_panel(axis_label(axis) + (" (axes zipped)" if len(spec.axes) > 1 else "")))
             ax.set_ylabel(column_label(column), fontsize=8)
             ax.grid(alpha=0.3)
         fig.suptitle(spec.name)
