@@ -81,7 +81,7 @@ def suite_cache_dir(fresh: bool) -> str:
     if not folder:
         base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
         folder = os.path.join(base, "spacearm-tests")
-    return folder
+    return os.path.abspath(folder)  # tests that change directory must not move it
 
 
 def pytest_configure(config):

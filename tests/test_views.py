@@ -246,11 +246,24 @@ def test_pages_render_offline_in_chromium(pages, front_pages, shells_page, tmp_p
 
 @needs_chromium
 def test_network_check_sees_an_external_request(tmp_path):
-    """The control: a page that loads an external image is caught by the same check."""
+    """The control: a page that asks for anything outside is caught by the same check, from
+    the page itself (an image), a sandboxed iframe, a worker and a WebSocket."""
     page = tmp_path / "external.html"
-    page.write_text('<html><body><img src="https://example.com/x.png"><p>x</p></body></html>')
+    page.write_text(
+        '<html><body><img src="https://example.com/x.png">'
+        "<iframe sandbox srcdoc='<img src=\"https://example.org/frame.png\">'></iframe><script>"
+        "new Worker(URL.createObjectURL(new Blob(['fetch(\"https://example.net/worker.json\").catch(function () {})'],"
+        ' {type: "text/javascript"})));'
+        'try { new WebSocket("wss://example.com/socket"); } catch (e) {}'
+        "</script><p>x</p></body></html>"
+    )
     _, requested = _render(page, tmp_path)
-    assert requested == ["https://example.com/x.png"]
+    assert sorted(requested) == [
+        "https://example.com/x.png",
+        "https://example.net/worker.json",
+        "https://example.org/frame.png",
+        "wss://example.com/socket",
+    ]
 
 
 @needs_node
