@@ -130,32 +130,34 @@ def test_reaction_null_space_turns_the_bus_not_at_all(ur5):
 # The seam: closed forms equal the generic path ---------------------------------------------
 
 
+@jax.jit
+def _internal_paths(robot, q):
+    """The generic paths and the one-pass primitives (J* and the tip from one chain pass, the
+    fixed-base Jacobian and the tip from one), called on concrete arrays as one program: not
+    one per operation, nor one per path."""
+    return (
+        kinematics.generic_generalized_jacobian(robot, q),
+        kinematics.generic_tip_position(robot, q),
+        kinematics.generic_manipulability(robot, q),
+        primitives.tip_and_generalized_jacobian(robot, q),
+        primitives.tip_and_fixed_base_jacobian(robot, q),
+    )
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5-smallsat", "arm3dof-100kg"])
 def test_fast_paths_equal_the_generic_path(name):
     robot = _load(name)
     rng = np.random.default_rng(4)
     q = rng.uniform(-3, 3, (8, robot.n_joints))
-    # The internal paths are called on concrete arrays: one program each, not one per operation.
-    generic_jacobian, generic_tip, generic_manipulability, one_pass, one_pass_fixed = map(
-        jax.jit,
-        (
-            kinematics.generic_generalized_jacobian,
-            kinematics.generic_tip_position,
-            kinematics.generic_manipulability,
-            primitives.tip_and_generalized_jacobian,
-            primitives.tip_and_fixed_base_jacobian,
-        ),
-    )
-    np.testing.assert_allclose(generic_jacobian(robot, q), sa.generalized_jacobian(robot, q), atol=1e-13)
-    np.testing.assert_allclose(generic_tip(robot, q), sa.tip_position(robot, q), atol=1e-13)
-    J, tip = one_pass(robot, q)  # one chain pass for both
-    fixed, tip_too = one_pass_fixed(robot, q)
+    generic_J, generic_tip, generic_w, (J, tip), (fixed, tip_too) = _internal_paths(robot, q)
+    np.testing.assert_allclose(generic_J, sa.generalized_jacobian(robot, q), atol=1e-13)
+    np.testing.assert_allclose(generic_tip, sa.tip_position(robot, q), atol=1e-13)
     np.testing.assert_allclose(tip_too, tip, atol=1e-13)
     np.testing.assert_allclose(fixed, sa.fixed_base_jacobian(robot, q), atol=1e-13)
-    np.testing.assert_allclose(generic_jacobian(robot, q), J, atol=1e-13)
-    np.testing.assert_allclose(generic_tip(robot, q), tip, atol=1e-13)
-    np.testing.assert_allclose(generic_manipulability(robot, q), sa.manipulability(robot, q), atol=1e-12)
+    np.testing.assert_allclose(generic_J, J, atol=1e-13)
+    np.testing.assert_allclose(generic_tip, tip, atol=1e-13)
+    np.testing.assert_allclose(generic_w, sa.manipulability(robot, q), atol=1e-12)
     rates = rng.normal(size=q.shape)
     np.testing.assert_allclose(
         jnp.einsum("bij,bj->bi", sa.base_rate_matrix(robot, q), rates), sa.base_rate(robot, q, rates), atol=1e-13
