@@ -47,6 +47,12 @@ OFFLINE_FLAGS = [
     "--disable-features=IsolateSandboxedIframes,site-per-process",
 ]
 
+# Network events and automatic attaching, for a tab and for each target it starts (which
+# starts paused, ``waitForDebuggerOnStart``, until these are on).
+_WATCH = (
+    ("Network.enable", None),
+    ("Target.setAutoAttach", {"autoAttach": True, "waitForDebuggerOnStart": True, "flatten": True}),
+)
 _PROFILE_PREFIX = "spacearm-chromium-"
 _BROKEN = (TimeoutError, EOFError, OSError)  # the browser is gone or stuck: start a new one
 
@@ -129,25 +135,12 @@ class ChromiumPipe:
                 return message.get("result", {})
             self._keep(message)
 
-    def _watch(self, session: str) -> None:
-        """Network events and automatic attaching for a tab or a target it started; a target
-        started paused (``waitForDebuggerOnStart``) then runs."""
-        self.send("Network.enable", session=session)
-        self.send(
-            "Target.setAutoAttach",
-            {"autoAttach": True, "waitForDebuggerOnStart": True, "flatten": True},
-            session=session,
-        )
-
     def _release_attached(self) -> None:
+        """Watch each target a tab started (`_WATCH`), then let it run."""
         while self._attached:
             session = self._attached.pop(0)["params"]["sessionId"]
             # Each step on its own: a worker has no Target domain, and a target may have ended.
-            for method, params in (
-                ("Network.enable", None),
-                ("Target.setAutoAttach", {"autoAttach": True, "waitForDebuggerOnStart": True, "flatten": True}),
-                ("Runtime.runIfWaitingForDebugger", None),
-            ):
+            for method, params in (*_WATCH, ("Runtime.runIfWaitingForDebugger", None)):
                 with contextlib.suppress(RuntimeError):
                     self.send(method, params, session=session)
 
@@ -181,7 +174,8 @@ class ChromiumPipe:
         try:
             session = self.send("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
             self._tab_of[session] = session
-            self._watch(session)
+            for method, params in _WATCH:
+                self.send(method, params, session=session)
             self.send("Page.enable", session=session)
             self.send(
                 "Emulation.setDeviceMetricsOverride",
@@ -282,20 +276,16 @@ def _tab(executable: str, page: Path, width: int, height: int):
     dropped (the next page starts a new one)."""
     global _browser
     chromium = browser(executable)
+    target = session = None
     try:
         target, session = chromium.open(Path(page).resolve().as_uri(), width, height, budget_ms=8000)
-    except _BROKEN:
-        chromium.close()
-        _browser = None
-        raise
-    try:
         yield chromium, session
     except _BROKEN:
         chromium.close()
         _browser = None
         raise
     finally:
-        if _browser is chromium:
+        if _browser is chromium and target is not None:  # (open closes its own tab when it fails)
             chromium.close_tab(target, session)
 
 
