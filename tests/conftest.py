@@ -22,6 +22,8 @@ compile options and the JAX version, so an edited kernel never loads a stale pro
 The same kept folder records each test's CPU seconds in its last run
 (``test-cpu-seconds.json``); ``--fast`` leaves out the tests marked ``slow`` and those
 that took more than ``--fast-limit`` (5 s) there, for the edit-test loop. CI runs all.
+It also keeps the documentation site tests/test_docs.py last built, under a digest of
+the sources it was built from.
 """
 
 import collections

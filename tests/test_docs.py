@@ -1,10 +1,14 @@
 """The documentation site: it builds strictly, every link and image resolves, every formula renders.
 
-The site is built once per session into a scratch folder (``mkdocs build --strict``, the
-command CI runs); the checks then read the built HTML. Building takes ~15 s on a loaded
-2-core machine (~7 s of CPU: the API reference renders every docstring), hence ``slow``.
-CI builds the site with that command just before the tests and names the folder in
-``$SPACEARM_TEST_SITE``: the checks read that build instead of making a second one.
+The site is built once per session (``mkdocs build --strict``, the command CI runs); the
+checks then read the built HTML. Building takes ~15 s on a loaded 2-core machine (~10 s of
+CPU: the API reference renders every docstring), hence ``slow``. The build is kept in the
+suite's cache folder (``$SPACEARM_CACHE_DIR``, tests/conftest.py) under a digest of
+everything it reads: the files git lists in mkdocs.yml, docs/, src/ and results/, and the
+versions of Python and of every installed distribution. A later run with the same digest
+reads that build; any edit to a page, a docstring, the command line or a result builds
+again (``--fresh-cache`` always builds). CI builds the site just before the tests and
+names the folder in ``$SPACEARM_TEST_SITE``: the checks read that build instead.
 The text checks (no citation of notes that are not shipped) and the formula hook's own
 checks are fast.
 """
@@ -12,12 +16,16 @@ checks are fast.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import importlib.util
 import io
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
+import time
 from html.parser import HTMLParser
 from importlib import metadata
 from pathlib import Path
@@ -75,26 +83,83 @@ class _Page(HTMLParser):
             self.text.append(data)
 
 
+_SITE_INPUTS = ("mkdocs.yml", "docs", "src", "results")  # what the build reads (mkdocs.yml, docs/scripts)
+
+
+def _build_site(out: Path) -> None:
+    env = dict(os.environ, DISABLE_MKDOCS_2_WARNING="true", NO_MKDOCS_2_WARNING="1")
+    run = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr[-4000:]
+
+
+def _site_inputs_digest() -> str | None:
+    """SHA-256 of what the build reads (module docstring); None where git cannot list the files."""
+    try:
+        listed = subprocess.run(
+            ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard", "--", *_SITE_INPUTS],
+            cwd=ROOT,
+            capture_output=True,
+            check=True,
+            timeout=60,
+        ).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    digest = hashlib.sha256()
+    for name in sorted(set(filter(None, listed.split(b"\0")))):
+        path = ROOT / os.fsdecode(name)
+        if not path.is_file():  # listed by git, deleted in the working tree
+            continue
+        content = path.read_bytes()
+        digest.update(b"%d:%s%d:" % (len(name), name, len(content)) + content)
+    versions = sorted(f"{d.metadata['Name']}=={d.version}" for d in metadata.distributions() if d.metadata["Name"])
+    digest.update("\n".join([sys.version, *versions]).encode())
+    return digest.hexdigest()
+
+
+def _kept_site(tmp_path_factory) -> Path:
+    """The site for the current sources: read from the suite's cache folder when built there
+    from the same inputs, else built there (into a scratch folder, renamed into place whole,
+    older builds removed). Without a cache folder or a digest: built into a scratch folder."""
+    cache, key = os.environ.get("SPACEARM_CACHE_DIR", ""), _site_inputs_digest()
+    if not cache or key is None:
+        out = tmp_path_factory.mktemp("site")
+        _build_site(out)
+        return out
+    kept = Path(cache) / "docs-site"
+    out = kept / key
+    if (out / "index.html").is_file():
+        return out
+    kept.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix="building-", dir=kept))
+    try:
+        _build_site(scratch)
+        try:
+            scratch.rename(out)
+        except OSError:  # another run put the same build in place first
+            if not (out / "index.html").is_file():
+                raise
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    for older in kept.iterdir():  # other builds; scratch folders of runs that died an hour ago
+        if older != out and (not older.name.startswith("building-") or time.time() - older.stat().st_mtime > 3600):
+            shutil.rmtree(older, ignore_errors=True)
+    return out
+
+
 @pytest.fixture(scope="session")
 def site(tmp_path_factory) -> dict[Path, _Page]:
     """The site built strictly into a scratch folder (or the one CI just built, module
     docstring), each page parsed."""
     _load_hooks()
     built = os.environ.get("SPACEARM_TEST_SITE", "")
-    if built and (Path(built) / "index.html").is_file():
-        out = Path(built)
-    else:
-        out = tmp_path_factory.mktemp("site")
-        env = dict(os.environ, DISABLE_MKDOCS_2_WARNING="true", NO_MKDOCS_2_WARNING="1")
-        run = subprocess.run(
-            [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-            cwd=ROOT,
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=600,
-        )
-        assert run.returncode == 0, run.stderr[-4000:]
+    out = Path(built) if built and (Path(built) / "index.html").is_file() else _kept_site(tmp_path_factory)
     pages = {}
     for path in sorted(out.rglob("*.html")):
         parser = _Page()
