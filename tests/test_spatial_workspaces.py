@@ -8,15 +8,19 @@ import pytest
 import spacearm as sa
 from spacearm.analysis import singularities, spatial_workspaces as sw, workspaces
 
-from .conftest import random_robot
+from .conftest import count_compiles, random_robot
 
 
 @pytest.mark.parametrize("n", [2, 3])
 def test_reachable_radii_match_planar_closed_forms(n):
     robot = sa.umetani1990() if n == 2 else random_robot(np.random.default_rng(11), 3)
     radii = sw.reachable_radii(robot)
-    np.testing.assert_allclose(float(radii.outer), float(workspaces.maximum_reachable_radius(robot)), rtol=1e-10)
-    assert abs(float(radii.inner) - float(workspaces.maximum_reachable_inner_radius(robot))) < 1e-8
+    with count_compiles() as compiled:  # the number of starts is traced: 100 runs the program of 128
+        fewer = sw.reachable_radii(robot, starts=100)
+    assert sum(compiled.values()) == 0, compiled
+    for r in (radii, fewer):
+        np.testing.assert_allclose(float(r.outer), float(workspaces.maximum_reachable_radius(robot)), rtol=1e-10)
+        assert abs(float(r.inner) - float(workspaces.maximum_reachable_inner_radius(robot))) < 1e-8
 
 
 def test_reachable_radius_gradient_is_the_envelope():
@@ -52,14 +56,53 @@ def test_singular_radii_match_planar_references(seed):
     np.testing.assert_allclose(float(kinematic), float(workspaces.kinematic_singularity_radius(robot)), rtol=1e-8)
 
 
+def test_singular_radius_sizes_are_traced_within_a_bucket():
+    """``samples`` and ``keep`` are traced bounds in power-of-two buckets: sizes in one bucket
+    share one program (the one the default sizes compile), each finds the planar reference, and
+    a size's result does not depend on its bucket (the rows past it are never used), to the bit."""
+    robot = sa.umetani1990()
+    reference = float(singularities.path_independent_radius(robot))
+    first = sw.singular_radius(robot, samples=10_000, keep=1_500)  # buckets 2^14 and 2048: the defaults'
+    with count_compiles() as compiled:
+        second = sw.singular_radius(robot, samples=12_000, keep=1_800)
+        default = sw.singular_radius(robot)
+    assert sum(compiled.values()) == 0, compiled
+    for radius, joints in (first, second, default):
+        np.testing.assert_allclose(float(radius), reference, rtol=1e-8)
+        assert abs(float(sw.singularity_measure(robot, joints))) < 1e-10
+    roomier = sw._singular_radius(
+        robot,
+        "generalized",
+        np.int32(10_000),
+        np.int32(1_500),
+        32,
+        150,
+        16,
+        4,
+        0,
+        False,
+        sample_room=2**15,
+        keep_room=4096,
+    )
+    for a, b in zip(roomier, first, strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    with pytest.raises(sa.ConfigError, match=r"keep: from 1 to samples \(100\) postures, got 200"):
+        sw.singular_radius(robot, samples=100, keep=200)
+
+
 def test_singular_postures_lie_on_the_dynamic_set():
     robot = sa.umetani1990()
     postures = sw.singular_postures(robot)
-    on = np.asarray(postures.on_set)
-    assert on.mean() > 0.9
-    phi = jnp.concatenate([jnp.zeros((on.sum(), 1)), postures.joints[on]], axis=-1)
-    det = np.asarray(jnp.linalg.det(sa.generalized_jacobian(robot, phi)))
-    assert np.max(np.abs(det)) < 1e-9
+    with count_compiles() as compiled:  # the number of samples is traced: 10,000 runs the program of 2^14
+        fewer = sw.singular_postures(robot, samples=10_000)
+    assert sum(compiled.values()) == 0, compiled
+    for found in (postures, fewer):
+        on = np.asarray(found.on_set)
+        assert on.mean() > 0.9
+        phi = jnp.concatenate([jnp.zeros((on.sum(), 1)), found.joints[on]], axis=-1)
+        det = np.asarray(jnp.linalg.det(sa.generalized_jacobian(robot, phi)))
+        assert np.max(np.abs(det)) < 1e-9
+    assert not np.array_equal(np.asarray(fewer.joints), np.asarray(postures.joints))  # other samples kept
 
 
 def test_spatial_guaranteed_workspace_is_ordered():

@@ -47,6 +47,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._core.batching import bucket_size
+from .._core.errors import ConfigError
 from ..kinematics import fixed_base_jacobian, generalized_jacobian, square_determinant, tip_position
 from ..models.family import family_of
 from ..motion.spatial_paths import spatial_straight_tip_path
@@ -194,10 +196,14 @@ def _adam_search(objective, u0, wraps, steps: int, rate: float, *rows):
     return u, f
 
 
-@functools.partial(jax.jit, static_argnames=("starts",))
-def _reachable(robot, starts: int, steps, seed, rate):
+@functools.partial(jax.jit, static_argnames=("start_room",))
+def _reachable(robot, starts, steps, seed, rate, *, start_room: int):
+    """Both radii from ``starts`` Sobol starts (traced: the search holds ``start_room`` rows,
+    a power of two, whose rows past ``starts`` copy the first start and are never picked)."""
     wraps = _wraps(robot)
-    u0 = _start_points(robot, starts, seed)
+    real = jnp.arange(start_room) < starts
+    u0 = _start_points(robot, start_room, seed)
+    u0 = jnp.where(real[:, None], u0, u0[:1])
     # The search runs on the design with its gradient stopped (its step count is a traced
     # loop bound); the radius below is differentiable at the optimizer (envelope theorem).
     fixed = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
@@ -208,11 +214,11 @@ def _reachable(robot, starts: int, steps, seed, rate):
     lower, upper = joint_box(robot)
     # Both searches in one loop (one copy of the chain pass and its gradient to compile):
     # the first ``starts`` rows minimize |tip|^2 (inner), the others maximize it (outer).
-    signs = jnp.repeat(jnp.array([-1.0, 1.0], u0.dtype), starts)
+    signs = jnp.repeat(jnp.array([-1.0, 1.0], u0.dtype), start_room)
     u, f = _adam_search(lambda u, sign: -sign * radius_sq(u), jnp.concatenate([u0, u0]), wraps, steps, rate, signs)
-    u, ends = jax.lax.stop_gradient(u), jax.lax.stop_gradient(-signs * f).reshape(2, starts)  # |tip|^2 at the ends
-    pick = jnp.argmax(signs.reshape(2, starts) * ends, axis=1)
-    best = u.reshape(2, starts, -1)[jnp.arange(2), pick]
+    u, ends = jax.lax.stop_gradient(u), jax.lax.stop_gradient(-signs * f).reshape(2, start_room)  # |tip|^2 at the ends
+    pick = jnp.argmax(jnp.where(real, signs.reshape(2, start_room) * ends, -jnp.inf), axis=1)
+    best = u.reshape(2, start_room, -1)[jnp.arange(2), pick]
     # Envelope theorem: the radii at the optimizers' box coordinates, differentiable in the
     # design and the limits (through the box map); the program evaluates the tip again
     # only where the radii are differentiated (`_with_value`).
@@ -230,7 +236,8 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
 
     Args:
         robot: one design (``vmap`` for batches).
-        starts: Sobol starting points in the joint box.
+        starts: Sobol starting points in the joint box (a traced size: every count up to
+            the same power of two runs one program).
         steps: projected Adam steps per start (cosine-decaying rate from ``rate``, in
             unit-box coordinates).
 
@@ -239,7 +246,10 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
         closed forms K0+..+Kn and max(0, 2 max K - sum K) (tests/test_spatial_workspaces.py).
     """
     check_joint_box(robot)
-    return _reachable(robot, starts, steps, seed, rate)
+    starts = int(starts)
+    if starts < 1:
+        raise ConfigError(f"starts: at least 1, got {starts}")
+    return _reachable(robot, np.int32(starts), steps, seed, rate, start_room=bucket_size(starts))
 
 
 # Families with closed forms for Area 3's radii (free joints): (outer, inner).
@@ -423,16 +433,19 @@ def _newton_project(robot, joints, jacobian, steps, lower, upper, wraps):
     return _refine(robot, joints, jacobian, 1, steps, 0.0, lower, upper, wraps)[0]
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep"))
-def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol):
+@functools.partial(jax.jit, static_argnames=("jacobian", "keep", "sample_room"))
+def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol, *, sample_room):
+    """``samples`` is traced (``sample_room`` rows, a power of two; the rows past it are never kept);
+    ``keep`` is the result's row count (static)."""
     n = family_of(robot).joint_count(robot)
     lower, upper = joint_box(robot)
     wraps = _wraps(robot)
-    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples, digital_shifts(seed, 1, n))[0]
-    joints = lower + (upper - lower) * unit
-    s = singularity_measure(robot, joints, jacobian)
-    scale = jnp.median(jnp.abs(s))
-    _, nearest = jax.lax.top_k(-jnp.abs(s), keep)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
+    real = jnp.arange(sample_room) < samples
+    joints = jnp.where(real[:, None], lower + (upper - lower) * unit, lower + (upper - lower) * unit[:1])
+    absolute = jnp.where(real, jnp.abs(singularity_measure(robot, joints, jacobian)), jnp.inf)
+    scale = _median_of_first(absolute, jnp.asarray(samples))
+    _, nearest = jax.lax.top_k(-absolute, keep)
     q = _newton_project(robot, joints[nearest], jacobian, newton_steps, lower, upper, wraps)
     residual = jnp.abs(singularity_measure(robot, q, jacobian))
     tip = tip_position(robot, _joints_to_posture(robot, q))
@@ -455,12 +468,19 @@ def singular_postures(
     ``samples`` Sobol points of the joint box; the ``keep`` with the smallest |s| are
     moved onto s = 0 by ``newton_steps`` Newton projections (see
     `singularity_measure`). Rows with ``on_set`` False did not converge (for
-    example where the set meets a joint limit); discard them.
+    example where the set meets a joint limit); discard them. ``samples`` is a traced
+    size (every count up to the same power of two runs one program); ``keep`` fixes the
+    result's shape.
     """
     check_joint_box(robot)
+    samples, keep = int(samples), int(keep)
+    if not 1 <= keep <= samples:
+        raise ConfigError(f"keep: from 1 to samples ({samples}) postures, got {keep}")
     if tol is None:
         tol = 1e-9 if family_of(robot).joint_count(robot) == family_of(robot).translational_rows else 1e-6
-    return _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol)
+    return _singular_postures(
+        robot, jacobian, np.int32(samples), keep, newton_steps, seed, tol, sample_room=bucket_size(samples)
+    )
 
 
 def _kkt_polish(robot, best, free, jacobian, lower, upper, wraps, steps: int = 3):
@@ -637,9 +657,33 @@ def _polished_value(robot, best, free, at_lower, at_upper, jacobian, lower, uppe
     return value, best
 
 
-@functools.partial(jax.jit, static_argnames=("jacobian", "samples", "keep", "candidates", "polish"))
+def _median_of_first(values, count):
+    """``jnp.median(values[:count])`` for a traced ``count`` (the rest of ``values`` is +inf):
+    the same sort, indices and weights, so the same number to the bit."""
+    ordered = jnp.sort(values)
+    q = 0.5 * (count.astype(values.dtype) - 1.0)
+    low, high = jnp.floor(q), jnp.ceil(q)
+    high_weight = q - low
+    low_weight = 1.0 - high_weight
+    middle = ordered[low.astype(int)] * low_weight + ordered[high.astype(int)] * high_weight
+    return jnp.where(jnp.any(jnp.isnan(values)), jnp.nan, middle)
+
+
+@functools.partial(jax.jit, static_argnames=("jacobian", "sample_room", "keep_room", "candidates", "polish"))
 def _singular_radius(
-    robot, jacobian, samples, keep, candidates, descent_steps, projection_steps, newton_steps, seed, polish
+    robot,
+    jacobian,
+    samples,
+    keep,
+    candidates,
+    descent_steps,
+    projection_steps,
+    newton_steps,
+    seed,
+    polish,
+    *,
+    sample_room,
+    keep_room,
 ):
     """Sampling, projection and descent in ONE loop whose body holds the only evaluation (`_refine`).
 
@@ -649,33 +693,42 @@ def _singular_radius(
     to the centroid (a tangent step and ``newton_steps`` Newton steps each); without
     ``polish``, one more evaluates the chosen posture, whose |tip| is the returned value.
     So the program holds one forward-mode pass over the chain (the costly part to
-    compile), not one per use. The step counts and the seed are traced: they change no
-    shape. The search runs on the design with its gradient stopped; the returned radius
-    is differentiable through `_closest_value` (envelope theorem), whose passes over the
-    chain a program holds only where it differentiates the radius.
+    compile), not one per use. The step counts, the seed and the sizes ``samples`` and
+    ``keep`` are traced: the arrays hold ``sample_room`` and ``keep_room`` rows (static,
+    powers of two from `singular_radius`), the loop visits only the real ones, and the
+    rows past a size are copies of the first and never chosen; so every size in a bucket
+    runs the same program and gives what an exact-size program gives. The search runs on
+    the design with its gradient stopped; the returned radius is differentiable through
+    `_closest_value` (envelope theorem), whose passes over the chain a program holds only
+    where it differentiates the radius.
     """
     design = robot
     robot = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
     n = family_of(robot).joint_count(robot)
     lower, upper = joint_box(robot)
     wraps = _wraps(robot)
-    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples, digital_shifts(seed, 1, n))[0]
+    samples, keep = jnp.asarray(samples), jnp.asarray(keep)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
     joints = lower + (upper - lower) * unit
-    blocks = -(-samples // candidates)
-    padded = jnp.concatenate([joints, jnp.broadcast_to(joints[:1], (blocks * candidates - samples, n))])
+    block_room, chunk_room = -(-sample_room // candidates), -(-keep_room // candidates)
+    rows = jnp.arange(block_room * candidates)[:, None]
+    padded = jnp.concatenate([joints, jnp.broadcast_to(joints[:1], (block_room * candidates - sample_room, n))])
+    padded = jnp.where(rows < samples, padded, joints[:1])  # rows past the samples: copies of the first
+    blocks = (samples + candidates - 1) // candidates
     factor = 1e-9 if n == family_of(robot).translational_rows else 1e-6
-    chunks = -(-keep // candidates)
+    chunks = (keep + candidates - 1) // candidates
     descend = blocks + chunks  # the first descent iteration
     span = jnp.max(upper - lower)
     descent_steps = jnp.asarray(descent_steps)
 
     def nearest_samples(measures):
         # The keep samples of smallest |s| (padded to whole chunks), and the on-set bound.
-        absolute = jnp.abs(measures[:samples])
-        _, nearest = jax.lax.top_k(-absolute, keep)
-        buffer = joints[nearest]
-        buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunks * candidates - keep, n))])
-        return buffer, factor * jnp.median(absolute)
+        absolute = jnp.where(rows[:, 0] < samples, jnp.abs(measures), jnp.inf)  # rows past the samples: never kept
+        _, nearest = jax.lax.top_k(-absolute, keep_room)
+        buffer = padded[nearest]
+        buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunk_room * candidates - keep_room, n))])
+        buffer = jnp.where(jnp.arange(chunk_room * candidates)[:, None] < keep, buffer, buffer[:1])
+        return buffer, factor * _median_of_first(absolute, samples)
 
     def candidates_of(buffer, buffer_radius_sq):
         # The refined rows' |tip|^2 (inf off the set; padding never chosen).
@@ -741,9 +794,9 @@ def _singular_radius(
 
     dtype = joints.dtype
     state = (
-        jnp.zeros((blocks * candidates,), dtype),
-        jnp.zeros((chunks * candidates, n), dtype),
-        jnp.full((chunks * candidates,), jnp.inf, dtype),
+        jnp.zeros((block_room * candidates,), dtype),
+        jnp.zeros((chunk_room * candidates, n), dtype),
+        jnp.full((chunk_room * candidates,), jnp.inf, dtype),
         jnp.zeros((), dtype),
         jnp.zeros((candidates, n), dtype),
         jnp.full((candidates,), jnp.inf, dtype),
@@ -778,7 +831,10 @@ def singular_radius(
 
     The ``candidates`` refined singular postures of smallest radius are moved along
     the set (tangent descent of |tip|^2, Newton projection after each step, steps
-    shrinking geometrically).
+    shrinking geometrically). ``samples`` and ``keep`` are traced sizes, like the step
+    counts and the seed: every pair of counts up to the same powers of two runs one
+    program, with the result an exact-size program gives; ``candidates`` (the rows
+    moved together) and ``polish`` are compiled in.
 
     Returns:
         ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
@@ -798,8 +854,24 @@ def singular_radius(
     a least-squares solve: the UR5 radius's first call takes ~11 s of CPU instead of ~6.
     """
     check_joint_box(robot)
+    samples, keep, candidates = int(samples), int(keep), int(candidates)
+    if not 1 <= keep <= samples:
+        raise ConfigError(f"keep: from 1 to samples ({samples}) postures, got {keep}")
+    if candidates < 1:
+        raise ConfigError(f"candidates: at least 1, got {candidates}")
     return _singular_radius(
-        robot, jacobian, samples, keep, min(candidates, keep), descent_steps, 16, newton_steps, seed, bool(polish)
+        robot,
+        jacobian,
+        np.int32(samples),
+        np.int32(keep),
+        min(candidates, keep),
+        descent_steps,
+        16,
+        newton_steps,
+        seed,
+        bool(polish),
+        sample_room=bucket_size(samples),
+        keep_room=bucket_size(keep),
     )
 
 
