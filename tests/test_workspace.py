@@ -140,6 +140,12 @@ def test_dynamic_singular_set_table1():
     assert np.nanmax(radius) == pytest.approx(float(ws.maximum_reachable_radius(robot)), abs=1e-9)
     # The folded branch, which eq. (8) ignores, comes to 1.0 m of the centroid.
     assert float(ws.path_independent_radius(robot, **GRID)) == pytest.approx(1.0, abs=1e-9)
+    with count_compiles() as compiled:  # the bisection's step count is traced: no program of its own
+        coarse = ws.dynamic_singularities(robot, **GRID, bisection_steps=20)
+    assert sum(compiled.values()) == 0, compiled
+    # 20 halvings of a 2 pi / 64 cell: within 1e-7 rad of the 55-step roots
+    np.testing.assert_allclose(np.asarray(coarse.phi2)[found], phi2[found], rtol=0, atol=1e-7)
+    assert np.max(np.abs(np.asarray(coarse.phi2)[found] - phi2[found])) > 0
     # Robot-frame tips are the fixed-base tips of those postures.
     np.testing.assert_allclose(
         np.linalg.norm(np.asarray(s.tip_robot)[found], axis=-1),

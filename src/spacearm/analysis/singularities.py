@@ -14,6 +14,7 @@ import functools
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._core.errors import ConfigError
 from ..kinematics import generalized_jacobian, square_determinant, tip_position
@@ -56,7 +57,7 @@ def _det_generalized_jacobian(robot, phi1, phi2):
     return square_determinant(generalized_jacobian(robot, phi))
 
 
-@functools.partial(jax.jit, static_argnames=("n_phi1", "n_phi2", "bisection_steps", "max_roots"))
+@functools.partial(jax.jit, static_argnames=("n_phi1", "n_phi2", "max_roots"))
 def _singular_roots(robot, n_phi1, n_phi2, bisection_steps, max_roots):
     dtype = jnp.asarray(robot.link_a).dtype
     phi1 = -jnp.pi + 2.0 * jnp.pi * jnp.arange(n_phi1, dtype=dtype) / n_phi1
@@ -107,7 +108,8 @@ def dynamic_singularities(
     For every phi_1 on an even grid of ``n_phi1`` values in [-pi, pi), the roots in phi_2
     are bracketed by sign changes on ``n_phi2`` cells (the first ``max_roots`` per row
     are kept; rows of the shape ``(M, max_roots)``) and refined by bisection to
-    2 pi / n_phi2 / 2**bisection_steps rad. A root of even multiplicity (a tangency
+    2 pi / n_phi2 / 2**bisection_steps rad. The grid sizes and ``max_roots`` fix the
+    program's shapes; ``bisection_steps`` is traced (a new count compiles nothing). A root of even multiplicity (a tangency
     without sign change) would be missed; for the designs we tried det J* changes sign
     across both branches everywhere but at the collinear crossings.
 
@@ -118,9 +120,10 @@ def dynamic_singularities(
     require_family(robot, "planar", "dynamic_singularities")
     if robot.n_links != 2:
         raise ConfigError(f"links: dynamic_singularities traces det J* for n = 2 links, got n = {robot.n_links}")
+    steps = np.int32(bisection_steps)  # traced: a new count runs the same program
     if robot.batch_shape:
-        return jax.vmap(lambda r: _singular_roots(r, n_phi1, n_phi2, bisection_steps, max_roots))(robot)
-    return _singular_roots(robot, n_phi1, n_phi2, bisection_steps, max_roots)
+        return jax.vmap(lambda r: _singular_roots(r, n_phi1, n_phi2, steps, max_roots))(robot)
+    return _singular_roots(robot, n_phi1, n_phi2, steps, max_roots)
 
 
 def path_independent_radius(robot: PlanarRobot, **grid) -> jax.Array:
