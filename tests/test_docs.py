@@ -7,7 +7,8 @@ suite's cache folder (``$SPACEARM_CACHE_DIR``, tests/conftest.py) under a digest
 everything it reads: the files git lists in mkdocs.yml, docs/, src/ and results/, and the
 versions of Python and of every installed distribution. A later run with the same digest
 reads that build; any edit to a page, a docstring, the command line or a result builds
-again (``--fresh-cache`` always builds). CI builds the site just before the tests and
+again (``--fresh-cache`` always builds); the folder keeps the three newest builds and any
+read within the hour. CI builds the site just before the tests and
 names the folder in ``$SPACEARM_TEST_SITE``: the checks read that build instead.
 The text checks (no citation of notes that are not shipped) and the formula hook's own
 checks are fast.
@@ -111,8 +112,11 @@ def _site_inputs_digest() -> str | None:
         ).stdout
     except (OSError, subprocess.SubprocessError):
         return None
+    names = sorted(set(filter(None, listed.split(b"\0"))))
+    if b"mkdocs.yml" not in names:  # not this checkout's files (a copy inside another repository)
+        return None
     digest = hashlib.sha256()
-    for name in sorted(set(filter(None, listed.split(b"\0")))):
+    for name in names:
         path = ROOT / os.fsdecode(name)
         if not path.is_file():  # listed by git, deleted in the working tree
             continue
@@ -125,8 +129,8 @@ def _site_inputs_digest() -> str | None:
 
 def _kept_site(tmp_path_factory) -> Path:
     """The site for the current sources: read from the suite's cache folder when built there
-    from the same inputs, else built there (into a scratch folder, renamed into place whole,
-    older builds removed). Without a cache folder or a digest: built into a scratch folder."""
+    from the same inputs, else built there (into a scratch folder, renamed into place whole).
+    Without a cache folder or a digest: built into a scratch folder."""
     cache, key = os.environ.get("SPACEARM_CACHE_DIR", ""), _site_inputs_digest()
     if not cache or key is None:
         out = tmp_path_factory.mktemp("site")
@@ -135,22 +139,45 @@ def _kept_site(tmp_path_factory) -> Path:
     kept = Path(cache) / "docs-site"
     out = kept / key
     if (out / "index.html").is_file():
+        os.utime(out)  # used now: the clean-up below keeps it
         return out
     kept.mkdir(parents=True, exist_ok=True)
     scratch = Path(tempfile.mkdtemp(prefix="building-", dir=kept))
     try:
         _build_site(scratch)
-        try:
-            scratch.rename(out)
-        except OSError:  # another run put the same build in place first
-            if not (out / "index.html").is_file():
-                raise
-    finally:
+    except BaseException:
         shutil.rmtree(scratch, ignore_errors=True)
-    for older in kept.iterdir():  # other builds; scratch folders of runs that died an hour ago
-        if older != out and (not older.name.startswith("building-") or time.time() - older.stat().st_mtime > 3600):
-            shutil.rmtree(older, ignore_errors=True)
+        raise
+    if out.exists() and not (out / "index.html").is_file():  # a build half removed
+        shutil.rmtree(out, ignore_errors=True)
+    try:
+        scratch.rename(out)
+    except OSError:  # another run put the same build in place first, or the old one stayed
+        if not (out / "index.html").is_file():
+            return scratch  # this run's own build (a scratch folder: removed an hour from now)
+        shutil.rmtree(scratch, ignore_errors=True)
+    _remove_old_builds(kept, out)
     return out
+
+
+_KEPT_BUILDS = 3  # the newest builds stay (checkouts and branches side by side), and any used within the hour
+
+
+def _remove_old_builds(kept: Path, current: Path) -> None:
+    """Builds past the newest few that no run used within the hour, and scratch folders of runs
+    that died more than an hour ago: another run may still be reading the others."""
+    now, entries = time.time(), []
+    for entry in kept.iterdir():
+        try:
+            entries.append((entry.stat().st_mtime, entry))
+        except OSError:  # renamed or removed by another run meanwhile
+            continue
+    builds = sorted((e for e in entries if not e[1].name.startswith("building-")), reverse=True)
+    old = [path for mtime, path in builds[_KEPT_BUILDS:] if now - mtime > 3600]
+    old += [path for mtime, path in entries if path.name.startswith("building-") and now - mtime > 3600]
+    for path in old:
+        if path != current:
+            shutil.rmtree(path, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

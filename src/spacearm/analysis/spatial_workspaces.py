@@ -236,8 +236,10 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
 
     Args:
         robot: one design (``vmap`` for batches).
-        starts: Sobol starting points in the joint box (a traced size: every count up to
-            the same power of two runs one program).
+        starts: Sobol starting points in the joint box. A traced size: every count
+            between the same two consecutive powers of two runs one program, which
+            searches from the larger (the extra starts copy the first and are never
+            picked), so a count just past a power of two costs up to twice the work.
         steps: projected Adam steps per start (cosine-decaying rate from ``rate``, in
             unit-box coordinates).
 
@@ -443,7 +445,8 @@ def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol, 
     unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
     real = jnp.arange(sample_room) < samples
     joints = jnp.where(real[:, None], lower + (upper - lower) * unit, lower + (upper - lower) * unit[:1])
-    absolute = jnp.where(real, jnp.abs(singularity_measure(robot, joints, jacobian)), jnp.inf)
+    # Rows past the samples are NaN: top_k ranks them last (after any real NaN), the median skips them.
+    absolute = jnp.where(real, jnp.abs(singularity_measure(robot, joints, jacobian)), jnp.nan)
     scale = _median_of_first(absolute, jnp.asarray(samples))
     _, nearest = jax.lax.top_k(-absolute, keep)
     q = _newton_project(robot, joints[nearest], jacobian, newton_steps, lower, upper, wraps)
@@ -469,8 +472,9 @@ def singular_postures(
     moved onto s = 0 by ``newton_steps`` Newton projections (see
     `singularity_measure`). Rows with ``on_set`` False did not converge (for
     example where the set meets a joint limit); discard them. ``samples`` is a traced
-    size (every count up to the same power of two runs one program); ``keep`` fixes the
-    result's shape.
+    size: every count between the same two consecutive powers of two runs one program,
+    which evaluates s at the larger count of points (the extra ones are never kept);
+    ``keep`` fixes the result's shape.
     """
     check_joint_box(robot)
     samples, keep = int(samples), int(keep)
@@ -658,15 +662,15 @@ def _polished_value(robot, best, free, at_lower, at_upper, jacobian, lower, uppe
 
 
 def _median_of_first(values, count):
-    """``jnp.median(values[:count])`` for a traced ``count`` (the rest of ``values`` is +inf):
-    the same sort, indices and weights, so the same number to the bit."""
-    ordered = jnp.sort(values)
+    """``jnp.median(values[:count])`` for a traced ``count``, the rest of ``values`` NaN:
+    the same sort, middle indices and midpoint, so the same number to the bit (NaN where
+    one of the first ``count`` is NaN, as ``jnp.median``)."""
+    ordered = jnp.sort(values)  # NaN last: the first count are the real values, sorted
     q = 0.5 * (count.astype(values.dtype) - 1.0)
-    low, high = jnp.floor(q), jnp.ceil(q)
-    high_weight = q - low
-    low_weight = 1.0 - high_weight
-    middle = ordered[low.astype(int)] * low_weight + ordered[high.astype(int)] * high_weight
-    return jnp.where(jnp.any(jnp.isnan(values)), jnp.nan, middle)
+    low, high = jnp.floor(q).astype(int), jnp.ceil(q).astype(int)
+    middle = (ordered[low] + ordered[high]) * 0.5
+    real = jnp.arange(values.shape[0]) < count
+    return jnp.where(jnp.any(jnp.isnan(values) & real), jnp.nan, middle)
 
 
 @functools.partial(jax.jit, static_argnames=("jacobian", "sample_room", "keep_room", "candidates", "polish"))
@@ -711,9 +715,9 @@ def _singular_radius(
     unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
     joints = lower + (upper - lower) * unit
     block_room, chunk_room = -(-sample_room // candidates), -(-keep_room // candidates)
-    rows = jnp.arange(block_room * candidates)[:, None]
+    real = jnp.arange(block_room * candidates) < samples
     padded = jnp.concatenate([joints, jnp.broadcast_to(joints[:1], (block_room * candidates - sample_room, n))])
-    padded = jnp.where(rows < samples, padded, joints[:1])  # rows past the samples: copies of the first
+    padded = jnp.where(real[:, None], padded, joints[:1])  # rows past the samples: copies of the first
     blocks = (samples + candidates - 1) // candidates
     factor = 1e-9 if n == family_of(robot).translational_rows else 1e-6
     chunks = (keep + candidates - 1) // candidates
@@ -723,7 +727,8 @@ def _singular_radius(
 
     def nearest_samples(measures):
         # The keep samples of smallest |s| (padded to whole chunks), and the on-set bound.
-        absolute = jnp.where(rows[:, 0] < samples, jnp.abs(measures), jnp.inf)  # rows past the samples: never kept
+        # Rows past the samples are NaN: top_k ranks them last (after any real NaN), the median skips them.
+        absolute = jnp.where(real, jnp.abs(measures), jnp.nan)
         _, nearest = jax.lax.top_k(-absolute, keep_room)
         buffer = padded[nearest]
         buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunk_room * candidates - keep_room, n))])
@@ -832,9 +837,10 @@ def singular_radius(
     The ``candidates`` refined singular postures of smallest radius are moved along
     the set (tangent descent of |tip|^2, Newton projection after each step, steps
     shrinking geometrically). ``samples`` and ``keep`` are traced sizes, like the step
-    counts and the seed: every pair of counts up to the same powers of two runs one
-    program, with the result an exact-size program gives; ``candidates`` (the rows
-    moved together) and ``polish`` are compiled in.
+    counts and the seed: counts between the same two consecutive powers of two run one
+    program (its loop visits only the real samples), with the result an exact-size
+    program gives. ``candidates`` (the rows moved together; at most ``keep``) and
+    ``polish`` are compiled in.
 
     Returns:
         ``(radius, joints)``: m, and the ``(n,)`` singular posture where it occurs;
