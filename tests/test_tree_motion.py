@@ -97,31 +97,43 @@ def _turn(R):
 # The focus ----------------------------------------------------------------------------------
 
 
+@jax.jit
+def _focus_kernels(robot, q, R):
+    """The public kernels the focus test reads, as one program per robot (the jitted kernels
+    inlined unchanged): each focus is a new tree structure, compiled once instead of once per
+    kernel. Tips and J* in inertial axes (R) and in bus axes, C, w*."""
+    return (
+        sa.tip_position(robot, q, R),
+        sa.generalized_jacobian(robot, q, R),
+        sa.base_rate_matrix(robot, q),
+        sa.manipulability(robot, q),
+        sa.tip_position(robot, q),
+        sa.generalized_jacobian(robot, q),
+    )
+
+
 def test_focus_is_the_chosen_tip_with_held_columns_zero(dual, right_alone):
     q = np.random.default_rng(0).uniform(-2.0, 2.0, (3, 12))
     R = np.asarray(expm(np.array([0.3, -0.2, 0.5])))
-    tips, J = np.asarray(sa.tip_position(dual, q, R)), np.asarray(sa.generalized_jacobian(dual, q, R))
-    C = np.asarray(sa.base_rate_matrix(dual, q))
-    np.testing.assert_array_equal(sa.tip_position(right_alone, q, R), tips[:, 1])
-    Jf = np.asarray(sa.generalized_jacobian(right_alone, q, R))
+    tips, J, C, _, _, J_bus = (np.asarray(x) for x in _focus_kernels(dual, q, R))
+    tips_f, Jf, Cf, wf, tips_f_bus, Jf_bus = (np.asarray(x) for x in _focus_kernels(right_alone, q, R))
+    np.testing.assert_array_equal(tips_f, tips[:, 1])
     assert Jf.shape == (3, 6, 12)
     np.testing.assert_array_equal(Jf[..., :6], 0.0)  # the held arm's columns
     np.testing.assert_allclose(Jf[..., 6:], J[:, 1, :, 6:], rtol=0, atol=1e-15)
-    np.testing.assert_array_equal(np.asarray(sa.base_rate_matrix(right_alone, q))[..., :6], 0.0)
-    np.testing.assert_allclose(np.asarray(sa.base_rate_matrix(right_alone, q))[..., 6:], C[..., 6:], atol=1e-15)
+    np.testing.assert_array_equal(Cf[..., :6], 0.0)
+    np.testing.assert_allclose(Cf[..., 6:], C[..., 6:], atol=1e-15)
     Jv = J[:, 1, :3, 6:]
-    np.testing.assert_allclose(
-        sa.manipulability(right_alone, q), np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, -1, -2))), rtol=1e-12
-    )
+    np.testing.assert_allclose(wf, np.sqrt(np.linalg.det(Jv @ np.swapaxes(Jv, -1, -2))), rtol=1e-12)
     # the generic path over the focused primitives (J_S, J_M, I_S, I_M) equals the fast path
     generic_J, generic_tip = jax.jit(lambda r, q: (generic_generalized_jacobian(r, q), generic_tip_position(r, q)))(
         right_alone, q
     )
-    np.testing.assert_allclose(generic_J, sa.generalized_jacobian(right_alone, q), atol=1e-14)
-    np.testing.assert_allclose(generic_tip, sa.tip_position(right_alone, q), atol=1e-15)
+    np.testing.assert_allclose(generic_J, Jf_bus, atol=1e-14)
+    np.testing.assert_allclose(generic_tip, tips_f_bus, atol=1e-15)
     # a focus on one tip with every joint moving: the tip's J* over all joints (the other arm's columns are not zero)
     left = dual.focus(tip="left/tool0")
-    np.testing.assert_array_equal(sa.generalized_jacobian(left, q), sa.generalized_jacobian(dual, q)[:, 0])
+    np.testing.assert_array_equal(sa.generalized_jacobian(left, q), J_bus[:, 0])
     assert family_of(left).tip_count(left) is None and family_of(dual).tip_count(dual) == 2
 
 
@@ -130,16 +142,22 @@ def test_focus_locks_the_held_joints_in_the_inertias(dual, right_alone):
     zero); the metrics' posture quantities are the focused kernels'."""
     q = np.random.default_rng(4).uniform(-2.0, 2.0, 12)
     family = family_of(right_alone)
-    inertia = jax.jit(family.arm_inertia)  # one program per robot, not one per operation
-    full, held = np.asarray(inertia(dual, q)), np.asarray(inertia(right_alone, q))
+    full = np.asarray(jax.jit(family.arm_inertia)(dual, q))
+    # the focused robot's inertia, posture quantities and public kernels: one program
+    held, quantities, J, C = jax.jit(
+        lambda r, q: (
+            family.arm_inertia(r, q),
+            family.fast_paths["posture_quantities"](r, q, ("jacobian", "base_rate")),
+            sa.generalized_jacobian(r, q),
+            sa.base_rate_matrix(r, q),
+        )
+    )(right_alone, q)
+    held = np.asarray(held)
     np.testing.assert_allclose(held[6:, 6:], full[6:, 6:], rtol=1e-14)
     np.testing.assert_array_equal(held[:6, :6], np.eye(6))
     np.testing.assert_array_equal(held[:6, 6:], 0.0)
-    quantities = jax.jit(lambda r, q: family.fast_paths["posture_quantities"](r, q, ("jacobian", "base_rate")))(
-        right_alone, q
-    )
-    np.testing.assert_allclose(quantities["jacobian"], sa.generalized_jacobian(right_alone, q), atol=1e-15)
-    np.testing.assert_allclose(quantities["base_rate"], sa.base_rate_matrix(right_alone, q), atol=1e-15)
+    np.testing.assert_allclose(quantities["jacobian"], J, atol=1e-15)
+    np.testing.assert_allclose(quantities["base_rate"], C, atol=1e-15)
 
 
 def test_focus_names_arms_tips_and_joints(dual):
