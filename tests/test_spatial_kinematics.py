@@ -167,31 +167,41 @@ def test_fast_paths_equal_the_generic_path(name):
     np.testing.assert_allclose(sa.fixed_base_manipulability(robot, q), np.sqrt(np.maximum(gram, 0)), atol=1e-12)
 
 
+@jax.jit
+def _extra_metrics(robot, q, length):
+    """The metrics beyond w* that test_metrics_extras reads, as one program (the jitted public
+    kernels inlined unchanged: one compile instead of eight)."""
+    return dict(
+        w_rot=spatial.rotational_manipulability(robot, q),
+        w_full=spatial.full_manipulability(robot, q, length),
+        H=spatial.arm_inertia(robot, q),
+        M=spatial.mass_matrix(robot, q),
+        w_dyn=spatial.dynamic_manipulability(robot, q),
+        axes=sa.manipulability_ellipsoid(robot, q)[0],
+        rot_axes=spatial.rotational_ellipsoid(robot, q)[0],
+        fixed_axes=spatial.fixed_base_ellipsoid(robot, q)[0],
+    )
+
+
 def test_metrics_extras(ur5):
     rng = np.random.default_rng(5)
     q = rng.uniform(-3, 3, (8, 6))
     J = np.asarray(sa.generalized_jacobian(ur5, q))
-    w_rot = np.sqrt(np.linalg.det(J[:, 3:] @ np.swapaxes(J[:, 3:], 1, 2)))
-    np.testing.assert_allclose(spatial.rotational_manipulability(ur5, q), w_rot, rtol=1e-10)
     length = 0.8
+    m = {name: np.asarray(value) for name, value in _extra_metrics(ur5, q, length).items()}
+    w_rot = np.sqrt(np.linalg.det(J[:, 3:] @ np.swapaxes(J[:, 3:], 1, 2)))
+    np.testing.assert_allclose(m["w_rot"], w_rot, rtol=1e-10)
     scaled = np.concatenate([J[:, :3] / length, J[:, 3:]], axis=1)
-    np.testing.assert_allclose(spatial.full_manipulability(ur5, q, length), np.abs(np.linalg.det(scaled)), rtol=1e-9)
-    H = np.asarray(spatial.arm_inertia(ur5, q))
+    np.testing.assert_allclose(m["w_full"], np.abs(np.linalg.det(scaled)), rtol=1e-9)
+    H = m["H"]
     np.testing.assert_allclose(H, np.swapaxes(H, 1, 2), atol=1e-14)
     assert np.all(np.linalg.eigvalsh(H) > 0)
-    assert np.all(
-        np.linalg.eigvalsh(np.asarray(spatial.mass_matrix(ur5, q)) - H) > -1e-12
-    )  # a free bus only lightens the arm
+    assert np.all(np.linalg.eigvalsh(m["M"] - H) > -1e-12)  # a free bus only lightens the arm
     K = J[:, :3] @ np.linalg.inv(H)
-    np.testing.assert_allclose(
-        spatial.dynamic_manipulability(ur5, q), np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9
-    )
-    axes, _ = sa.manipulability_ellipsoid(ur5, q)
-    np.testing.assert_allclose(np.prod(axes, axis=-1), sa.manipulability(ur5, q), rtol=1e-10)
-    rot_axes, _ = spatial.rotational_ellipsoid(ur5, q)
-    np.testing.assert_allclose(np.prod(rot_axes, axis=-1), w_rot, rtol=1e-10)
-    fixed_axes, _ = spatial.fixed_base_ellipsoid(ur5, q)
-    np.testing.assert_allclose(np.prod(fixed_axes, axis=-1), sa.fixed_base_manipulability(ur5, q), rtol=1e-10)
+    np.testing.assert_allclose(m["w_dyn"], np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9)
+    np.testing.assert_allclose(np.prod(m["axes"], axis=-1), sa.manipulability(ur5, q), rtol=1e-10)
+    np.testing.assert_allclose(np.prod(m["rot_axes"], axis=-1), w_rot, rtol=1e-10)
+    np.testing.assert_allclose(np.prod(m["fixed_axes"], axis=-1), sa.fixed_base_manipulability(ur5, q), rtol=1e-10)
 
 
 def test_any_leading_batch_shape(ur5):
