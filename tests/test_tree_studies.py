@@ -8,6 +8,7 @@ URDF chain, a tree built from a URDF chain scaled by hand, direct means of
 
 import csv
 import dataclasses
+import functools
 import json
 import shutil
 from pathlib import Path
@@ -257,27 +258,43 @@ def _problem_config(robot_file: Path, **changes) -> dict:
     return config
 
 
+@functools.partial(jax.jit, static_argnames=("points",))
+def _rule_postures(robot, shifts, points: int):
+    """The fixed QMC rule's postures ``(R points, n)``: digitally shifted Sobol points mapped
+    onto the joint box (inside the caller's program, not op by op)."""
+    n = robot.n_joints
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, points, shifts)
+    return box_postures(robot, unit).reshape(-1, n)
+
+
+@functools.partial(jax.jit, static_argnames=("points",))
+def _rule_means_kernels(robot, shifts, points: int):
+    """w* per tip and C at the rule's postures, from the public kernels (one program)."""
+    q = _rule_postures(robot, shifts, points)
+    return sa.manipulability(robot, q), sa.base_rate_matrix(robot, q)
+
+
+@functools.partial(jax.jit, static_argnames=("points",))
+def _rule_jacobians_and_inertias(robot, shifts, points: int):
+    """J* per tip and H* at the rule's postures, from the public kernels (one program)."""
+    q = _rule_postures(robot, shifts, points)
+    return sa.generalized_jacobian(robot, q), TREE.arm_inertia(robot, q)
+
+
 def _direct_means(robot, samples: int, randomizations: int, seed: int):
     """The means of w* per tip and of ||C_w||_F over the fixed QMC rule, from the public kernels."""
-    n = robot.n_joints
-    shifts = digital_shifts(seed, randomizations, n)
-    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples // randomizations, shifts)
-    q = np.asarray(box_postures(robot, unit)).reshape(-1, n)
-    w = np.asarray(jax.jit(sa.manipulability)(robot, q))  # (P, k)
-    C = np.asarray(jax.jit(sa.base_rate_matrix)(robot, q))  # (P, 6, n)
+    shifts = digital_shifts(seed, randomizations, robot.n_joints)
+    w, C = (np.asarray(x) for x in _rule_means_kernels(robot, shifts, samples // randomizations))  # (P, k), (P, 6, n)
     return w.mean(axis=0), np.linalg.norm(C[:, 3:, :], axis=(-2, -1)).mean()
 
 
 def _direct_gci_and_wd(robot, samples: int, randomizations: int, seed: int):
     """The means of 1/kappa of each tip's J*_v (NumPy singular values) and of its
     w_d = sqrt det(J*_v H*^-1 H*^-T J*_v^T) (NumPy solve and determinant) over the fixed QMC rule."""
-    n = robot.n_joints
-    shifts = digital_shifts(seed, randomizations, n)
-    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, samples // randomizations, shifts)
-    q = np.asarray(box_postures(robot, unit)).reshape(-1, n)
-    J = np.asarray(jax.jit(sa.generalized_jacobian)(robot, q))[..., :3, :]  # (P, k, 3, n)
+    shifts = digital_shifts(seed, randomizations, robot.n_joints)
+    J, H = (np.asarray(x) for x in _rule_jacobians_and_inertias(robot, shifts, samples // randomizations))
+    J = J[..., :3, :]  # (P, k, 3, n); H: (P, n, n)
     singular = np.linalg.svd(J, compute_uv=False)
-    H = np.asarray(jax.jit(TREE.arm_inertia)(robot, q))  # (P, n, n)
     K = np.swapaxes(np.linalg.solve(H[:, None], np.swapaxes(J, -1, -2)), -1, -2)  # J H^-1 (H symmetric)
     w_d = np.sqrt(np.linalg.det(K @ np.swapaxes(K, -1, -2)))
     return (singular[..., -1] / singular[..., 0]).mean(axis=0), w_d.mean(axis=0)  # (k,), (k,)
