@@ -258,7 +258,6 @@ def _problem_config(robot_file: Path, **changes) -> dict:
     return config
 
 
-@functools.partial(jax.jit, static_argnames=("points",))
 def _rule_postures(robot, shifts, points: int):
     """The fixed QMC rule's postures ``(R points, n)``: digitally shifted Sobol points mapped
     onto the joint box (inside the caller's program, not op by op)."""

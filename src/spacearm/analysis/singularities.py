@@ -109,9 +109,10 @@ def dynamic_singularities(
     are bracketed by sign changes on ``n_phi2`` cells (the first ``max_roots`` per row
     are kept; rows of the shape ``(M, max_roots)``) and refined by bisection to
     2 pi / n_phi2 / 2**bisection_steps rad. The grid sizes and ``max_roots`` fix the
-    program's shapes; ``bisection_steps`` is traced (a new count compiles nothing). A root of even multiplicity (a tangency
-    without sign change) would be missed; for the designs we tried det J* changes sign
-    across both branches everywhere but at the collinear crossings.
+    program's shapes; ``bisection_steps`` is traced (a new count compiles nothing). A
+    root of even multiplicity (a tangency without sign change) would be missed; for the
+    designs we tried det J* changes sign across both branches everywhere but at the
+    collinear crossings.
 
     Raises:
         ConfigError: for n != 2 (for n > 2, J* loses rank on a set of codimension 2 in

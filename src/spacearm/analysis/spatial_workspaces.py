@@ -435,6 +435,14 @@ def _newton_project(robot, joints, jacobian, steps, lower, upper, wraps):
     return _refine(robot, joints, jacobian, 1, steps, 0.0, lower, upper, wraps)[0]
 
 
+def _checked_sizes(samples, keep) -> tuple[int, int]:
+    """``samples`` and ``keep`` of a singular-set search as ints, ``1 <= keep <= samples``."""
+    samples, keep = int(samples), int(keep)
+    if not 1 <= keep <= samples:
+        raise ConfigError(f"keep: from 1 to samples ({samples}) postures, got {keep}")
+    return samples, keep
+
+
 @functools.partial(jax.jit, static_argnames=("jacobian", "keep", "sample_room"))
 def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol, *, sample_room):
     """``samples`` is traced (``sample_room`` rows, a power of two; the rows past it are never kept);
@@ -444,7 +452,8 @@ def _singular_postures(robot, jacobian, samples, keep, newton_steps, seed, tol, 
     wraps = _wraps(robot)
     unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
     real = jnp.arange(sample_room) < samples
-    joints = jnp.where(real[:, None], lower + (upper - lower) * unit, lower + (upper - lower) * unit[:1])
+    joints = lower + (upper - lower) * unit
+    joints = jnp.where(real[:, None], joints, joints[:1])  # rows past the samples: copies of the first
     # Rows past the samples are NaN: top_k ranks them last (after any real NaN), the median skips them.
     absolute = jnp.where(real, jnp.abs(singularity_measure(robot, joints, jacobian)), jnp.nan)
     scale = _median_of_first(absolute, jnp.asarray(samples))
@@ -477,9 +486,7 @@ def singular_postures(
     ``keep`` fixes the result's shape.
     """
     check_joint_box(robot)
-    samples, keep = int(samples), int(keep)
-    if not 1 <= keep <= samples:
-        raise ConfigError(f"keep: from 1 to samples ({samples}) postures, got {keep}")
+    samples, keep = _checked_sizes(samples, keep)
     if tol is None:
         tol = 1e-9 if family_of(robot).joint_count(robot) == family_of(robot).translational_rows else 1e-6
     return _singular_postures(
@@ -860,9 +867,8 @@ def singular_radius(
     a least-squares solve: the UR5 radius's first call takes ~11 s of CPU instead of ~6.
     """
     check_joint_box(robot)
-    samples, keep, candidates = int(samples), int(keep), int(candidates)
-    if not 1 <= keep <= samples:
-        raise ConfigError(f"keep: from 1 to samples ({samples}) postures, got {keep}")
+    samples, keep = _checked_sizes(samples, keep)
+    candidates = int(candidates)
     if candidates < 1:
         raise ConfigError(f"candidates: at least 1, got {candidates}")
     return _singular_radius(
