@@ -6,6 +6,7 @@ import sys
 
 import pytest
 
+import spacearm.cli
 from spacearm.cli import COMMANDS, build_parser, main
 
 
@@ -59,3 +60,27 @@ def test_removed_module_paths_are_gone(old):
     silently serving a renamed function (``workspace.normalized_areas`` did)."""
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module(f"spacearm.{old}")
+
+
+def test_an_interrupt_inside_an_import_is_one_line_and_exit_130(monkeypatch, capsys):
+    """Ctrl-C while an extension module initializes reaches the command as the ImportError it
+    caused (seen from matplotlib's Agg renderer: "initialization failed"): still exit 130 and
+    one line. An ImportError with no interrupt behind it is not swallowed."""
+
+    def interrupted_import():
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as interrupt:
+            raise ImportError("initialization failed") from interrupt
+
+    monkeypatch.setattr(spacearm.cli, "_draw_into_files", interrupted_import)
+    assert main(["validate", "configs/umetani1990.yaml"]) == 130
+    err = capsys.readouterr().err
+    assert err == "spacearm validate: interrupted\n"
+
+    def broken_import():
+        raise ImportError("initialization failed")
+
+    monkeypatch.setattr(spacearm.cli, "_draw_into_files", broken_import)
+    with pytest.raises(ImportError, match="initialization failed"):
+        main(["validate", "configs/umetani1990.yaml"])

@@ -93,6 +93,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{error.filename}: " if error.filename else ""
         print(f"{name}: error: {where}{error.strerror or error}", file=sys.stderr)
         return EXIT_FAILED
+    except Exception as error:
+        if not _caused_by_interrupt(error):
+            raise
+        # Ctrl-C inside an extension module's import surfaces as the ImportError it caused
+        # (matplotlib's Agg renderer: "initialization failed"): still an interrupt.
+        print(f"{name}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _caused_by_interrupt(error: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is in the chain of causes and contexts of ``error``."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False
 
 
 def _one_line(error: BaseException, limit: int = 2000) -> str:
