@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .._core.errors import ConfigError, RunError
-from ..io.folders import check_output_folder, lock_folder, stage_folder, swap_in
+from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
 from ._args import comma_numbers
 
 # The files a reach run writes; the other entries of --out are kept.
@@ -159,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
     # One writer at a time (a second one is refused naming the holder's PID); the files are
     # written into a staging folder that replaces --out as a whole.
     with lock_folder(out, label=f"--out {out}"):
+        claim_folder(out, "reach", label=f"--out {out}")
         if args.target_rpy is not None:
             return _run_pose(args, robot, out)
         return _run_spatial(args, robot, out) if spatial else _run_planar(args, robot, out)

@@ -22,7 +22,7 @@ import numpy as np
 from .._core.errors import ConfigError, RunError
 from .._core.numeric import x64_enabled
 from ..io import build_manifest, manifest as provenance, write_csv, write_json
-from ..io.folders import check_output_folder, lock_folder, stage_folder, swap_in
+from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
 from .baselines import grid_search, nsga2_search
 from .fronts import hypervolume
 from .hybrid import HybridSettings, hybrid_search
@@ -213,6 +213,7 @@ def run_problem(
     # One writer at a time (a second one is refused naming the holder's PID), taken before
     # the search so that a refused run costs nothing.
     with lock_folder(out_dir, label=f"--out {out_dir}"):
+        claim_folder(out_dir, "optimize", label=f"--out {out_dir}")
         return _run_locked(
             problem,
             out_dir,
@@ -409,7 +410,7 @@ def _run_locked(
             command=list(command) if command is not None else sys.argv,
             timings=timings,
             git=code_state,
-            extra={"files": summary["files"]},
+            extra={"kind": "optimize", "files": summary["files"]},
         )
         write_json(staging / "manifest.json", data)
         if _BEFORE_SWAP is not None:

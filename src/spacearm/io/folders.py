@@ -2,6 +2,7 @@
 
 A run takes `lock_folder` on its output folder (an advisory ``fcntl`` lock on the file
 ``.<name>.lock`` beside the folder; a second writer is refused with the holder's PID),
+refuses a folder that holds another command's results (`claim_folder`),
 builds its results in a staging folder beside the target (`stage_folder`: the files it
 keeps from the old folder are hard links, its own files are new) and swaps the staging
 folder in at the end. On Linux the swap is one ``renameat2(RENAME_EXCHANGE)`` call, so a
@@ -18,14 +19,29 @@ import ctypes
 import ctypes.util
 import errno
 import fcntl
+import json
 import os
 import shutil
+import stat
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from .._core.errors import ConfigError
 
-__all__ = ["FolderLocked", "check_output_folder", "lock_folder", "lock_path", "stage_folder", "swap_in"]
+__all__ = [
+    "RESULT_KINDS",
+    "FolderLocked",
+    "check_output_folder",
+    "claim_folder",
+    "folder_owner",
+    "lock_folder",
+    "lock_path",
+    "stage_folder",
+    "swap_in",
+]
+
+# The commands that write result folders (a manifest's ``kind``).
+RESULT_KINDS = ("sweep", "optimize", "reach")
 
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
@@ -35,26 +51,82 @@ class FolderLocked(ConfigError):
     """Another process holds the output folder's lock (exit status 2 on the command line)."""
 
 
-def check_output_folder(out_dir: str | os.PathLike, *, label: str | None = None) -> None:
-    """ConfigError unless ``out_dir`` is, or can become, a writable folder of its own
-    (nothing is created). The results replace the folder as a whole, so it is never the
-    folder this process works in or one above it, nor a mount point."""
-    out_dir = Path(out_dir)
-    label = label or f"--out {out_dir}"
-    target = out_dir.absolute()
+def check_output_folder(out_dir: str | os.PathLike, *, label: str | None = None, whole: bool = True) -> None:
+    """ConfigError unless ``out_dir`` is, or can become, a writable folder (nothing is
+    created). With ``whole`` (results that replace the folder as a whole) it must be a
+    folder of its own: never the folder this process works in or one above it, nor a
+    mount point."""
+    label = label or f"--out {os.fspath(out_dir)!r}"
+    if "\0" in os.fspath(out_dir):
+        raise ConfigError(f"{label}: a folder name cannot hold a NUL byte")
+    target = Path(out_dir).absolute()
     existing = target
-    while not existing.exists():
-        existing = existing.parent
-    if not existing.is_dir():
-        raise ConfigError(f"{label}: {existing} is a file, not a folder")
+    while True:
+        try:
+            mode = os.stat(existing).st_mode
+        except FileNotFoundError:
+            existing = existing.parent
+            continue
+        except OSError as error:  # a loop of symbolic links, a name too long, a path under a file
+            raise ConfigError(f"{label}: {error.strerror or error}") from None
+        if not stat.S_ISDIR(mode):
+            raise ConfigError(f"{label}: {existing} is a file, not a folder")
+        break
     if not os.access(existing, os.W_OK | os.X_OK):
         raise ConfigError(f"{label}: cannot write into {existing} (permission denied)")
+    if not whole:
+        return
     real, here = Path(os.path.realpath(target)), Path(os.path.realpath(os.getcwd()))
     if real == here or real in here.parents or (real.exists() and os.path.ismount(real)):
         raise ConfigError(
             f"{label}: results replace their folder as a whole, so they need a folder of "
             f"their own, not the current folder, one above it or a mount point (e.g. --out results/{real.name or 'run'})"
         )
+
+
+def folder_owner(folder: str | os.PathLike) -> str | None:
+    """Which command's results ``folder`` holds: ``"sweep"``, ``"optimize"``, ``"reach"``,
+    or None (no folder, or no spacearm results in it).
+
+    Read from the ``kind`` of its ``manifest.json`` (older manifests: a sweep's lists its
+    ``n_designs``, an optimization's its ``summary.json``), else from a reach run's ``reach.npz``.
+    """
+    folder = Path(folder)
+    manifest = _small_json(folder / "manifest.json")
+    if isinstance(manifest, dict):
+        kind = manifest.get("kind")
+        if kind in RESULT_KINDS:
+            return kind
+        if "n_designs" in manifest:
+            return "sweep"
+        if "summary.json" in (manifest.get("files") or []):
+            return "optimize"
+    return "reach" if (folder / "reach.npz").is_file() else None
+
+
+def claim_folder(folder: str | os.PathLike, kind: str, *, label: str | None = None) -> None:
+    """ConfigError when ``folder`` holds the results of another command than ``kind``: a
+    run replaces its own earlier results, never another command's."""
+    owner = folder_owner(folder)
+    if owner not in (None, kind):
+        raise ConfigError(
+            f"{label or folder}: holds the results of 'spacearm {owner}', which 'spacearm {kind}' would "
+            "replace; choose another output folder"
+        )
+
+
+def _small_json(path: Path, limit: int = 1 << 24):
+    """The JSON in a regular file of at most ``limit`` bytes, or None."""
+    try:
+        with open(
+            path, "rb", opener=lambda name, flags: os.open(name, flags | os.O_NOFOLLOW | os.O_NONBLOCK)
+        ) as handle:
+            if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+                return None
+            text = handle.read(limit + 1)
+        return json.loads(text) if len(text) <= limit else None
+    except (OSError, ValueError):
+        return None
 
 
 def lock_path(folder: str | os.PathLike) -> Path:
@@ -64,10 +136,10 @@ def lock_path(folder: str | os.PathLike) -> Path:
     return folder.parent / f".{folder.name}.lock"
 
 
-def _holder(path: Path) -> str:
+def _holder(handle: int) -> str:
     try:
-        text = path.read_text().strip()
-    except OSError:
+        text = os.pread(handle, 32, 0).decode("ascii").strip()
+    except (OSError, UnicodeDecodeError):
         return "unknown"
     return text if text.isdigit() else "unknown"
 
@@ -76,36 +148,83 @@ def _holder(path: Path) -> str:
 def lock_folder(folder: str | os.PathLike, *, label: str | None = None) -> Iterator[Path]:
     """Hold the advisory write lock of ``folder`` for the ``with`` block.
 
-    The lock is ``flock`` on ``.<name>.lock`` beside the folder (created if needed; its
-    text is the holder's PID). The kernel drops it when the holder exits, however it
-    ends, so a killed run never leaves a stale lock. On entry, leftovers of an earlier
-    writer that was killed are cleaned: its staging folders are removed, and a folder
-    it had moved aside during a non-atomic swap is put back.
+    The lock is ``flock`` on ``.<name>.lock`` beside the folder: a regular file of ours
+    holding the holder's PID, created if needed and removed on release. The kernel drops
+    the lock when the holder exits, however it ends, so a killed run never leaves a stale
+    lock. A symbolic link, a hard link, another user's file or a file with other contents
+    at that name is refused, never followed or overwritten. On entry, leftovers of an
+    earlier writer that was killed are cleaned: its staging folders are removed, and a
+    folder it had moved aside during a non-atomic swap is put back.
 
     Raises:
         FolderLocked: another process holds the lock; the message names its PID.
+        ConfigError: the lock's name holds something that is not a spacearm lock.
     """
     folder = Path(os.path.realpath(folder))
     label = label or str(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     path = lock_path(folder)
-    handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    handle = _take_lock(path, label)
     try:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as error:
-            if error.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise
-            raise FolderLocked(
-                f"{label}: another spacearm run (PID {_holder(path)}) is writing this folder; "
-                f"wait for it to finish or choose another output folder (lock: {path})"
-            ) from None
-        os.ftruncate(handle, 0)
+        os.ftruncate(handle, 0)  # ours: a regular file of one link holding at most a PID
         os.write(handle, f"{os.getpid()}\n".encode())
         _recover(folder)
         yield folder
     finally:
+        # Removed while still held: a process that opened the old file finds it gone
+        # (its inode check below fails) and opens the new one.
+        with contextlib.suppress(OSError):
+            if _same_file(os.fstat(handle), os.lstat(path)):
+                os.unlink(path)
         os.close(handle)  # closing the descriptor releases the lock
+
+
+def _take_lock(path: Path, label: str) -> int:
+    """An open descriptor of the lock file ``path``, locked (`lock_folder`)."""
+    while True:
+        try:
+            handle = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC, 0o644)
+        except OSError as error:
+            why = "a symbolic link" if error.errno == errno.ELOOP else (error.strerror or str(error))
+            raise ConfigError(f"{label}: cannot use the lock file {path}: {why}; remove it") from None
+        try:
+            _check_lock_file(handle, path, label)
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as error:
+                if error.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    raise
+                raise FolderLocked(
+                    f"{label}: another spacearm run (PID {_holder(handle)}) is writing this folder; "
+                    f"wait for it to finish or choose another output folder (lock: {path})"
+                ) from None
+            try:
+                current = os.lstat(path)
+            except FileNotFoundError:
+                current = None
+            if current is not None and _same_file(os.fstat(handle), current):
+                return handle
+        except BaseException:
+            os.close(handle)
+            raise
+        os.close(handle)  # the holder removed it as we opened it: take the new one
+
+
+def _check_lock_file(handle: int, path: Path, label: str) -> None:
+    info = os.fstat(handle)
+    text = os.pread(handle, 64, 0) if stat.S_ISREG(info.st_mode) else b""
+    if (
+        not stat.S_ISREG(info.st_mode)
+        or info.st_nlink > 1
+        or info.st_uid != os.geteuid()
+        or info.st_size > 32
+        or (not text.strip().isdigit() and text.strip())
+    ):
+        raise ConfigError(f"{label}: {path} is not a spacearm lock file (a lock holds only a PID); remove it")
+
+
+def _same_file(a: os.stat_result, b: os.stat_result) -> bool:
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
 def _recover(folder: Path) -> None:
@@ -128,6 +247,7 @@ def stage_folder(folder: str | os.PathLike, keep: Callable[[str], bool]) -> Path
     shutil.rmtree(staging, ignore_errors=True)
     staging.mkdir(parents=True)
     if folder.is_dir():
+        os.chmod(staging, stat.S_IMODE(folder.stat().st_mode))  # the swap keeps the folder's mode
         for entry in folder.iterdir():
             if not keep(entry.name):
                 continue
