@@ -77,7 +77,7 @@ def _error_lines(err: str) -> list[str]:
 
 def test_a_process_with_other_settings_is_refused_naming_the_keys(tmp_path):
     """The issue's case: process 1 given --set axes.x.range.start=-0.2 (here 0.2, a valid value). Before: both exit 0 and
-    7 of 25 rows hold process 1's results under process 0's x values."""
+    7 of 25 rows hold process 1's results under process 0's x values. A mismatch is bad input: exit 2 on both."""
     sweep = _sweep(tmp_path)
     coordinator = f"127.0.0.1:{_free_port()}"
     processes = [
@@ -86,7 +86,7 @@ def test_a_process_with_other_settings_is_refused_naming_the_keys(tmp_path):
     ]
     outputs = _finish(processes)
     for rank, (p, (_, err)) in enumerate(zip(processes, outputs, strict=False)):
-        assert p.returncode == 1, f"process {rank}: {err}"
+        assert p.returncode == 2, f"process {rank}: {err}"
         assert "Traceback" not in err and len(_error_lines(err)) == 1, err
         assert "config.axes.x.values" in err and "refusing to run" in err, err
     assert not (tmp_path / "out" / "table.csv").exists()

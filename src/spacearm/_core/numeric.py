@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import importlib.metadata
 import math
 import os
 import sys
 import threading
+import time
 
 import jax
 
-from .errors import RunError
+from .errors import RunError, Stalled
 
 
 def enable_x64(enabled: bool = True) -> None:
@@ -125,16 +127,59 @@ def join_processes(coordinator: str, num_processes: int, process_id: int, *, tim
         joined.set()
 
 
+# jaxlib releases whose batched LAPACK kernels wait for their chunks on XLA's intra-op
+# thread pool: with as many CPU devices as pool threads, each device blocks one thread and
+# none is left to run the chunks (see pyproject.toml, which excludes them).
+_POOL_DEADLOCK_JAXLIB = frozenset({"0.10.0", "0.10.1", "0.10.2"})
+
+STALL_S = 120.0  # how long a wait for the devices may go without this process using CPU
+
+
+def devices_share_a_deadlock() -> bool:
+    """Whether the installed jaxlib deadlocks several CPU devices of one process."""
+    try:
+        return importlib.metadata.version("jaxlib") in _POOL_DEADLOCK_JAXLIB
+    except importlib.metadata.PackageNotFoundError:
+        return False
+
+
+def wait_until_ready(tree, what: str, *, stall_s: float = STALL_S) -> None:
+    """Block until every JAX array in ``tree`` is computed.
+
+    A computation in progress uses CPU; one whose threads all sleep never ends. The wait
+    watches this process's CPU time and raises `Stalled` naming ``what`` once ``stall_s``
+    seconds pass without any.
+
+    Raises:
+        Stalled: no CPU used for ``stall_s`` seconds before the arrays were ready.
+    """
+    arrays = [leaf for leaf in jax.tree_util.tree_leaves(tree) if hasattr(leaf, "is_ready")]
+    cpu, since = time.process_time(), time.monotonic()
+    pause = 1e-3
+    while not all(array.is_ready() for array in arrays):
+        time.sleep(pause)
+        pause = min(2 * pause, 0.25)
+        now = time.process_time()
+        if now - cpu > 0.05:  # the polling itself costs microseconds
+            cpu, since = now, time.monotonic()
+        elif time.monotonic() - since > stall_s:
+            raise Stalled(
+                f"{what}: no progress in {stall_s:g} s (every thread asleep: the devices deadlocked); "
+                "finished work is kept; rerun with one device (XLA_FLAGS=--xla_force_host_platform_device_count=1)"
+            )
+
+
 def use_every_cpu_core() -> int:
     """Expose each CPU core as a JAX device, so sweeps shard their designs over all cores.
 
     XLA runs most of a CPU program on one thread; with one host device per core the
     sweep's sharded chunks run side by side (1.5x on 2 cores, see README). Only effective
     before JAX starts its backend, and only when ``XLA_FLAGS`` does not already set the
-    count (so an explicit setting always wins). Returns the number of cores asked for.
+    count (so an explicit setting always wins) and the installed jaxlib does not deadlock
+    several CPU devices (`devices_share_a_deadlock`). Returns the number of cores asked for.
     """
     flags = os.environ.get("XLA_FLAGS", "")
-    if "xla_force_host_platform_device_count" in flags:
+    if "xla_force_host_platform_device_count" in flags or devices_share_a_deadlock():
         return 0
     count = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     count = min(count, _cgroup_cpu_limit() or count)

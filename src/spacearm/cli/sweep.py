@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._core.errors import ConfigError, RunError
+from .._core.errors import ConfigError, RunError, Stalled
 from ._help import LazyEpilogHelp
 
 ROWS_SHOWN = 20  # a longer table prints its first rows and a summary of every column
@@ -89,6 +89,14 @@ def register(subparsers) -> None:
         help="how long to wait for the other processes before giving up with one line "
         "(SPACEARM_PEER_TIMEOUT; default 60)",
     )
+    parser.add_argument(
+        "--stall-timeout",
+        metavar="SECONDS",
+        type=float,
+        default=float(os.environ.get("SPACEARM_STALL_TIMEOUT") or 120.0),
+        help="end with one line when a chunk goes this long without using any CPU, a deadlock "
+        "(SPACEARM_STALL_TIMEOUT; default 120)",
+    )
 
 
 def _join(args: argparse.Namespace) -> bool:
@@ -122,14 +130,17 @@ def _join(args: argparse.Namespace) -> bool:
 def run(args: argparse.Namespace) -> int:
     # First: jax.distributed must start before JAX's backend. Bad options raise here, as
     # any bad input does (in-process callers such as the tests keep their process).
-    if not _join(args):
-        return _run(args)
+    joined = _join(args)
+    if not args.stall_timeout > 0:
+        raise ConfigError(f"--stall-timeout {args.stall_timeout:g}: must be a positive number of seconds")
     try:
         return _run(args)
     except (ConfigError, RunError) as error:
-        # One of several processes: say why in one line and leave at once. A normal exit
-        # would wait in jax.distributed's shutdown for peers that may be gone, then abort
-        # with a C++ stack.
+        if not joined and not isinstance(error, Stalled):
+            raise
+        # One of several processes, or threads that are stuck: say why in one line and
+        # leave at once. A normal exit would wait in jax.distributed's shutdown for peers
+        # that may be gone (then abort with a C++ stack), or for the stuck threads.
         status = 2 if isinstance(error, ConfigError) else 1
         message = " ".join(str(error).splitlines())
         print(f"spacearm sweep: error: {message}", file=sys.stderr, flush=True)
@@ -153,6 +164,7 @@ def _run(args: argparse.Namespace) -> int:
             command=sys.argv,
             outputs=(write_figures, _shells_view),
             peer_timeout_s=args.peer_timeout,
+            stall_s=args.stall_timeout,
         )
     except OSError as error:  # e.g. a read-only file system under --out
         raise ConfigError(f"--out {out_dir}: cannot write the results ({error.strerror or error})") from None

@@ -31,13 +31,13 @@ from jax._src import distributed as jax_distributed  # the coordination service'
 from jax.experimental import multihost_utils
 from tqdm.auto import tqdm
 
-from .._core.errors import ConfigError, RunError
+from .._core.errors import ConfigError, RunError, Stalled
 from .._core.memory import TEMPORARIES, working_numbers
-from .._core.numeric import PEER_TIMEOUT_S
+from .._core.numeric import PEER_TIMEOUT_S, STALL_S, wait_until_ready
 from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, manifest as provenance, write_csv, write_json, write_npz
-from ..io.folders import FolderLocked, check_output_folder, lock_folder, stage_folder, swap_in
+from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
 from .designs import build_designs, design_columns
 from .metrics import METRICS, MetricSpec, design_function, metric_columns
 from .spec import SweepSpec
@@ -153,6 +153,7 @@ def run_sweep(
     stop_after_chunks: int | None = None,
     outputs: Sequence[SweepOutput] = (),
     peer_timeout_s: float = PEER_TIMEOUT_S,
+    stall_s: float = STALL_S,
 ) -> SweepResult:
     """Evaluate every design of a sweep and write ``table.csv``, ``grids.npz``, the report
     (``report:`` in the file, e.g. ``table.md``) and ``manifest.json`` into ``out_dir``
@@ -170,11 +171,15 @@ def run_sweep(
             passes `spacearm.figures.sweep.write_figures`). This layer draws nothing.
         peer_timeout_s: under ``jax.distributed``, how long to wait for the other processes
             when they compare their settings (`agree_with_peers`).
+        stall_s: how long a chunk may go without this process using any CPU before the
+            sweep ends with `Stalled` naming the chunk (a deadlock never finishes).
 
     Raises:
-        ConfigError: a second writer holds ``out_dir``, or the sweep would not fit in memory.
-        RunError: a metric came out non-finite; under ``jax.distributed``, the processes
-            disagree on the config or the code, or a peer stopped.
+        ConfigError: a second writer holds ``out_dir``, it holds another command's results,
+            the sweep would not fit in memory, or under ``jax.distributed`` the processes
+            disagree on the config or the code.
+        RunError: a metric came out non-finite, a chunk stalled (`Stalled`), or under
+            ``jax.distributed`` a peer stopped or did not answer.
     """
     wall_start = time.perf_counter()
     out_dir = Path(out_dir if out_dir is not None else spec.output)
@@ -185,7 +190,8 @@ def run_sweep(
         if jax.process_index() == 0:  # the one writer: refuse a second one before computing
             try:
                 stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
-            except FolderLocked as error:
+                claim_folder(out_dir, "sweep", label=f"--out {out_dir}")
+            except ConfigError as error:
                 if jax.process_count() == 1:
                     raise
                 refusal = str(error)  # every process must hear it, or they would wait for process 0
@@ -199,6 +205,7 @@ def run_sweep(
             command=command,
             stop_after_chunks=stop_after_chunks,
             outputs=outputs,
+            stall_s=stall_s,
         )
 
 
@@ -211,6 +218,7 @@ def _run_locked(
     command: Sequence[str] | None,
     stop_after_chunks: int | None,
     outputs: Sequence[SweepOutput],
+    stall_s: float,
 ) -> SweepResult:
     """`run_sweep` once this process may write ``out_dir``."""
     code_state = provenance.git_state()  # before this run changes any tracked result file
@@ -288,12 +296,15 @@ def _run_locked(
                 compiled = evaluate.lower(batch).compile()
                 compile_s = time.perf_counter() - t0
             values = compiled(batch)
+            wait_until_ready(values, f"sweep {spec.name}: chunk {done + 1} of {len(todo)}", stall_s=stall_s)
             piece = {c: _gather(values[c])[: stop - start] for c in columns}
             if jax.process_index() == 0:
                 write_npz(partial / f"chunk_{number:06d}.npz", **piece)
             pieces[number] = piece
             bar.update(stop - start)
     except Exception as error:
+        if isinstance(error, Stalled):
+            raise Stalled(f"{error}; {_kept_line(spans, pieces, total, partial)}") from None
         if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError, OSError)):
             raise
         # Under jax.distributed a peer that died surfaces here as a collective's error.
@@ -305,8 +316,7 @@ def _run_locked(
         ) from None
     except KeyboardInterrupt:
         bar.close()
-        kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
-        print(f"{kept:,} of {total:,} designs kept in {partial}; run the same command again to resume", file=sys.stderr)
+        print(_kept_line(spans, pieces, total, partial), file=sys.stderr)
         raise
     finally:
         bar.close()
@@ -343,6 +353,7 @@ def _run_locked(
             timings=timings,
             git=code_state,
             extra={
+                "kind": "sweep",
                 "robot_file": spec.robot_source,
                 "n_designs": total,
                 "chunk_size": chunk,
@@ -439,7 +450,7 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refu
     Each process publishes its fingerprint in the coordination service's key-value store;
     process 0 compares every peer's with its own and publishes one verdict, which every
     process waits for (at most ``timeout_s``). A mismatch ends every process with a
-    `RunError` naming the differing keys, before anything is computed or written.
+    `ConfigError` naming the differing keys, before anything is computed or written.
     ``refusal``: process 0's own reason not to run (another run holds the folder's lock),
     passed on in the verdict.
     """
@@ -479,7 +490,7 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refu
         # process sees its peers vanish and no coordination-service abort follows.
         with contextlib.suppress(Exception):
             jax.distributed.shutdown()
-        raise RunError(
+        raise ConfigError(
             f"process {rank} of {count}: refusing to run: {verdict} (every process must run the same "
             "sweep file, --set options and spacearm version)"
         )
@@ -535,6 +546,11 @@ def _previous_files(out_dir: Path) -> set[str]:
     except (OSError, ValueError, KeyError, TypeError):
         return set()
     return {name for name in listed if isinstance(name, str) and _OWN_FILES.fullmatch(name)}
+
+
+def _kept_line(spans, pieces, total: int, partial: Path) -> str:
+    kept = sum(stop - start for n, (start, stop) in enumerate(spans) if n in pieces)
+    return f"{kept:,} of {total:,} designs kept in {partial}; run the same command again to resume"
 
 
 def _check_output_dir(out_dir: Path) -> None:
