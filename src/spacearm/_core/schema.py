@@ -12,6 +12,7 @@ import math
 import os
 import re
 import reprlib
+import stat
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -28,6 +29,7 @@ __all__ = [
     "SIZE_LIMITS",
     "check_keys",
     "check_memory",
+    "check_name",
     "choice",
     "describe_yaml_error",
     "did_you_mean",
@@ -36,6 +38,7 @@ __all__ = [
     "number",
     "number_list",
     "quote",
+    "read_regular_file",
     "read_yaml",
     "robot_file_name",
 ]
@@ -48,6 +51,7 @@ MAX_YAML_NODES = 1_000_000  # values after alias expansion (an "alias bomb" expa
 MAX_YAML_DEPTH = 64  # nesting of mappings and lists
 MAX_MAGNITUDE = 1e15  # |x| of a number read from a file: far from float64 (and float32) overflow
 MAX_QUOTE = 200  # characters of a value quoted in a message
+MAX_NAME_CHARS = 128  # a robot's, sweep's or problem's name, which becomes a file or folder name
 
 _QUOTER = reprlib.Repr()
 _QUOTER.maxlevel, _QUOTER.maxdict, _QUOTER.maxlist, _QUOTER.maxtuple = 3, 6, 8, 8
@@ -141,34 +145,59 @@ def _children(node: yaml.Node) -> list[yaml.Node]:
     return []
 
 
+def read_regular_file(path: str | os.PathLike, *, what: str, limit: int) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes; `ConfigError` naming the
+    file and the reason otherwise.
+
+    A FIFO, a device or a folder is refused without reading from it (the open never
+    blocks), and so is a path that cannot name a file (a NUL byte, a loop of symbolic
+    links, a name too long, a path under a file).
+    """
+    path = os.fspath(path)
+    if "\0" in path:
+        raise ConfigError(f"{quote(path)}: a file name cannot hold a NUL byte")
+    try:
+        handle = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such {what}") from None
+    except PermissionError:
+        raise ConfigError(f"{path}: cannot read the {what} (permission denied)") from None
+    except OSError as error:
+        raise ConfigError(f"{path}: cannot read the {what} ({error.strerror or error})") from None
+    with os.fdopen(handle, "rb") as stream:
+        info = os.fstat(handle)
+        if stat.S_ISDIR(info.st_mode):
+            raise ConfigError(f"{path}: is a directory, not a {what}")
+        if not stat.S_ISREG(info.st_mode):
+            raise ConfigError(f"{path}: not a regular file (a pipe or a device?); give the {what} itself")
+        if info.st_size > limit:
+            raise ConfigError(f"{path}: the {what} is {info.st_size:,} bytes; at most {limit:,} are read")
+        try:
+            data = stream.read(limit + 1)
+        except OSError as error:
+            raise ConfigError(f"{path}: cannot read the {what} ({error.strerror or error})") from None
+    if len(data) > limit:
+        raise ConfigError(f"{path}: the {what} is over {limit:,} bytes")
+    return data
+
+
 def read_yaml(path: str | os.PathLike, *, what: str = "YAML file") -> Any:
     """Parse a YAML file; `ConfigError` for a missing, unreadable, malformed or oversized file.
 
-    Refused as well: a file over `MAX_YAML_BYTES`, a key given twice in one mapping,
-    values nested deeper than `MAX_YAML_DEPTH`, and aliases that expand past `MAX_YAML_NODES`
-    values. Only the first document is read.
+    Refused as well: anything but a regular file (`read_regular_file`), a file over
+    `MAX_YAML_BYTES`, a key given twice in one mapping, values nested deeper than
+    `MAX_YAML_DEPTH`, and aliases that expand past `MAX_YAML_NODES` values. Only the first
+    document is read.
     """
+    data = read_regular_file(path, what=what, limit=MAX_YAML_BYTES)
     path = os.fspath(path)
     try:
-        with open(path, "rb") as handle:
-            size = os.fstat(handle.fileno()).st_size
-            if size > MAX_YAML_BYTES:
-                raise ConfigError(f"{path}: the {what} is {size:,} bytes; at most {MAX_YAML_BYTES:,} are read")
-            data = handle.read(MAX_YAML_BYTES + 1)
-        if len(data) > MAX_YAML_BYTES:
-            raise ConfigError(f"{path}: the {what} is over {MAX_YAML_BYTES:,} bytes")
         text = data.decode("utf-8")
         loader = _StrictLoader(text)
         try:
             return loader.get_single_data()
         finally:
             loader.dispose()
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such {what}") from None
-    except IsADirectoryError:
-        raise ConfigError(f"{path}: is a directory, not a {what}") from None
-    except PermissionError:
-        raise ConfigError(f"{path}: cannot read the {what} (permission denied)") from None
     except UnicodeDecodeError:
         raise ConfigError(f"{path}: not a UTF-8 text file") from None
     except _Refused as error:
@@ -177,6 +206,28 @@ def read_yaml(path: str | os.PathLike, *, what: str = "YAML file") -> Any:
         raise ConfigError(f"{path}: values nest too deeply (at most {MAX_YAML_DEPTH} levels)") from None
     except yaml.YAMLError as error:
         raise ConfigError(f"{path}: {describe_yaml_error(error)}") from None
+
+
+def check_name(where: str, name: Any) -> str:
+    """``name``, checked before it becomes a file or folder name (``results/<name>/``,
+    ``<name>.html``): a string of 1 to `MAX_NAME_CHARS` printable characters, with no
+    path separator, not ``.`` or ``..``; `ConfigError` naming ``where`` otherwise."""
+    if not isinstance(name, str):
+        raise ConfigError(f"{where}: must be a string, got {quote(name)}")
+    reason = None
+    if not name:
+        reason = "must not be empty"
+    elif len(name) > MAX_NAME_CHARS:
+        reason = f"is {len(name)} characters long; at most {MAX_NAME_CHARS}"
+    elif not name.isprintable():
+        reason = "holds a control character (a NUL byte, a newline, an escape)"
+    elif "/" in name or "\\" in name or os.sep in name:
+        reason = "holds a path separator; it names a file, not a path"
+    elif name in (".", ".."):
+        reason = "cannot be '.' or '..'"
+    if reason:
+        raise ConfigError(f"{where}: {quote(name, 60)} {reason}")
+    return name
 
 
 def did_you_mean(word: str, known: Iterable[str]) -> str:
@@ -319,9 +370,7 @@ def robot_file_name(source: str, config: Any, allowed: Iterable[str]) -> str:
     if not isinstance(config, Mapping):
         raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
     check_keys(f"{source}: ", config, allowed)
-    name = config.get("name", "robot")
-    if not isinstance(name, str):
-        raise ConfigError(f"{source}: name: must be a string, got {quote(name)}")
+    name = check_name(f"{source}: name", config.get("name", "robot"))
     if "base" not in config:
         raise ConfigError(f"{source}: base: missing required key")
     return name

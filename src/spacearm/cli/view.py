@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from .._core.errors import ConfigError
+from .._core.schema import check_name
+from ..io.folders import check_output_folder
 from ._args import comma_numbers
 
 
@@ -83,6 +85,8 @@ def run(args: argparse.Namespace) -> int:
         attitude = comma_numbers(args.attitude, 3, "--attitude-rpy")
         if not args.radians:
             attitude = np.radians(attitude)
-    path = write_arm_view(robot, Path(args.out) / f"{robot.name}.html", posture, attitude_rpy=attitude)
+    name = check_name(f"{args.robot}: name", robot.name)  # the page's file name
+    check_output_folder(args.out, label=f"--out {args.out}", whole=False)
+    path = write_arm_view(robot, Path(args.out) / f"{name}.html", posture, attitude_rpy=attitude)
     print(f"view   {path} ({os.path.getsize(path) / 1e6:.2f} MB, self-contained; open it in any browser)")
     return 0

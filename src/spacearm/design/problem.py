@@ -52,7 +52,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from .._core.schema import check_keys, check_memory, choice, integer, number, read_yaml
+from .._core.schema import check_keys, check_memory, check_name, choice, integer, number, read_yaml
 from ..analysis import check_average_options
 from ..analysis.averages import joint_averages
 from ..analysis.joint_box import check_joint_box
@@ -411,9 +411,9 @@ def problem_from_mapping(
     if not isinstance(config, Mapping):
         raise ConfigError(f"{source}: an optimization problem must be a mapping")
     check_keys(f"{source}: ", config, _TOP_KEYS)
-    name = config.get("name")
-    if not isinstance(name, str) or not name:
-        raise ConfigError(f"{source}: name: a non-empty string is required")
+    if "name" not in config:
+        raise ConfigError(f"{source}: name: missing required key (it names the result folder, results/<name>/)")
+    name = check_name(f"{source}: name", config["name"])
     description = str(config.get("description", ""))
 
     # The base design: a robot file, or a planar ``fixed:`` section.

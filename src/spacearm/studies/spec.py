@@ -271,8 +271,8 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         raise ConfigError(f"{where}: chunk_size: must be a positive integer, got {chunk_size!r}")
     integer(f"{where}: chunk_size", chunk_size, least=1)  # its upper bound (SIZE_LIMITS)
     output = config.get("output", f"results/{name}")
-    if not isinstance(output, str):
-        raise ConfigError(f"{where}: output: must be a folder path")
+    if not isinstance(output, str) or not output or "\0" in output:
+        raise ConfigError(f"{where}: output: must be a folder path (a non-empty string with no NUL byte)")
     report = config.get("report")
     if report is not None and report not in REPORTS:
         raise ConfigError(f"{where}: report: unknown report {report!r}; known: {', '.join(sorted(REPORTS))}")

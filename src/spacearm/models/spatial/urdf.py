@@ -46,7 +46,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ..._core.schema import MAX_MAGNITUDE, did_you_mean, quote
+from ..._core.schema import MAX_MAGNITUDE, did_you_mean, quote, read_regular_file
 
 __all__ = [
     "ArmChain",
@@ -73,7 +73,7 @@ _KNOWN_TYPES = MOVABLE + ("fixed", "floating", "planar")
 # printed with a few digits; a body that is a thin rod sits on the triangle's edge).
 _INERTIA_RTOL = 1e-9
 # Bounds on what is read (so a hostile file cannot make the reader, or a run, blow up).
-MAX_URDF_BYTES = 64 * 2**20
+MAX_URDF_BYTES = 8 * 2**20
 MAX_ARM_JOINTS = 64
 
 
@@ -703,14 +703,12 @@ def parse_urdf(
 
 
 def read_urdf_text(path: str) -> str:
-    """A URDF file's text (at most `MAX_URDF_BYTES` + 1 characters); `ConfigError` when unreadable."""
+    """A URDF file's text (a regular file of at most `MAX_URDF_BYTES`); `ConfigError` when unreadable."""
+    data = read_regular_file(path, what="URDF file", limit=MAX_URDF_BYTES)
     try:
-        with open(path, encoding="utf-8") as handle:
-            return handle.read(MAX_URDF_BYTES + 1)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such URDF file") from None
-    except (IsADirectoryError, UnicodeDecodeError, PermissionError) as error:
-        raise ConfigError(f"{path}: cannot read the URDF file ({type(error).__name__})") from None
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: cannot read the URDF file (not UTF-8 text)") from None
 
 
 def read_urdf(
