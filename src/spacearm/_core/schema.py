@@ -22,6 +22,7 @@ from .errors import ConfigError
 
 __all__ = [
     "MAX_MAGNITUDE",
+    "MAX_OBJECTIVES",
     "MAX_QUOTE",
     "MAX_YAML_BYTES",
     "MAX_YAML_DEPTH",
@@ -51,6 +52,7 @@ MAX_YAML_NODES = 1_000_000  # values after alias expansion (an "alias bomb" expa
 MAX_YAML_DEPTH = 64  # nesting of mappings and lists
 MAX_MAGNITUDE = 1e15  # |x| of a number read from a file: far from float64 (and float32) overflow
 MAX_QUOTE = 200  # characters of a value quoted in a message
+MAX_OBJECTIVES = 6  # a design problem's objectives: the hypervolume's cost is exponential in them
 MAX_NAME_CHARS = 128  # a robot's, sweep's or problem's name, which becomes a file or folder name
 
 _QUOTER = reprlib.Repr()
@@ -297,7 +299,7 @@ SIZE_LIMITS: dict[str, int] = {
     "initial_samples": 2**20,
     "keep": 65_536,
     "candidates": 65_536,
-    "population": 100_000,
+    "population": 4096,  # non-dominated sorting compares every pair: (2 x population)^2 x objectives bytes
     "evaluations": 10**8,
     "links": 64,
     "seed": 2**32 - 1,

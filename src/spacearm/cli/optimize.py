@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
@@ -51,12 +52,16 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     import dataclasses
 
+    from .._core.errors import ConfigError
     from .._core.schema import read_yaml
     from ..design import load_problem, run_problem
     from ..design.hybrid import parse_hybrid
     from ..figures.design import plot_results
     from .validate import check_problem_memory
 
+    for option, value in (("--max-seconds", args.max_seconds), ("--nsga2-factor", args.nsga2_factor)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ConfigError(f"{option} {value:g}: must be a positive number")
     config = read_yaml(args.file, what="design problem file")
     problem = load_problem(config, name=os.fspath(args.file), base_dir=os.path.dirname(os.path.abspath(args.file)))
     check_problem_memory(os.fspath(args.file), problem)  # before the search allocates anything

@@ -41,6 +41,7 @@ def check_problem_memory(where: str, problem) -> float:
 
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     """Validate a robot, sweep or design-problem file; return (kind, one-line summary) or raise ConfigError."""
+    from ..design.hybrid import parse_hybrid
     from ..design.spatial_problem import load_design_problem
     from ..models import is_robot_mapping, robot_from_file_mapping
     from ..studies.runner import check_sweep_memory
@@ -56,6 +57,7 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     if isinstance(config, Mapping) and ("variables" in config or "objectives" in config):
         problem = load_design_problem(path)
         check_problem_memory(path, problem)
+        parse_hybrid(path, config.get("hybrid"))  # as spacearm optimize reads it
         return "design problem", f"{problem.name}: variables {', '.join(problem.variable_names)}"
     if isinstance(config, Mapping) and ("axes" in config or "robot" in config):
         spec = load_sweep(path)

@@ -52,7 +52,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from .._core.schema import check_keys, check_memory, check_name, choice, integer, number, read_yaml
+from .._core.schema import MAX_OBJECTIVES, check_keys, check_memory, check_name, choice, integer, number, read_yaml
 from ..analysis import check_average_options
 from ..analysis.averages import joint_averages
 from ..analysis.joint_box import check_joint_box
@@ -488,6 +488,11 @@ def problem_from_mapping(
     raw_objectives = config.get("objectives", list(allowed[:2]) if family.name == "planar" else default)
     if not isinstance(raw_objectives, (list, tuple)):
         raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
+    if len(raw_objectives) > MAX_OBJECTIVES:
+        raise ConfigError(
+            f"{source}: objectives: {len(raw_objectives)} listed; at most {MAX_OBJECTIVES} (the hypervolume's "
+            "cost grows exponentially with their number)"
+        )
     objectives = tuple(
         _objective_entry(f"{source}: objectives[{i}]", v, allowed, base) for i, v in enumerate(raw_objectives)
     )

@@ -122,22 +122,43 @@ def _front_table(problem: DesignProblem, result: SearchResult) -> dict[str, list
 
 def summary_table(summary: Mapping[str, Any]) -> str:
     """The run's summary as a short table: one row per method (hypervolume, share of the
-    best known, evaluations, run and compile seconds), then the comparison in one line."""
+    best known when there is more than one method, evaluations, run and compile seconds),
+    the reference point, which baseline beat the search if one did, then the comparison
+    with NSGA-II in one line."""
     best = summary["best_known_hypervolume"]
-    lines = [f"{'method':<11}{'hypervolume':>14}{'of best':>10}{'evaluations':>13}{'run s':>9}{'compile s':>11}"]
-    for name, row in summary["methods"].items():
-        share = row["hypervolume"] / best if best else float("nan")
+    methods = summary["methods"]
+    shared = len(methods) > 1  # a share of the best known, when others were measured
+    lines = [
+        f"{'method':<11}{'hypervolume':>14}"
+        + (f"{'of best':>10}" if shared else "")
+        + f"{'evaluations':>13}{'run s':>9}{'compile s':>11}"
+    ]
+    for name, row in methods.items():
+        share = f"{row['hypervolume'] / best if best else float('nan'):>10.4%}" if shared else ""
         lines.append(
-            f"{name:<11}{row['hypervolume']:>14.7g}{share:>10.4%}{row['evaluations']:>13d}"
+            f"{name:<11}{row['hypervolume']:>14.7g}{share}{row['evaluations']:>13d}"
             f"{row['run_seconds']:>9.2f}{row['compile_seconds']:>11.2f}"
         )
+    reference = ", ".join(f"{r:.6g}" for r in summary["reference_point"])
     lines.append(
-        f"reference point {', '.join(f'{r:.6g}' for r in summary['reference_point'])} "
-        f"({summary['reference_point_from']}); best known hypervolume {best:.7g} (all methods' designs)"
+        f"reference point {reference} ({summary['reference_point_from']}); "
+        + (f"best known hypervolume {best:.7g} (all methods' designs)" if shared else f"hypervolume {best:.7g}")
     )
+    if not best > 0:
+        lines.append(
+            "no design dominates the reference point, so every hypervolume is 0: set reference_point below the front"
+        )
+    main = summary["method"]
+    winners = [
+        name for name, row in methods.items() if name != main and row["hypervolume"] > methods[main]["hypervolume"]
+    ]
+    for name in winners:
+        lines.append(
+            f"the {name} baseline beat the {main} search: {methods[name]['hypervolume']:.7g} against "
+            f"{methods[main]['hypervolume']:.7g}; its designs are in pareto_{name}.csv"
+        )
     against = summary.get("against_nsga2")
     if against:
-        main = summary["method"]
         reached = against["main_wall_seconds_to_nsga2_final"]
         lines.append(
             f"NSGA-II ran {against['nsga2_wall_seconds']:.1f} s wall ({against['nsga2_wall_factor']:.3g}x {main}'s "

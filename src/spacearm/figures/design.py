@@ -221,6 +221,8 @@ def _convergence(problem, results: Mapping[str, SearchResult], summary: Mapping,
     """Archive hypervolume against evaluations and against wall time (compile included)."""
     fig, (ax_e, ax_t) = plt.subplots(1, 2, figsize=(12.0, 4.8))
     best = summary["best_known_hypervolume"] or max(r.checkpoints[-1]["hypervolume"] for r in results.values())
+    if not best > 0:  # no design dominates the reference point: the ratios would be 0 / 0
+        best = 1.0
     lowest = 1.0
     for method in ("nsga2", "gradient", "hybrid"):
         if method in results:

@@ -1,0 +1,93 @@
+"""Hostile numbers end in one line, never a traceback, a hang or an allocation past memory.
+
+The probe's cases: a NaN time factor that ran NSGA-II forever, a reference point above the
+front that divided by a zero hypervolume, a ``hybrid:`` section that ``validate`` passed
+and ``optimize`` refused, a population within the old limit that ran out of memory, and
+an unbounded number of objectives.
+"""
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from spacearm.cli import main
+from spacearm.design.run import summary_table
+
+ROOT = Path(__file__).resolve().parents[1]
+PROBLEM = ROOT / "sweeps" / "pareto-attachment.yaml"
+
+
+def problem_file(tmp_path: Path, **changes) -> Path:
+    data = yaml.safe_load(PROBLEM.read_text())
+    data.update(changes)
+    path = tmp_path / "problem.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def one_error_line(capsys) -> str:
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "error:" in line]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+@pytest.mark.parametrize("option", ["--nsga2-factor", "--max-seconds"])
+@pytest.mark.parametrize("value", ["nan", "inf", "0", "-1"])
+def test_a_time_option_that_is_not_a_positive_number_is_refused(tmp_path, capsys, option, value):
+    assert main(["optimize", str(PROBLEM), f"{option}={value}", "--out", str(tmp_path / "out")]) == 2
+    assert option in one_error_line(capsys)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("section", "field"),
+    [
+        ({"population": 1_000_000_000}, "hybrid.population"),
+        ({"generations": -1}, "hybrid.generations"),
+        ({"populaton": 64}, "populaton"),
+        ({"population": 100_000}, "hybrid.population"),
+    ],
+)
+def test_validate_reads_the_hybrid_section_as_optimize_does(tmp_path, capsys, section, field):
+    path = problem_file(tmp_path, hybrid=section)
+    assert main(["validate", str(path)]) == 2
+    assert field in one_error_line(capsys)
+    assert main(["optimize", str(path), "--no-baselines", "--out", str(tmp_path / "out")]) == 2
+    assert field in one_error_line(capsys)
+
+
+def test_the_number_of_objectives_is_bounded(tmp_path, capsys):
+    path = problem_file(tmp_path, objectives=["wbar", "S_G"] * 4, reference_point=[0.0] * 8)
+    assert main(["validate", str(path)]) == 2
+    assert "at most 6" in one_error_line(capsys)
+
+
+@pytest.mark.slow
+def test_a_reference_point_above_the_front_is_reported_not_a_traceback(tmp_path, capsys):
+    """Before: ZeroDivisionError in the convergence figure."""
+    path = problem_file(tmp_path, name="zero-hv", reference_point=[10.0, 10.0])
+    out = tmp_path / "out"
+    assert main(["optimize", str(path), "--no-baselines", "--max-seconds", "1", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "no design dominates the reference point" in printed
+    assert "of best" not in printed  # no share of a best measured against itself
+    assert (out / "convergence.png").exists()
+
+
+def test_without_baselines_the_table_gives_the_hypervolume_not_a_share(tmp_path, capsys):
+    row = {"hypervolume": 2.5, "evaluations": 10, "run_seconds": 1.0, "compile_seconds": 1.0}
+    alone = {
+        "best_known_hypervolume": 2.5,
+        "methods": {"hybrid": row},
+        "method": "hybrid",
+        "reference_point": [0.0, 0.0],
+        "reference_point_from": "problem",
+    }
+    table = summary_table(alone)
+    assert "of best" not in table and "100.0000%" not in table and "hypervolume 2.5" in table
+    grid = dict(row, hypervolume=3.0)
+    both = dict(alone, best_known_hypervolume=3.0, methods={"hybrid": row, "grid": grid})
+    table = summary_table(both)
+    assert "83.3333%" in table and "the grid baseline beat the hybrid search" in table
