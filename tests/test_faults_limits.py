@@ -91,3 +91,41 @@ def test_without_baselines_the_table_gives_the_hypervolume_not_a_share(tmp_path,
     both = dict(alone, best_known_hypervolume=3.0, methods={"hybrid": row, "grid": grid})
     table = summary_table(both)
     assert "83.3333%" in table and "the grid baseline beat the hybrid search" in table
+
+
+def test_robots_past_the_stated_sizes_are_refused_by_validate(tmp_path, capsys):
+    """Before: a 2,048-joint planar chain passed validate and 15 GB; a 256-joint tree went for 170 GB."""
+    planar = yaml.safe_load((ROOT / "configs" / "umetani1990.yaml").read_text())
+    planar["links"] = planar["links"] * 9  # 18 links
+    path = tmp_path / "planar.yaml"
+    path.write_text(yaml.safe_dump(planar))
+    assert main(["validate", str(path)]) == 2
+    assert "links: 2 to 16 links" in one_error_line(capsys)
+
+    links = ['<link name="l0"><inertial><mass value="5"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>']
+    links[0] += "</inertial></link>"
+    joints = []
+    for i in range(1, 41):
+        links.append(
+            f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" '
+            'iyz="0"/></inertial></link>'
+        )
+        joints.append(
+            f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/><child link="l{i}"/>'
+            f'<origin xyz="0 0 0.1"/><axis xyz="0 {i % 2} {1 - i % 2}"/>'
+            '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+        )
+    (tmp_path / "chain.urdf").write_text('<robot name="chain">' + "".join(links + joints) + "</robot>")
+    arm = {"urdf": "chain.urdf", "root_link": "l0", "tip": "l40"}
+    tree = {
+        "name": "two-long-arms",
+        "base": {"mass": 500.0, "com": [0, 0, 0], "inertia": [[80, 0, 0], [0, 80, 0], [0, 0, 80]]},
+        "arms": [{"name": "a", **arm}, {"name": "b", **arm, "mount": {"xyz": [0, 1, 0]}}],
+    }
+    path = tmp_path / "tree.yaml"
+    path.write_text(yaml.safe_dump(tree))
+    assert main(["validate", str(path)]) == 2
+    assert "80 movable joints in all; at most 64" in one_error_line(capsys)
+    tree["arms"] = tree["arms"][:1]
+    path.write_text(yaml.safe_dump(tree))
+    assert main(["validate", str(path)]) == 0  # one 40-joint arm is within the limits

@@ -46,11 +46,11 @@ from typing import Any
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ..._core.schema import check_keys, quote, read_yaml, robot_file_name
+from ..._core.schema import check_keys, check_name, quote, read_yaml, robot_file_name
 from ..spatial.schema import read_base, read_flag, read_lock_joints, read_mount, urdf_path
 from ..spatial.urdf import read_urdf
 from .robot import TreeLabels, TreeRobot, tree_from_chains
-from .urdf import read_urdf_tree
+from .urdf import MAX_TREE_JOINTS, read_urdf_tree
 
 __all__ = ["is_tree_config", "load_tree_robot", "tree_robot_from_mapping"]
 
@@ -128,6 +128,12 @@ def _arms_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
         chains.append(chain)
         mount_xyz.append(xyz)
         mount_rpy.append(rpy)
+    joints = sum(len(chain.joint_lower) for chain in chains)
+    if joints > MAX_TREE_JOINTS:
+        raise ConfigError(
+            f"{source}: arms: {joints} movable joints in all; at most {MAX_TREE_JOINTS} are supported "
+            "(lock some in an arm's lock_joints)"
+        )
     try:
         robot = tree_from_chains(
             chains,
@@ -158,9 +164,7 @@ def _system_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
     if not isinstance(config, Mapping):
         raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
     check_keys(f"{source}: ", config, _SYSTEM_TOP_KEYS)
-    name = config.get("name", "robot")
-    if not isinstance(name, str):
-        raise ConfigError(f"{source}: name: must be a string, got {quote(name)}")
+    name = check_name(f"{source}: name", config.get("name", "robot"))
     system = _section(f"{source}: system", config["system"], _SYSTEM_KEYS)
     base_link = _link_name(f"{source}: system.base_link", system.get("base_link"))
     tips = system.get("tips")
@@ -168,6 +172,8 @@ def _system_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
         raise ConfigError(f"{source}: system.tips: must be a list of link names, e.g. [{tips}]")
     if not isinstance(tips, list) or not tips:
         raise ConfigError(f"{source}: system.tips: must be a list of one or more link names, got {quote(tips)}")
+    if len(tips) > MAX_ARMS:
+        raise ConfigError(f"{source}: system.tips: at most {MAX_ARMS} tips, got {len(tips)}")
     tips = [_link_name(f"{source}: system.tips[{t}]", tip) for t, tip in enumerate(tips)]
     lock = read_lock_joints(f"{source}: system.lock_joints", system.get("lock_joints"))
     as_written = read_flag(f"{source}: system.inertia_as_written", system.get("inertia_as_written", False))

@@ -41,7 +41,7 @@ from ..spatial.urdf import (
 __all__ = ["MAX_TREE_JOINTS", "UrdfTree", "parse_urdf_tree", "read_urdf_tree"]
 
 # The most movable joints a tree may keep (the arms of one system together).
-MAX_TREE_JOINTS = 256
+MAX_TREE_JOINTS = 64  # movable joints of a tree: the reach planner's memory grows steeply with them
 
 
 @dataclasses.dataclass(frozen=True)
