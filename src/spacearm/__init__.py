@@ -34,6 +34,7 @@ from .kinematics import (
     tip_position as tip_position,
 )
 from .models import family_of as family_of, load_robot as load_robot
+from .models.budget import MassLine as MassLine, mass_budget as mass_budget
 from .models.planar import PlanarRobot as PlanarRobot, stack_robots as stack_robots, umetani1990 as umetani1990
 from .models.planar.closed_forms import (
     angular_momentum as angular_momentum,
@@ -77,6 +78,7 @@ _LAZY = {
 }
 
 __all__ = [
+    "MassLine",
     "ConfigError",
     "PlanarRobot",
     "SpatialRobot",
@@ -96,6 +98,7 @@ __all__ = [
     "fixed_base_manipulability",
     "generalized_jacobian",
     "load_robot",
+    "mass_budget",
     "manipulability",
     "manipulability_ellipse",
     "manipulability_ellipsoid",

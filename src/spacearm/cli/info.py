@@ -1,4 +1,6 @@
-"""``spacearm info``: versions, devices and the float64 flag."""
+"""``spacearm info [ROBOT]``: versions, devices and the float64 flag; with a robot file,
+its mass budget (the bus, each root body and what was merged into it, the moving links
+of each arm, the total)."""
 
 from __future__ import annotations
 
@@ -8,11 +10,15 @@ import sys
 
 
 def register(subparsers) -> None:
-    subparsers.add_parser(
+    parser = subparsers.add_parser(
         "info",
-        help="versions, devices and the float64 flag",
-        description="Print versions, devices and the float64 flag.",
+        help="versions, devices and the float64 flag; a robot's mass budget",
+        description=(
+            "Print versions, devices and the float64 flag. With ROBOT, print its mass budget instead: the bus, "
+            "each rigid root body and the URDF links merged into it, the moving links of each arm, and the total."
+        ),
     )
+    parser.add_argument("robot", nargs="?", help="a robot YAML file, e.g. configs/dual-ur5-servicer.yaml")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -21,6 +27,12 @@ def run(args: argparse.Namespace) -> int:
 
     from .. import __version__
     from .._core.numeric import x64_enabled
+    from ..models import load_robot
+    from ..models.budget import format_mass_budget
+
+    if args.robot is not None:
+        print(format_mass_budget(load_robot(args.robot)))
+        return 0
 
     print(f"spacearm {__version__}")
     print(f"python   {platform.python_version()} ({sys.executable})")

@@ -82,6 +82,11 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..models import load_robot
+    from ..models.budget import format_mass_budget
+
     kind, summary = validate_file(args.file)
     print(f"{args.file}: valid {kind} ({summary})")
+    if kind == "robot":
+        print(format_mass_budget(load_robot(args.file)))
     return 0

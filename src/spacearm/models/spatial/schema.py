@@ -10,6 +10,7 @@ arm:
   tip: tool0
   lock_joints: {}            # joint: value (rad or m), for joints held fixed
   lock_others: false         # true: hold every movable joint off the path at 0 (or its nearest limit)
+  drop_others: false         # true: leave out every movable joint off the path, with all below it
   inertia_as_written: false  # true: take link inertias that break the triangle inequality
 ```
 
@@ -49,7 +50,7 @@ __all__ = [
 _TOP_KEYS = {"name", "description", "base", "mount", "arm"}
 _BASE_KEYS = {"mass", "com", "inertia"}
 _MOUNT_KEYS = {"xyz", "rpy", "rpy_deg"}
-_ARM_KEYS = {"urdf", "root_link", "tip", "lock_joints", "lock_others", "inertia_as_written"}
+_ARM_KEYS = {"urdf", "root_link", "tip", "lock_joints", "lock_others", "drop_others", "inertia_as_written"}
 _PACKAGE_KEYS = {"package", "path"}
 
 
@@ -185,6 +186,7 @@ def spatial_robot_from_mapping(
     lock = read_lock_joints(f"{source}: arm.lock_joints", arm.get("lock_joints"))
     as_written = read_flag(f"{source}: arm.inertia_as_written", arm.get("inertia_as_written", False))
     lock_others = read_flag(f"{source}: arm.lock_others", arm.get("lock_others", False))
+    drop_others = read_flag(f"{source}: arm.drop_others", arm.get("drop_others", False))
     urdf = urdf_path(source, arm, os.fspath(base_dir))
     try:
         chain = read_urdf(
@@ -195,6 +197,7 @@ def spatial_robot_from_mapping(
             inertia_as_written=as_written,
             fields=f"{source}: arm.",
             lock_others=lock_others,
+            drop_others=drop_others,
         )
     except ConfigError as error:  # a problem inside the URDF: name the robot file's field first
         if str(error).startswith(f"{source}: "):

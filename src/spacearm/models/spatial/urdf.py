@@ -64,6 +64,7 @@ __all__ = [
     "read_urdf_text",
     "rigid_closure",
     "rpy_matrix",
+    "side_branches",
     "unlocked_message",
 ]
 
@@ -540,7 +541,10 @@ def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -
     """
     shown = ", ".join(f"'{j.name}' ({j.kind})" for j in joints)
     example = ", ".join(f"{j.name}: {held_value(j):g}" for j in joints[:2])
-    others = f", or set {keys}lock_others: true to hold each at 0 (or its nearest limit)"
+    others = (
+        f", or set {keys}lock_others: true to hold each at 0 (or its nearest limit), or {keys}drop_others: "
+        "true to leave out each with everything below it"
+    )
     if len(joints) == 1:
         return (
             f"{source}: joint {shown} is {where} and not locked; add it to "
@@ -550,6 +554,25 @@ def unlocked_message(source: str, joints: list[_Joint], where: str, keys: str) -
         f"{source}: {len(joints)} joints are {where} and not locked: {shown}; add them to "
         f"{keys}lock_joints (e.g. {{{example}{', ...' if len(joints) > 2 else ''}}}) to hold them fixed{others}"
     )
+
+
+def side_branches(
+    source: str, others: list[_Joint], locks: Mapping[str, float], *, hold: bool, drop: bool, where: str, keys: str
+) -> tuple[dict[str, float], set[str]]:
+    """What becomes of the movable joints ``others`` off the kept paths: held (``hold``,
+    `hold_others`: their links merge into the bodies), dropped with everything below them
+    (``drop``: their mass leaves the model), or refused naming them.
+
+    Returns:
+        The joints to hold with their values, and the joints that cut the bodies off.
+    """
+    if hold and drop:
+        raise ConfigError(f"{source}: give {keys}lock_others or {keys}drop_others, not both")
+    if others and not (hold or drop):
+        raise ConfigError(unlocked_message(source, others, where, keys))
+    if drop:
+        return {}, {joint.name for joint in others}
+    return hold_others(others, locks), set()
 
 
 Pose = tuple[str, np.ndarray, np.ndarray]
@@ -604,6 +627,7 @@ def parse_urdf(
     fields: str | None = None,
     lock_others: bool = False,
     keys: str = "arm.",
+    drop_others: bool = False,
 ) -> ArmChain:
     """Read the arm from URDF text. See the module docstring for the rules.
 
@@ -619,6 +643,8 @@ def parse_urdf(
         lock_others: hold every movable joint off the root-to-tip path (and not in
             ``lock_joints``) at 0, or at its nearest limit when 0 is outside them.
         keys: the robot-file section named in advice (``"arm."``, ``"arms[1]."``).
+        drop_others: leave out every movable joint off the path (and not in
+            ``lock_joints``) with everything below it: "just the arm" of a larger robot.
 
     Raises:
         ConfigError: naming the file and the link, joint or attribute.
@@ -657,13 +683,14 @@ def parse_urdf(
         for joint in below
         if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints
     ]
-    if others and not lock_others:
-        where = f"off the path from '{root_link}' to '{tip}'"
-        raise ConfigError(unlocked_message(source, others, where, keys))
-    lock_joints.update(hold_others(others, lock_joints))
+    where = f"off the path from '{root_link}' to '{tip}'"
+    held, dropped = side_branches(
+        source, others, lock_joints, hold=lock_others, drop=drop_others, where=where, keys=keys
+    )
+    lock_joints.update(held)
 
     starts = [root_link] + [j.child for j in arm]
-    bodies = [rigid_closure(document, start, arm_names, lock_joints) for start in starts]
+    bodies = [rigid_closure(document, start, arm_names | dropped, lock_joints) for start in starts]
     for body in bodies:
         for name, _, _ in body:
             check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
@@ -721,6 +748,7 @@ def read_urdf(
     fields: str | None = None,
     lock_others: bool = False,
     keys: str = "arm.",
+    drop_others: bool = False,
 ) -> ArmChain:
     """Read the arm from a URDF file (see `parse_urdf`).
 
@@ -739,4 +767,5 @@ def read_urdf(
         fields=fields,
         lock_others=lock_others,
         keys=keys,
+        drop_others=drop_others,
     )

@@ -70,6 +70,7 @@ class TreeLabels:
         joint_names: ``n`` joint names (an arm's prefix added where two arms share a URDF).
         tip_names: ``k`` tip names (the tip link, or ``arm/link`` where arms share a URDF).
         root_names: ``r`` names of the root bodies (the arm names of an ``arms:`` file).
+        root_links: ``r`` tuples of the URDF links merged into each root body.
         joint_roots: ``n`` index of the root (arm) each joint belongs to.
         urdf_types: ``n`` URDF joint types as written (``"continuous"`` kept).
         body_links: ``n`` tuples of the URDF links merged into each body.
@@ -80,6 +81,7 @@ class TreeLabels:
     joint_names: tuple[str, ...] = ()
     tip_names: tuple[str, ...] = ()
     root_names: tuple[str, ...] = ()
+    root_links: tuple[tuple[str, ...], ...] = ()
     joint_roots: tuple[int, ...] = ()
     urdf_types: tuple[str, ...] = ()
     body_links: tuple[tuple[str, ...], ...] = ()
@@ -528,6 +530,7 @@ def tree_from_chains(
             joint_names=tuple(joint_names),
             tip_names=tuple(label(arm, c.tip) for arm, c in zip(arm_names, chains, strict=True)),
             root_names=tuple(arm_names),
+            root_links=tuple(c.body_links[0] for c in chains),
             joint_roots=tuple(joint_roots),
             urdf_types=tuple(t for c in chains for t in c.urdf_types),
             body_links=tuple(b for c in chains for b in c.body_links[1:]),

@@ -55,9 +55,19 @@ from .urdf import MAX_TREE_JOINTS, read_urdf_tree
 __all__ = ["is_tree_config", "load_tree_robot", "tree_robot_from_mapping"]
 
 _ARMS_TOP_KEYS = {"name", "description", "base", "arms"}
-_SYSTEM_TOP_KEYS = {"name", "description", "system"}
-_ARM_KEYS = {"name", "urdf", "root_link", "tip", "lock_joints", "lock_others", "mount", "inertia_as_written"}
-_SYSTEM_KEYS = {"urdf", "base_link", "tips", "lock_joints", "lock_others", "inertia_as_written"}
+_SYSTEM_TOP_KEYS = {"name", "description", "system", "base", "mount"}
+_ARM_KEYS = {
+    "name",
+    "urdf",
+    "root_link",
+    "tip",
+    "lock_joints",
+    "lock_others",
+    "drop_others",
+    "mount",
+    "inertia_as_written",
+}
+_SYSTEM_KEYS = {"urdf", "base_link", "tips", "lock_joints", "lock_others", "drop_others", "inertia_as_written"}
 # At most this many arms in one file.
 MAX_ARMS = 32
 
@@ -110,6 +120,7 @@ def _arms_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
         lock = read_lock_joints(f"{source}: {section}.lock_joints", arm.get("lock_joints"))
         as_written = read_flag(f"{source}: {section}.inertia_as_written", arm.get("inertia_as_written", False))
         lock_others = read_flag(f"{source}: {section}.lock_others", arm.get("lock_others", False))
+        drop_others = read_flag(f"{source}: {section}.drop_others", arm.get("drop_others", False))
         urdf = urdf_path(source, arm, base_dir, section)
         try:
             chain = read_urdf(
@@ -120,6 +131,7 @@ def _arms_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
                 inertia_as_written=as_written,
                 fields=f"{source}: {section}.",
                 lock_others=lock_others,
+                drop_others=drop_others,
                 keys=f"{section}.",
             )
         except ConfigError as error:
@@ -160,6 +172,39 @@ def _arms_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
     return robot
 
 
+def _system_bus(config: Mapping, source: str, base_link: str, urdf: str, tree) -> tuple[dict, dict]:
+    """The bus and the root body of a ``system:`` file, as `TreeRobot` fields.
+
+    Without ``base:`` the bus is ``base_link`` with its rigid attachments, as written. With
+    ``base:`` (a real bus) that body becomes the root, fixed to the bus at ``mount:``.
+    """
+    f = lambda x: np.asarray(x, dtype=np.float64)
+    if "base" not in config:
+        if "mount" in config:
+            raise ConfigError(f"{source}: mount: places system.base_link on a bus, which needs a base: section")
+        if tree.body_mass[0] <= 0:
+            raise ConfigError(
+                f"{source}: system.base_link: the bus '{base_link}' and the links rigidly attached to it "
+                f"({', '.join(tree.body_links[0][:6])}) have no mass in {urdf}"
+            )
+        bus = {
+            "base_mass": f(tree.body_mass[0]),
+            "base_com": f(tree.body_com[0]),
+            "base_inertia": f(tree.body_inertia[0]),
+        }
+        root = {"root_mass": np.zeros(1), "root_com": np.zeros((1, 3)), "root_inertia": np.zeros((1, 3, 3))}
+        return bus, {**root, "mount_xyz": np.zeros((1, 3)), "mount_rpy": np.zeros((1, 3))}
+    base_mass, base_com, base_inertia = read_base(source, config)
+    xyz, rpy = read_mount(f"{source}: mount", config.get("mount", {}))
+    bus = {"base_mass": f(base_mass), "base_com": f(base_com), "base_inertia": f(base_inertia)}
+    root = {
+        "root_mass": f(tree.body_mass[:1]),
+        "root_com": f(tree.body_com[:1]),
+        "root_inertia": f(tree.body_inertia[:1]),
+    }
+    return bus, {**root, "mount_xyz": f(xyz)[None], "mount_rpy": f(rpy)[None]}
+
+
 def _system_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
     if not isinstance(config, Mapping):
         raise ConfigError(f"{source}: the robot description must be a mapping, got {type(config).__name__}")
@@ -178,6 +223,7 @@ def _system_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
     lock = read_lock_joints(f"{source}: system.lock_joints", system.get("lock_joints"))
     as_written = read_flag(f"{source}: system.inertia_as_written", system.get("inertia_as_written", False))
     lock_others = read_flag(f"{source}: system.lock_others", system.get("lock_others", False))
+    drop_others = read_flag(f"{source}: system.drop_others", system.get("drop_others", False))
     urdf = urdf_path(source, system, base_dir, "system")
     try:
         tree = read_urdf_tree(
@@ -186,28 +232,19 @@ def _system_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
             tips=tips,
             lock_joints=lock,
             lock_others=lock_others,
+            drop_others=drop_others,
             inertia_as_written=as_written,
             fields=f"{source}: system.",
             keys="system.",
         )
     except ConfigError as error:
         raise _inside_urdf(source, "system.urdf", error) from None
-    if tree.body_mass[0] <= 0:
-        raise ConfigError(
-            f"{source}: system.base_link: the bus '{base_link}' and the links rigidly attached to it "
-            f"({', '.join(tree.body_links[0][:6])}) have no mass in {urdf}"
-        )
     f = lambda x: np.asarray(x, dtype=np.float64)
+    bus, root = _system_bus(config, source, base_link, urdf, tree)
     try:
         return TreeRobot(
-            base_mass=f(tree.body_mass[0]),
-            base_com=f(tree.body_com[0]),
-            base_inertia=f(tree.body_inertia[0]),
-            mount_xyz=np.zeros((1, 3)),
-            mount_rpy=np.zeros((1, 3)),
-            root_mass=np.zeros(1),
-            root_com=np.zeros((1, 3)),
-            root_inertia=np.zeros((1, 3, 3)),
+            **bus,
+            **root,
             joint_rotation=f(tree.joint_rotation),
             joint_translation=f(tree.joint_translation),
             joint_axis=f(tree.joint_axis),
@@ -226,6 +263,7 @@ def _system_robot(config: Mapping, source: str, base_dir: str) -> TreeRobot:
                 joint_names=tree.joint_names,
                 tip_names=tree.tips,
                 root_names=(base_link,),
+                root_links=tree.body_links[:1],
                 joint_roots=(0,) * tree.n_joints,
                 urdf_types=tree.urdf_types,
                 body_links=tree.body_links[1:],

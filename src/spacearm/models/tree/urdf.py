@@ -30,12 +30,11 @@ from ..spatial.urdf import (
     check_kinds,
     check_link,
     check_lock_joints,
-    hold_others,
     merge_links,
     parse_document,
     read_urdf_text,
     rigid_closure,
-    unlocked_message,
+    side_branches,
 )
 
 __all__ = ["MAX_TREE_JOINTS", "UrdfTree", "parse_urdf_tree", "read_urdf_tree"]
@@ -108,6 +107,7 @@ def parse_urdf_tree(
     inertia_as_written: bool = False,
     fields: str | None = None,
     keys: str = "system.",
+    drop_others: bool = False,
 ) -> UrdfTree:
     """Read a branched system from URDF text (see the module docstring for the rules).
 
@@ -122,6 +122,8 @@ def parse_urdf_tree(
         fields: where the fields were given (``"robot.yaml: system."``): messages about them
             name that file and field, and the URDF after it.
         keys: the robot-file section named in advice (``"system."``).
+        drop_others: leave out every other movable joint off the tip paths with
+            everything below it (their mass leaves the model).
 
     Raises:
         ConfigError: naming the file and the field, link or joint.
@@ -176,13 +178,14 @@ def parse_urdf_tree(
     others = [
         joint for joint in below if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints
     ]
-    if others and not lock_others:
-        where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
-        raise ConfigError(unlocked_message(source, others, where, keys))
-    lock_joints.update(hold_others(others, lock_joints))
+    where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
+    held, dropped = side_branches(
+        source, others, lock_joints, hold=lock_others, drop=drop_others, where=where, keys=keys
+    )
+    lock_joints.update(held)
 
     starts = [base_link] + [joint.child for joint in order]
-    bodies = [rigid_closure(document, start, kept, lock_joints) for start in starts]
+    bodies = [rigid_closure(document, start, kept | dropped, lock_joints) for start in starts]
     for body in bodies:
         for name, _, _ in body:
             check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
