@@ -133,7 +133,8 @@ def test_a_killed_peer_ends_the_other_process_with_one_line(tmp_path):
 
 def test_a_locked_folder_refuses_every_process(tmp_path):
     """Another run holds the output folder: process 0 says so, and its peer hears it rather
-    than waiting for process 0 until the heartbeat check aborts it."""
+    than waiting for process 0 until the heartbeat check aborts it. A held folder is bad input
+    (exit 2), as it is for one process."""
     from tests.test_faults_folders import _HOLDER, SRC
 
     sweep = _sweep(tmp_path)
@@ -149,5 +150,5 @@ def test_a_locked_folder_refuses_every_process(tmp_path):
         holder.kill()
         holder.wait()
     for rank, (p, (_, err)) in enumerate(zip(processes, outputs, strict=False)):
-        assert p.returncode == 1, f"process {rank}: {err}"
+        assert p.returncode == 2, f"process {rank}: {err}"
         assert f"another spacearm run (PID {holder.pid})" in err and len(_error_lines(err)) == 1, err
