@@ -45,12 +45,14 @@ from .table2 import REPORTS
 
 __all__ = [
     "DESIGNS_PER_STEP",
+    "STEP_MEMORY_BYTES",
     "NonFiniteResult",
     "SweepOutput",
     "SweepResult",
     "agree_with_peers",
     "check_finite",
     "check_sweep_memory",
+    "designs_per_step",
     "differing_keys",
     "memory_estimate",
     "run_sweep",
@@ -58,6 +60,9 @@ __all__ = [
 
 # Designs vmapped together inside a chunk (see run_sweep): small enough for the cache.
 DESIGNS_PER_STEP = 32
+# The estimated working sets of the designs computed side by side, all devices together
+# (`designs_per_step`): a dual-arm humanoid's joint-box averages then run 2 at a time.
+STEP_MEMORY_BYTES = 512 * 2**20
 
 # A writer run after the table, grids and report: (spec, out_dir, table: column -> values
 # per design) -> the paths it wrote (listed in the manifest).
@@ -232,6 +237,7 @@ def _run_locked(
         "config": spec.config,
         "axis_order": [a.name for a in spec.axes],
         "chunk": chunk,
+        "designs_per_step": designs_per_step(spec, devices)[0],
         "float64": bool(jax.config.jax_enable_x64),
         "spacearm": __version__,
         "jax": jax.__version__,
@@ -242,15 +248,9 @@ def _run_locked(
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("designs"))
     # Each device walks its share of a chunk in vmapped steps of a few designs: the
     # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
-    # slower per design on CPU), while chunk_size alone bounds the memory.
-    per_device = chunk // devices
-    per_step = min(
-        [DESIGNS_PER_STEP]
-        + [METRICS[m.name].designs_per_step for m in spec.metrics if METRICS[m.name].designs_per_step]
-    )
-    evaluate = _evaluator(
-        json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True), min(per_step, per_device), mesh
-    )
+    # slower per design on CPU); the step's size comes from the metrics' memory estimate.
+    per_step, design_bytes = designs_per_step(spec, devices)
+    evaluate = _evaluator(json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True), per_step, mesh)
     columns = metric_columns(spec.metrics)
 
     compile_s = 0.0
@@ -357,6 +357,9 @@ def _run_locked(
                 "robot_file": spec.robot_source,
                 "n_designs": total,
                 "chunk_size": chunk,
+                "designs_per_step": per_step,  # side by side on each device, from the memory estimate
+                "memory_estimate_bytes": round(memory_estimate(spec, devices)[0]),
+                "design_working_set_bytes": round(design_bytes),
                 "resumed_chunks": len(spans) - len(todo),
                 "files": sorted(str(p.relative_to(staging)) for p in files),
             },
@@ -496,14 +499,32 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refu
         )
 
 
-def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float, str]:
-    """Bytes a sweep holds at once (designs, results, every metric's working set of the
-    designs computed side by side, `spacearm._core.memory.working_numbers`) and the advice
-    that makes it smaller."""
+def designs_per_step(spec: SweepSpec, devices: int | None = None) -> tuple[int, float]:
+    """How many designs each device evaluates side by side, and one design's working set
+    in bytes (the largest of its metrics', `spacearm._core.memory.working_numbers`).
+
+    At most `DESIGNS_PER_STEP` (and each metric's own cap) and the designs a device holds
+    in a chunk, and few enough that all devices together stay within `STEP_MEMORY_BYTES`:
+    a robot with many joints or a metric with large sample blocks runs fewer at once.
+    """
     devices = devices or jax.device_count()
     n = spec.robot.n_joints if hasattr(spec.robot, "n_joints") else spec.robot.n_links
     chunk = max(devices, int(math.ceil(min(spec.chunk_size, spec.n_designs) / devices)) * devices)
-    in_flight = devices * min(DESIGNS_PER_STEP, max(1, chunk // devices))
+    design_bytes = 0.0
+    for metric in spec.metrics:
+        numbers, _ = working_numbers(metric.name, metric.options, n, joint_average=metric.name in _JOINT_AVERAGES)
+        design_bytes = max(design_bytes, 8.0 * numbers * TEMPORARIES)
+    caps = [METRICS[m.name].designs_per_step for m in spec.metrics if METRICS[m.name].designs_per_step]
+    fits = int(STEP_MEMORY_BYTES // (devices * design_bytes)) if design_bytes else DESIGNS_PER_STEP
+    return max(1, min([DESIGNS_PER_STEP, chunk // devices, fits, *caps])), design_bytes
+
+
+def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float, str]:
+    """Bytes a sweep holds at once (designs, results, every metric's working set of the
+    designs computed side by side, `designs_per_step`) and the advice that makes it smaller."""
+    devices = devices or jax.device_count()
+    n = spec.robot.n_joints if hasattr(spec.robot, "n_joints") else spec.robot.n_links
+    in_flight = devices * designs_per_step(spec, devices)[0]
     worst, advice = 0.0, ""
     for metric in spec.metrics:
         numbers, option = working_numbers(metric.name, metric.options, n, joint_average=metric.name in _JOINT_AVERAGES)
