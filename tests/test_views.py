@@ -26,6 +26,7 @@ import jax
 import matplotlib.image
 import numpy as np
 import pytest
+import yaml
 
 import spacearm as sa
 from spacearm.cli import main
@@ -484,3 +485,17 @@ def test_clicking_the_front_draws_that_design(front_pages, tmp_path):
     robot = jax.tree_util.tree_map(np.asarray, problem.robot(designs[row]))
     np.testing.assert_allclose(result["tip"], sa.tip_position(robot, np.zeros(robot.n_joints)), rtol=0, atol=1e-9)
     assert f"{problem.variable_names[0]} = {designs[row, 0]:.6g}" in result["readout"]
+
+
+def test_a_name_with_markup_stays_inside_its_script_block(tmp_path):
+    """Before: a robot named '<!--<script>' broke the page (the data block never closed)."""
+    robot = yaml.safe_load((ROOT / "configs" / "umetani1990.yaml").read_text())
+    robot["name"] = "<!--<script>x&"
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump(robot))
+    assert main(["view", str(path), "--out", str(tmp_path / "out")]) == 0
+    page = next((tmp_path / "out").glob("*.html")).read_text()
+    block = re.search(r"<script>window\.SPACEARM = (.*?);</script>", page, flags=re.S).group(1)
+    assert "<" not in block and ">" not in block and "&" not in block
+    assert "<!--<script>x&" in json.dumps(json.loads(block), ensure_ascii=False)
+    assert "&lt;!--&lt;script&gt;x&amp;</title>" in page

@@ -67,7 +67,9 @@ def plotly_bundle() -> str:
 
 
 def _json(value) -> str:
-    """JSON for a ``<script>`` block: finite numbers, NaN/inf as null, ``</`` escaped."""
+    """JSON for a ``<script>`` block: finite numbers, NaN/inf as null, and ``<``, ``>`` and
+    ``&`` as ``\\u`` escapes, so no name can close the block or open an HTML comment
+    (``</script>``, ``<!--<script>``) in it."""
 
     def clean(x):
         if isinstance(x, dict):
@@ -82,7 +84,8 @@ def _json(value) -> str:
             return int(x)
         return x
 
-    return json.dumps(clean(value), separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    text = json.dumps(clean(value), separators=(",", ":"), allow_nan=False)
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
 
 
 def write_page(path: str | Path, *, title: str, note: str, data: dict) -> Path:
