@@ -129,3 +129,19 @@ def test_robots_past_the_stated_sizes_are_refused_by_validate(tmp_path, capsys):
     tree["arms"] = tree["arms"][:1]
     path.write_text(yaml.safe_dump(tree))
     assert main(["validate", str(path)]) == 0  # one 40-joint arm is within the limits
+
+
+def test_joint_limit_errors_answer_in_the_units_typed(tmp_path, capsys):
+    ur5 = str(ROOT / "configs" / "ur5-smallsat.yaml")
+    out = str(tmp_path / "out")
+    assert main(["reach", ur5, "--from", "0,400,0,0,0,0", "--to=0.3,0.2,0.8", "--out", out]) == 2
+    assert "joint 2 (shoulder_lift_joint) = 400 deg is outside its limits [-360, 360] deg" in one_error_line(capsys)
+    assert main(["reach", ur5, "--from", "0,7,0,0,0,0", "--radians", "--to=0.3,0.2,0.8", "--out", out]) == 2
+    assert "= 7 rad is outside its limits [-6.28319, 6.28319] rad" in one_error_line(capsys)
+    planar = yaml.safe_load((ROOT / "configs" / "umetani1990.yaml").read_text())
+    planar["links"][1]["limit_deg"] = [-150, 150]
+    path = tmp_path / "limited.yaml"
+    path.write_text(yaml.safe_dump(planar))
+    assert main(["reach", str(path), "--from", "0,-60,170", "--to=-2.5,-3", "--out", out]) == 2
+    assert "joint 2 = 170 deg is outside its limits [-150, 150] deg" in one_error_line(capsys)
+    assert not (tmp_path / "out").exists() and not (tmp_path / ".out.lock").exists()

@@ -6,7 +6,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 
-__all__ = ["comma_numbers"]
+__all__ = ["check_limits", "comma_numbers"]
 
 
 def comma_numbers(text: str, count: int, what: str) -> np.ndarray:
@@ -18,3 +18,25 @@ def comma_numbers(text: str, count: int, what: str) -> np.ndarray:
     if values.size != count or not np.all(np.isfinite(values)):
         raise ConfigError(f"{what}: expected {count} finite comma-separated numbers, got {text!r}")
     return values
+
+
+def check_limits(what: str, values, lower, upper, *, degrees, prismatic=False, names=None, first: int = 1) -> None:
+    """ConfigError naming the first of ``values`` (rad, or m where ``prismatic``) outside
+    ``[lower, upper]``, in the units the user typed: degrees where ``degrees`` is set
+    (flags per joint, or one for all).
+
+    ``first``: the number the message gives the first joint (1-based by default).
+    """
+    values, lower, upper = (np.asarray(a, dtype=float) for a in (values, lower, upper))
+    outside = (values < lower) | (values > upper)
+    if not np.any(outside):
+        return
+    j = int(np.argmax(outside))
+    scale, unit = (1.0, "m") if np.broadcast_to(prismatic, values.shape)[j] else (1.0, "rad")
+    if np.broadcast_to(degrees, values.shape)[j] and unit == "rad":
+        scale, unit = 180.0 / np.pi, "deg"
+    name = f" ({names[j]})" if names is not None else ""
+    raise ConfigError(
+        f"{what}: joint {j + first}{name} = {values[j] * scale:.6g} {unit} is outside its limits "
+        f"[{lower[j] * scale:.6g}, {upper[j] * scale:.6g}] {unit}"
+    )

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._core.errors import ConfigError, RunError
 from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
-from ._args import comma_numbers
+from ._args import check_limits, comma_numbers
 
 # The files a reach run writes; the other entries of --out are kept.
 _REACH_FILES = frozenset({"reach.png", "reach.npz", "reach.gif", "reach.html"})
@@ -187,6 +187,7 @@ def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
     phi = comma_numbers(args.start, robot.n_links + 1, "--from")
     if not args.radians:
         phi = np.radians(phi)
+    check_limits("--from", phi[1:], robot.joint_lower, robot.joint_upper, degrees=not args.radians)
     target = comma_numbers(args.target, 2, "--to")
     plan = plan_reach(robot, phi, target)
     arrays = dict(
@@ -288,6 +289,10 @@ def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndar
     prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
     if not args.radians:
         q = np.where(prismatic, q, np.radians(q))
+    names = getattr(robot, "joint_names", None)
+    check_limits(
+        "--from", q, robot.joint_lower, robot.joint_upper, degrees=~prismatic & (not args.radians), names=names
+    )
     R0 = np.eye(3)
     if args.attitude is not None:
         rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
