@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+import spacearm as sa
 from spacearm.cli import main
 from spacearm.design.run import summary_table
 
@@ -145,3 +146,22 @@ def test_joint_limit_errors_answer_in_the_units_typed(tmp_path, capsys):
     assert main(["reach", str(path), "--from", "0,-60,170", "--to=-2.5,-3", "--out", out]) == 2
     assert "joint 2 = 170 deg is outside its limits [-150, 150] deg" in one_error_line(capsys)
     assert not (tmp_path / "out").exists() and not (tmp_path / ".out.lock").exists()
+
+
+def test_the_reach_loop_settings_are_options_checked_up_front(tmp_path, capsys):
+    paper = str(ROOT / "configs" / "umetani1990.yaml")
+    ur5 = str(ROOT / "configs" / "ur5-smallsat.yaml")
+    out = ["--out", str(tmp_path / "out")]
+    reach = ["reach", paper, "--from", "0,-60,120", "--to=-2.5,-3", *out]
+    assert main([*reach, "--loop-counts", "0,2"]) == 2
+    assert "--loop-counts 0,2" in one_error_line(capsys)
+    assert main([*reach, "--harmonics", "99"]) == 2
+    assert "--harmonics 99" in one_error_line(capsys)
+    pose = ["reach", ur5, "--from", "0,-60,90,0,60,0", "--to=0.3,0.2,0.8", "--to-rpy", "0,0,0", *out]
+    assert main([*pose, "--harmonics", "3"]) == 2
+    assert "--harmonics" in one_error_line(capsys)
+    for robot in (paper, ur5):
+        settings = sa.loop_settings(sa.load_robot(robot), loop_counts=(2, 3), harmonics=5)
+        assert settings.loop_counts == (2, 3) and settings.harmonics == 5
+    with pytest.raises(sa.ConfigError, match="no_such"):
+        sa.loop_settings(sa.load_robot(paper), no_such=1)

@@ -31,6 +31,7 @@ from .kinematics import (
     manipulability as manipulability,
     manipulability_ellipsoid as manipulability_ellipsoid,
     relative_jacobian as relative_jacobian,
+    tip_pose as tip_pose,
     tip_position as tip_position,
 )
 from .models import family_of as family_of, load_robot as load_robot
@@ -70,6 +71,7 @@ _LAZY = {
     "PosePath": "motion",
     "plan_reorientation": "planning",
     "plan_reach": "planning",
+    "loop_settings": "planning",
     "plan_pose_reach": "planning",
     "load_problem": "design",
     "pareto_search": "design",
@@ -108,6 +110,7 @@ __all__ = [
     "robot_frame_tip_position",
     "stack_robots",
     "tip_coefficients",
+    "tip_pose",
     "tip_position",
     "umetani1990",
     *_LAZY,
@@ -135,6 +138,7 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
         straight_tip_path_history as straight_tip_path_history,
     )
     from .planning import (
+        loop_settings as loop_settings,
         plan_pose_reach as plan_pose_reach,
         plan_reach as plan_reach,
         plan_reorientation as plan_reorientation,

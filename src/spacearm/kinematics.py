@@ -42,6 +42,7 @@ __all__ = [
     "relative_jacobian",
     "square_determinant",
     "straight_path_rates",
+    "tip_pose",
     "tip_position",
 ]
 
@@ -154,6 +155,31 @@ def tip_position(robot, posture: jax.Array, base_rotation: jax.Array | None = No
     fast = family.fast_paths.get("tip_position")
     p = fast(robot, posture) if fast is not None else generic_tip_position(robot, posture)
     return _rotate_vector(family, robot, p, base_rotation)
+
+
+@jax.jit
+def tip_pose(robot, joints: jax.Array, base_rotation: jax.Array | None = None) -> tuple[jax.Array, jax.Array]:
+    """The tip frame: its origin about the system centroid and its axes, inertial axes.
+
+    What a pose target (``spacearm reach --to-rpy``) is measured against: the rotation is
+    the tip frame's axes in inertial axes, so its URDF roll-pitch-yaw is the ``--to-rpy``
+    that holds the current orientation.
+
+    Args:
+        robot: a design whose tip has an orientation (a spatial arm, or a tree focused on one tip).
+        joints: ``(..., n)`` joint positions.
+        base_rotation: ``(..., 3, 3)`` bus attitude R (default identity).
+
+    Returns:
+        ``(position (..., 3) m, rotation (..., 3, 3))``.
+    """
+    family = family_of(robot)
+    frame = jnp.vectorize(lambda q: family.tip_frame(robot, q), signature="(n)->(s),(s,s)")
+    position, axes = frame(jnp.asarray(joints))
+    if base_rotation is None:
+        return position, axes
+    R = jnp.asarray(base_rotation)
+    return jnp.einsum("...ij,...j->...i", R, position), R @ axes
 
 
 @jax.jit

@@ -120,6 +120,19 @@ def register(subparsers) -> None:
         "others are held where they are (default: every joint moves)",
     )
     parser.add_argument("--radians", action="store_true", help="read --from, --attitude-rpy and --to-rpy in radians")
+    parser.add_argument(
+        "--loop-counts",
+        metavar="N,..",
+        default=None,
+        help="when the bus must turn first: the repetition counts of the joint loop tried "
+        "(default planar 1,2,3,4,6,8,12,16,24,32,48,64; spatial 1,2,4,8)",
+    )
+    parser.add_argument(
+        "--harmonics",
+        type=int,
+        default=None,
+        help="when the bus must turn first: Fourier harmonics of the joint loop (default planar 3, spatial 2)",
+    )
     parser.add_argument("--out", default="results/reach", help="output folder (default results/reach)")
     parser.add_argument("--animate", action="store_true", help="also write reach.gif")
     parser.add_argument(
@@ -154,6 +167,8 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError("--html: the replay is not available for several arms on one bus yet (reach.npz holds it)")
     if args.target_rpy is not None:
         check_pose_robot(robot, "--to-rpy")
+        if args.loop_counts is not None or args.harmonics is not None:
+            raise ConfigError("--loop-counts, --harmonics: apply to --to targets (a pose path turns no loop)")
     out = Path(args.out)
     check_output_folder(out)
     # One writer at a time (a second one is refused naming the holder's PID); the files are
@@ -163,6 +178,23 @@ def run(args: argparse.Namespace) -> int:
         if args.target_rpy is not None:
             return _run_pose(args, robot, out)
         return _run_spatial(args, robot, out) if spatial else _run_planar(args, robot, out)
+
+
+def _settings(args: argparse.Namespace, robot):
+    """The loop settings --loop-counts and --harmonics ask for (None: the planner's defaults)."""
+    from ..planning import loop_settings
+
+    changes = {}
+    if args.loop_counts is not None:
+        counts = comma_numbers(args.loop_counts, len(args.loop_counts.split(",")), "--loop-counts")
+        if np.any(counts < 1) or np.any(counts != np.round(counts)) or np.any(counts > 256):
+            raise ConfigError(f"--loop-counts {args.loop_counts}: expected whole numbers from 1 to 256")
+        changes["loop_counts"] = tuple(int(c) for c in counts)
+    if args.harmonics is not None:
+        if not 1 <= args.harmonics <= 16:
+            raise ConfigError(f"--harmonics {args.harmonics}: expected 1 to 16")
+        changes["harmonics"] = args.harmonics
+    return loop_settings(robot, **changes) if changes else None
 
 
 def _focus(args: argparse.Namespace, robot):
@@ -189,7 +221,7 @@ def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
         phi = np.radians(phi)
     check_limits("--from", phi[1:], robot.joint_lower, robot.joint_upper, degrees=not args.radians)
     target = comma_numbers(args.target, 2, "--to")
-    plan = plan_reach(robot, phi, target)
+    plan = plan_reach(robot, phi, target, settings=_settings(args, robot))
     arrays = dict(
         joints=plan.postures[:, 1:],
         phi=plan.postures,
@@ -235,7 +267,7 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
     target = comma_numbers(args.target, 3, "--to")
     if args.animate:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
-    plan = plan_reach(robot, q, target, base_rotation=R0)
+    plan = plan_reach(robot, q, target, base_rotation=R0, settings=_settings(args, robot))
     arrays = dict(
         joints=plan.joints,
         base_rotation=plan.base_rotation,

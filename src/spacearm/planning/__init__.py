@@ -9,6 +9,7 @@ from .reach import (
     PHASE_REPOSITION as PHASE_REPOSITION,
     PHASE_STRAIGHT as PHASE_STRAIGHT,
     ReachPlan as ReachPlan,
+    loop_settings as loop_settings,
     plan_reach as plan_reach,
     reachable_bounds as reachable_bounds,
 )
@@ -42,6 +43,7 @@ __all__ = [
     "SpatialLoopSettings",
     "SpatialReachPlan",
     "SpatialReorientation",
+    "loop_settings",
     "plan_pose_reach",
     "plan_reach",
     "plan_reorientation",

@@ -71,6 +71,7 @@ __all__ = [
     "PHASE_STRAIGHT",
     "ReachPlan",
     "check_in_shell",
+    "loop_settings",
     "plan_reach",
     "reachable_bounds",
 ]
@@ -226,6 +227,21 @@ def _reposition_joints(robot: PlanarRobot, q0: np.ndarray, radius: float) -> np.
             f"target: no joint posture within the limits puts the tip {radius:.6g} m from the system centroid"
         )
     return q
+
+
+def loop_settings(robot, **changes) -> LoopSettings | SpatialLoopSettings:
+    """The reorientation loop's settings `plan_reach` uses for ``robot`` (its family's
+    `LoopSettings` or `SpatialLoopSettings`), with ``changes`` (e.g. ``loop_counts``,
+    ``harmonics``); `ConfigError` naming a setting the family does not have."""
+    family = family_of(robot)
+    steps = _REACH_STEPS.get(family.attitude.name)
+    if steps is None:
+        raise ConfigError(f"robot: no reach planner for the {family.name!r} family")
+    known = {field.name for field in dataclasses.fields(steps.settings_type)}
+    for name in changes:
+        if name not in known:
+            raise ConfigError(f"settings: {name} is not a loop setting of a {family.name} robot")
+    return dataclasses.replace(steps.settings_type(), **changes)
 
 
 def plan_reach(

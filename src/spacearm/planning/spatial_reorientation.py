@@ -357,13 +357,17 @@ def _spatial_candidates(job: dict) -> dict:
     inside = np.all((loops >= lower) & (loops <= upper), axis=(1, 2))
     travel = counts * np.sum(np.linalg.norm(np.diff(loops, axis=1), axis=2), axis=1)
     error = np.where(inside, errors, np.inf)
-    return {"loops": loops, "counts": counts, "error": error, "travel": travel}
+    return {"loops": loops, "counts": counts, "error": error, "overall_error": errors, "travel": travel}
 
 
 def _spatial_failure(job: dict, candidates: dict) -> str:
+    error, overall = candidates["error"], candidates["overall_error"]
+    inside = np.isfinite(error)
+    best = f"best inside them {float(np.min(error)):.3g} rad" if inside.any() else "none stayed inside them"
     return (
         f"plan_reorientation: no loop reached the target rotation to {job['settings'].tolerance:g} rad inside the "
-        f"joint limits (best {float(np.min(candidates['error'])):.3g} rad); try more loop_counts or harmonics"
+        f"joint limits ({best}; best of all {len(error)} loops {float(np.nanmin(overall)):.3g} rad, "
+        f"{int((~inside).sum())} left the limits); try more loop_counts or harmonics"
     )
 
 
