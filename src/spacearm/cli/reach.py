@@ -321,9 +321,14 @@ def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndar
     prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
     if not args.radians:
         q = np.where(prismatic, q, np.radians(q))
-    names = getattr(robot, "joint_names", None)
     check_limits(
-        "--from", q, robot.joint_lower, robot.joint_upper, degrees=~prismatic & (not args.radians), names=names
+        "--from",
+        q,
+        robot.joint_lower,
+        robot.joint_upper,
+        degrees=not args.radians,
+        prismatic=prismatic,
+        names=robot.joint_names,
     )
     R0 = np.eye(3)
     if args.attitude is not None:

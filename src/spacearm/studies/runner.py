@@ -508,7 +508,7 @@ def designs_per_step(spec: SweepSpec, devices: int | None = None) -> tuple[int, 
     a robot with many joints or a metric with large sample blocks runs fewer at once.
     """
     devices = devices or jax.device_count()
-    n = spec.robot.n_joints if hasattr(spec.robot, "n_joints") else spec.robot.n_links
+    n = np.shape(spec.robot.joint_lower)[-1]
     chunk = max(devices, int(math.ceil(min(spec.chunk_size, spec.n_designs) / devices)) * devices)
     design_bytes = 0.0
     for metric in spec.metrics:
@@ -523,7 +523,7 @@ def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float,
     """Bytes a sweep holds at once (designs, results, every metric's working set of the
     designs computed side by side, `designs_per_step`) and the advice that makes it smaller."""
     devices = devices or jax.device_count()
-    n = spec.robot.n_joints if hasattr(spec.robot, "n_joints") else spec.robot.n_links
+    n = np.shape(spec.robot.joint_lower)[-1]
     in_flight = devices * designs_per_step(spec, devices)[0]
     worst, advice = 0.0, ""
     for metric in spec.metrics:
