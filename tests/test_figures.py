@@ -90,6 +90,9 @@ def test_every_sweep_column_has_a_label_in_words():
         for column in metric.columns({}):
             if column.endswith("_error"):
                 continue
+            if column.endswith("_samples"):  # an average's posture count, named after it
+                assert column_label(column) == f"postures averaged, {column_label(column[: -len('_samples')])}"
+                continue
             assert column in COLUMN_LABELS, f"metric {name}: column {column} has no label"
             assert column_label(column) != column
     assert column_label("w_avg_m3").endswith("m³") and column_label("C_w_avg").endswith("rad/rad")

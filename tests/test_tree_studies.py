@@ -352,7 +352,7 @@ def test_per_tip_sweep_metrics_share_one_pass_and_name_their_tips(small_tree_fil
         }
     )
     columns = ["w_avg_m3[right/tool]", "w_avg_m3[left/tool]", "C_w_avg", "gci[right/tool]", "w_d_avg[left/tool]"]
-    assert metric_columns(spec.metrics)[::2] == columns
+    assert metric_columns(spec.metrics)[::3] == columns  # each: value, error, samples
     robot, _ = build_designs(spec)
     single = jax.tree_util.tree_map(lambda leaf: leaf[0], robot)
     values = jax.jit(design_function(spec.metrics))(single)
@@ -459,8 +459,10 @@ def test_cli_sweep_optimize_and_bad_fields_on_a_tree(tmp_path, small_tree_file, 
         "right_mount_z_m",
         "w_avg_m3[right/tool]",
         "w_avg_m3[right/tool]_error",
+        "w_avg_m3[right/tool]_samples",
         "C_w_avg",
         "C_w_avg_error",
+        "C_w_avg_samples",
     ]
     assert np.all(np.asarray(table["w_avg_m3[right/tool]"]) > 0)
     # The resolved config is itself a sweep file: the arms' URDF paths work from here too.
@@ -486,7 +488,7 @@ def test_shipped_tree_examples_validate():
     """The two-UR5 servicer's sweep and Pareto problem (needs example-robot-data)."""
     assert validate_file("sweeps/dual-ur5-mount.yaml")[0] == "sweep"
     spec = load_sweep("sweeps/dual-ur5-mount.yaml")
-    assert metric_columns(spec.metrics)[::2] == ["w_avg_m3[left/tool0]", "w_avg_m3[right/tool0]", "C_w_avg"]
+    assert metric_columns(spec.metrics)[::3] == ["w_avg_m3[left/tool0]", "w_avg_m3[right/tool0]", "C_w_avg"]
     problem = sa.load_problem("sweeps/pareto-dual-ur5.yaml")
     assert problem.objectives == ("w_avg[left/tool0]", "w_avg[right/tool0]", "low_disturbance")
     assert problem.variable_names == ("arms.right.mount.xyz[0]", "arms.right.mount.xyz[2]", "arms.right.mount.rpy[1]")

@@ -50,7 +50,10 @@ COLUMN_LABELS: dict[str, str] = {
 
 def column_label(column: str) -> str:
     """A table column in words with its unit (the column name itself when it has no entry);
-    a per-tip column (``w_avg_m3[left/tool0]``) names its tip."""
+    a per-tip column (``w_avg_m3[left/tool0]``) names its tip, and an average's
+    ``_samples`` column counts the postures behind it."""
+    if column.endswith("_samples"):
+        return f"postures averaged, {column_label(column[: -len('_samples')])}"
     match = re.fullmatch(r"(\w+)\[(.+)\]", column)
     if match and match.group(1) in COLUMN_LABELS:
         return f"{COLUMN_LABELS[match.group(1)]}, tip {match.group(2)}"
@@ -106,8 +109,9 @@ def sweep_figures(spec: SweepSpec, out_dir: Path, table: Mapping[str, np.ndarray
     columns = metric_columns(spec.metrics)
     # An `_error` column is drawn with its value (bars, a band, or its largest value in the
     # title), not as a metric of its own: a change within the errors then looks like one.
+    # (A `_samples` column, the postures an average used, is in the table, not drawn.)
     errors = {c[: -len("_error")]: np.asarray(table[c]) for c in columns if c.endswith("_error")}
-    values = {column: np.asarray(table[column]) for column in columns if not column.endswith("_error")}
+    values = {column: np.asarray(table[column]) for column in columns if not column.endswith(("_error", "_samples"))}
     varying = {c: v for c, v in values.items() if np.ptp(v) > 1e-12 * max(1.0, float(np.max(np.abs(v))))} or values
     paths = []
     if spec.combine == "product" and len(spec.axes) == 2:

@@ -237,23 +237,30 @@ def _average_kind(name: str, options: dict, robot, where: str = "metrics") -> st
 
 
 def _average_columns(name: str, options: dict) -> list[str]:
-    """The value and error columns of a joint-box average; a per-tip one names its tip
-    (``w_avg_m3[left/tool0]``, ``w_avg_m3[left/tool0]_error``)."""
+    """The value, error and sample-count columns of a joint-box average; a per-tip one
+    names its tip (``w_avg_m3[left/tool0]``, ``w_avg_m3[left/tool0]_error``,
+    ``w_avg_m3[left/tool0]_samples``)."""
     column = _AVERAGES[name][1]
     if options.get("tip") is not None:
         column = f"{column}[{options['tip']}]"
-    return [column, f"{column}_error"]
+    return [column, f"{column}_error", f"{column}_samples"]
+
+
+def _average_values(name: str, options: dict, average) -> dict:
+    """The columns of one joint-box average (`_average_columns`) from its `JointAverage`."""
+    column, error, samples = _average_columns(name, options)
+    return {column: average.value, error: average.error, samples: average.samples.astype(average.value.dtype)}
 
 
 def _joint_average(name: str):
-    """A joint-box average as sweep columns: the value and its standard error (same unit)."""
+    """A joint-box average as sweep columns: the value, its standard error (same unit) and
+    the number of postures it averaged."""
 
     def evaluate(robot, options):
         settings = {key: value for key, value in options.items() if key != "tip"}
         kind = _average_kind(name, options, robot)
         average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **settings}, designs_per_chunk=1)
-        column, error = _average_columns(name, options)
-        return {column: average.value, error: average.error}
+        return _average_values(name, options, average)
 
     return evaluate
 
@@ -426,8 +433,7 @@ def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], di
             kinds = tuple(_average_kind(m.name, m.options, robot) for m in group)  # several tips: one pass
             averages = joint_averages(robot, kinds, **options, designs_per_chunk=1)
             for metric, kind in zip(group, kinds, strict=False):
-                column, error = _average_columns(metric.name, metric.options)
-                values.update({column: averages[kind].value, error: averages[kind].error})
+                values.update(_average_values(metric.name, metric.options, averages[kind]))
         for metric in metrics:
             entry = METRICS[metric.name]
             if metric.name in _AVERAGES or (entry.fn, str(metric.options.get("tip"))) in done:
