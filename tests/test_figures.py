@@ -153,17 +153,23 @@ def test_line_plot_axis_labels_stay_in_their_panels(tmp_path, monkeypatch):
 
 
 def test_3d_figures_have_equal_scales_and_keep_the_bus_inside():
+    """The bus is drawn as the uniform box of its mass and inertia, and the axes hold it."""
     rotation = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    chain = np.array([[0.2, 0.0, 0.3], [0.9, 0.1, 0.8], [1.6, 0.2, 0.4]])
-    bus = spatial.bus_corners(np.array([-0.3, 0.1, -0.2]), rotation)
+    robot = sa.load_robot("configs/ur5-smallsat.yaml")
     fig = plt.figure()
     ax = fig.add_subplot(projection="3d")
-    spatial._equal(ax, np.vstack([chain, bus]))
+    drawing = spatial.draw_robot(ax, robot, np.full(6, 0.4), rotation)
+    points = spatial.drawn_points(drawing)
+    spatial._equal(ax, points)
     limits = np.array([ax.get_xlim(), ax.get_ylim(), ax.get_zlim()])
     np.testing.assert_allclose(np.diff(limits, axis=1), np.diff(limits[:1], axis=1).repeat(3, 0))  # equal spans
-    points = np.vstack([chain, bus])
     assert np.all(points >= limits[:, 0]) and np.all(points <= limits[:, 1])
     np.testing.assert_allclose(ax.get_box_aspect() / ax.get_box_aspect()[0], 1.0)
+    # The box's sides from the bus inertia: side_i = sqrt(6 (I_j + I_k - I_i) / m) (a uniform box).
+    moments = np.linalg.eigvalsh(np.asarray(robot.base_inertia))
+    sides = np.sqrt(6.0 * (moments.sum() - 2.0 * moments) / float(robot.base_mass))
+    edges = np.linalg.norm(drawing.bus_corners[1:] - drawing.bus_corners[0], axis=1)
+    np.testing.assert_allclose(np.sort(edges)[:3], np.sort(sides), rtol=1e-12)
     plt.close(fig)
 
 

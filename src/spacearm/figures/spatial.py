@@ -60,20 +60,8 @@ def arm_points(robot, q, rotation) -> tuple[np.ndarray, np.ndarray]:
     return (chain - centroid) @ R.T, R @ (bus - centroid)
 
 
-BUS_HALF = 0.35  # m, half the edge of the cube drawn for the bus (a marker, not its shape)
-
-
-def bus_corners(centre, rotation, half: float = BUS_HALF) -> np.ndarray:
-    """``(8, 3)`` corners of the cube drawn for the bus, inertial axes."""
-    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
-    return np.asarray(centre) + corners @ np.asarray(rotation).T
-
-
-def _bus_box(ax, centre, rotation, half, color, alpha):
-    points = bus_corners(centre, rotation, half)
-    edges = [(0, 1), (0, 2), (0, 4), (1, 3), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 6), (5, 7), (6, 7)]
-    for a, b in edges:
-        ax.plot(*points[[a, b]].T, color=color, lw=0.8, alpha=alpha)
+# The bus is drawn as its equivalent uniform box: same mass and principal moments.
+BUS_LABEL = "bus (the uniform box of its mass and inertia)"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -239,7 +227,7 @@ def drawn_points(drawing: RobotDrawing) -> np.ndarray:
 
 
 def _draw(ax, robot, q, R, color, alpha=1.0, label=None):
-    draw_robot(ax, robot, q, R, colors=color, alpha=alpha, label=label, bus_half=BUS_HALF, frames=False)
+    draw_robot(ax, robot, q, R, colors=color, alpha=alpha, label=label, frames=False)
 
 
 def _equal(ax, points):
@@ -293,15 +281,14 @@ def fig_spatial_loop(out_dir: Path) -> list[Path]:
             alpha=0.9 if k in (0, len(q) - 1) else 0.45,
             label="start" if k == 0 else ("end (joints back, bus turned)" if k == len(q) - 1 else None),
         )
-        chain, bus = arm_points(robot, q[k], R[k])
-        everything.append(np.vstack([chain, bus_corners(bus, R[k])]))
+        everything.append(_drawn_points(robot, q[k], R[k]))
     tips = np.array([arm_points(robot, qk, Rk)[0][-1] for qk, Rk in zip(q, R, strict=False)])
     ax.plot(*tips.T, color="C3", lw=1.0, label="tip")
     angle = float(np.linalg.norm(np.asarray(log(jnp.asarray(R[0].T @ R[-1])))))
     ax.set_title(f"UR5 on a 500 kg bus: closed joint loop turns the bus by {np.degrees(angle):.2f} deg")
     _equal(ax, np.vstack(everything + [tips]))
     ax.plot([], [], "-o", color=cmap(0.5), lw=1.6, ms=2.5, alpha=0.45, label="along the loop (colour: start to end)")
-    ax.plot([], [], color="0.4", lw=0.8, label="bus (a 0.7 m cube about its centroid)")
+    ax.plot([], [], color="0.4", lw=0.8, label=BUS_LABEL)
     ax.legend(loc="upper left", fontsize=8)
     path = save_figure(fig, Path(out_dir) / "spatial_loop.png", dpi=130, bbox_inches="tight")
     plt.close(fig)
@@ -349,14 +336,11 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
     _draw(ax, robot, q[0], R[0], "C0", label="start")
     _draw(ax, robot, q[-1], R[-1], "C3", label="end")
     ax.plot(*tips.T, "k-", lw=1.5, label="tip path")
-    ends = [
-        np.vstack([arm_points(robot, q[k], R[k])[0], bus_corners(arm_points(robot, q[k], R[k])[1], R[k])])
-        for k in (0, -1)
-    ]
+    ends = [_drawn_points(robot, q[k], R[k]) for k in (0, -1)]
     _equal(ax, np.vstack(ends + [tips]))
     reason = {0: "J*_v loses rank", 1: "0.6 m reached", 2: "joint limit", 3: "approaching rank loss"}[int(end.reason)]
     ax.set_title(f"straight tip path, {float(end.length):.3f} m ({reason})", fontsize=10)
-    ax.plot([], [], color="0.4", lw=0.8, label="bus (a 0.7 m cube about its centroid)")
+    ax.plot([], [], color="0.4", lw=0.8, label=BUS_LABEL)
     ax.legend(fontsize=8)
     right = fig.add_subplot(1, 2, 2)
     vectors = np.asarray(log(jnp.asarray(np.swapaxes(R[:1], -1, -2) @ R)))
@@ -371,9 +355,8 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
 
 
 def _drawn_points(robot, q, R) -> np.ndarray:
-    """Every point drawn for one posture (spatial or tree robot): links, tips and the bus cube's corners."""
-    drawing = robot_drawing(robot, q, R)
-    return np.vstack([drawn_points(drawing), bus_corners(drawing.bus, R)])
+    """Every point drawn for one posture (spatial or tree robot): links, tips and the bus box's corners."""
+    return drawn_points(robot_drawing(robot, q, R))
 
 
 def draw_spatial_reach(robot, plan, path) -> Path:
@@ -406,7 +389,7 @@ def draw_spatial_reach(robot, plan, path) -> Path:
         fontsize=10,
     )
     _equal(ax, np.vstack(points))
-    ax.plot([], [], color="0.4", lw=0.8, label=f"bus (a {2 * BUS_HALF:.1f} m cube about its centroid)")
+    ax.plot([], [], color="0.4", lw=0.8, label=BUS_LABEL)
     ax.legend(fontsize=8, loc="upper left")
     written = save_figure(fig, Path(path), dpi=130, bbox_inches="tight")
     plt.close(fig)
