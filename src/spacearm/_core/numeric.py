@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib.metadata
 import math
 import os
@@ -59,6 +60,8 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, min_compi
             3 kB on disk) costs a fifteenth of compiling it (62 of them: 1.8 s of CPU
             saved in a new process).
 
+    Empty program files in the folder (left by a full disk) are removed.
+
     Returns:
         The folder, or None when the cache stays off (``off``, or a folder that cannot
         be created).
@@ -70,9 +73,20 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, min_compi
         os.makedirs(folder, exist_ok=True)
     except OSError:
         return None
+    _drop_empty_entries(folder)
     jax.config.update("jax_compilation_cache_dir", folder)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", float(min_compile_seconds))
     return folder
+
+
+def _drop_empty_entries(folder: str) -> None:
+    """Remove empty program files that a full disk left in the cache: JAX would warn about
+    each on every later run and compile the program again without replacing it."""
+    with contextlib.suppress(OSError), os.scandir(folder) as entries:
+        for entry in entries:
+            with contextlib.suppress(OSError):
+                if entry.name.endswith("-cache") and entry.is_file(follow_symlinks=False) and not entry.stat().st_size:
+                    os.unlink(entry.path)
 
 
 PEER_TIMEOUT_S = 60.0  # how long a process of a distributed job waits for its peers
