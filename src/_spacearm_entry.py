@@ -7,14 +7,30 @@ package can catch it.
 """
 
 import importlib
+import importlib.metadata
+import os
 import sys
 
 __all__ = ["console_main"]
 
 
+def _quiet_cache_loads() -> None:
+    """jaxlib before 0.10 logs two error lines for each program it loads from the
+    compilation cache on CPUs whose LLVM tuning features it does not list as host
+    features (``+prefer-no-gather``): noise on every warm run, harmless. Its C++ log lines
+    below FATAL are hidden then, unless ``TF_CPP_MIN_LOG_LEVEL`` is set. Before jaxlib loads."""
+    try:
+        major, minor = (int(part) for part in importlib.metadata.version("jaxlib").split(".")[:2])
+    except (importlib.metadata.PackageNotFoundError, ValueError):
+        return
+    if (major, minor) < (0, 10):
+        os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "3")
+
+
 def console_main() -> int:
     """Import the command line (`spacearm.cli`), then run it; Ctrl-C during the import is
     one line on stderr and exit status 130."""
+    _quiet_cache_loads()
     try:
         cli = importlib.import_module("spacearm.cli")
     except KeyboardInterrupt:

@@ -198,6 +198,7 @@ def test_sigint_during_a_sweep_is_one_line_and_resumable(tmp_path):
         env=env,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as from a terminal
     )
     deadline = time.monotonic() + 120
     while not list((tmp_path / "o").glob(".partial-*/chunk_*.npz")) and time.monotonic() < deadline:

@@ -8,6 +8,7 @@ an unbounded number of objectives.
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -165,3 +166,16 @@ def test_the_reach_loop_settings_are_options_checked_up_front(tmp_path, capsys):
         assert settings.loop_counts == (2, 3) and settings.harmonics == 5
     with pytest.raises(sa.ConfigError, match="no_such"):
         sa.loop_settings(sa.load_robot(paper), no_such=1)
+
+
+def test_a_target_at_the_current_tip_on_the_reach_boundary_is_reached(tmp_path, capsys):
+    """Before: the stretched arm's own tip, on the Maximum Reachable radius, was 'unreachable'."""
+    robot = sa.load_robot(ROOT / "configs" / "umetani1990.yaml")
+    tip = np.asarray(sa.tip_position(robot, np.zeros(3)))
+    assert np.linalg.norm(tip) == pytest.approx(sa.family_of(robot).tip_shell(robot)[1], rel=1e-15)
+    target = f"--to={float(tip[0])!r},{float(tip[1])!r}"
+    assert (
+        main(["reach", str(ROOT / "configs" / "umetani1990.yaml"), "--from", "0,0,0", target, "--out", str(tmp_path)])
+        == 0
+    )
+    assert "tip error      0.000e+00 m" in capsys.readouterr().out

@@ -82,6 +82,12 @@ def rerun(first, tmp_path):
     return out, path, snapshot(out)
 
 
+def like_a_terminal() -> None:
+    """Ctrl-C reaches the child as from a terminal: a runner started in the background
+    (a non-interactive shell's ``&``) ignores SIGINT, and its children inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 _HOOKED = """
 import signal, sys
 from spacearm.cli import main
@@ -98,7 +104,12 @@ def test_optimize_killed_or_interrupted_right_before_the_swap_keeps_the_old_fold
     out, path, before = rerun
     args = ["optimize", str(path), "--out", str(out), "--no-baselines"]
     done = subprocess.run(
-        [sys.executable, "-c", _HOOKED, sig, *args], env=ENV, capture_output=True, text=True, timeout=300
+        [sys.executable, "-c", _HOOKED, sig, *args],
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=like_a_terminal,
     )
     if sig == "SIGKILL":
         assert done.returncode == -signal.SIGKILL, done.stderr
@@ -121,6 +132,7 @@ def test_optimize_interrupted_during_the_search_keeps_the_old_folder(rerun):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=like_a_terminal,
     )
     assert process.stdout.readline().startswith("optimize ")  # the search starts (compiles) now
     time.sleep(0.3)

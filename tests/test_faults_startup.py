@@ -31,10 +31,17 @@ sys.exit(console_main())
 """
 
 
+def like_a_terminal() -> None:
+    """Ctrl-C reaches the child as from a terminal: a runner started in the background
+    (a non-interactive shell's ``&``) ignores SIGINT, and its children inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupt_during_import(entry: str) -> subprocess.CompletedProcess:
     process = subprocess.Popen(
         [sys.executable, "-c", _SLOW_IMPORT.format(entry=entry)],
         env=ENV,
+        preexec_fn=like_a_terminal,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

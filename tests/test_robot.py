@@ -56,7 +56,7 @@ def _broken(edit):
         (lambda c: c["base"].update(mass=float("nan")), r"base\.mass: must be a finite number"),
         (lambda c: c["base"].update(attach=float("inf")), r"base\.attach: must be a finite number"),
         (lambda c: c["base"].update(attach=-1.0), r"base\.attach: must not be negative"),
-        (lambda c: c["links"].pop(), r"links: at least 2 links"),
+        (lambda c: c["links"].pop(), r"links: 2 to 16 links are supported, got 1"),
         (lambda c: c["links"][0].update(mas=1.0), r"links\[0\]: unknown key 'mas' \(did you mean 'mass'\?\)"),
         (lambda c: c.update(bsae={}), r"unknown key 'bsae' \(did you mean 'base'\?\)"),
         (lambda c: c["links"][0].pop("b"), r"links\[0\]\.b: missing required key"),

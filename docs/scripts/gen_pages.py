@@ -44,6 +44,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm", "Package", "the public API: curated re-exports (some resolved lazily, see the table)"),
     ("spacearm.models", "Models", "the robot families and `load_robot` (a file with `arm:` is spatial)"),
     ("spacearm.models.family", "Models", "the seam: the per-posture primitives every family implements"),
+    ("spacearm.models.budget", "Models", "the mass budget: the bus, each root body, the moving links, the total"),
     ("spacearm.models.planar", "Models", "the planar family of the paper"),
     ("spacearm.models.planar.robot", "Models", "the `PlanarRobot` pytree and its validation"),
     ("spacearm.models.planar.schema", "Models", "the planar robot file, the Table 1 preset"),

@@ -392,10 +392,12 @@ def check_in_shell(robot, target, what: str = "target") -> None:
     """
     inner, outer = family_of(robot).tip_shell(robot)
     distance = float(np.linalg.norm(target))
-    if distance > outer * (1.0 - 1e-12) or distance < inner * (1.0 + 1e-12):
+    # The shell's boundary is reachable (the stretched arm's tip lies on it): only a
+    # target past it by more than rounding is refused.
+    if distance > outer * (1.0 + 1e-12) or distance < inner * (1.0 - 1e-12):
         where = (
             f"beyond the Maximum Reachable radius {outer:.6g} m"
-            if distance > outer * (1.0 - 1e-12)
+            if distance > outer * (1.0 + 1e-12)
             else f"inside the unreachable hole of radius {inner:.6g} m"
         )
         point = ", ".join(f"{x:.6g}" for x in target)
