@@ -13,19 +13,13 @@ import yaml
 
 import spacearm as sa
 from spacearm.cli import main
-from spacearm.models.spatial import locate_package_file
+
+from .test_tree_files import erd
 
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 ERD = "example-robot-data"
 UR5 = "robots/ur_description/urdf/ur5_robot.urdf"
 TALOS = "robots/talos_data/robots/talos_reduced.urdf"
-
-
-def erd(path):
-    try:
-        return locate_package_file("test", ERD, path)
-    except sa.ConfigError:
-        pytest.skip("example-robot-data is not installed")
 
 
 def xml_subtree_mass(path: str, link: str, *, drop_movable_except: set[str] | None = None) -> float:
