@@ -184,6 +184,14 @@ def test_swap_without_renameat2_recovers_a_folder_moved_aside(tmp_path, monkeypa
         assert (out / "a.txt").read_text() == "old"
 
 
+# The command line as from a terminal: a runner started with a shell's & ignores SIGINT,
+# and its children inherit that, so the child takes Python's own handler back first.
+_INTERRUPTIBLE = (
+    "import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    "runpy.run_module('spacearm.cli', run_name='__main__', alter_sys=True)"
+)
+
+
 def test_sigint_during_a_sweep_is_one_line_and_resumable(tmp_path):
     """Ctrl-C while the sweep computes: exit 130, no traceback, the chunks kept."""
     sweep = tmp_path / "long.yaml"
@@ -194,11 +202,10 @@ def test_sigint_during_a_sweep_is_one_line_and_resumable(tmp_path):
         XLA_FLAGS="--xla_force_host_platform_device_count=1",
     )
     process = subprocess.Popen(
-        [sys.executable, "-m", "spacearm.cli", "sweep", str(sweep), "--out", str(tmp_path / "o")],
+        [sys.executable, "-c", _INTERRUPTIBLE, "sweep", str(sweep), "--out", str(tmp_path / "o")],
         env=env,
         stderr=subprocess.PIPE,
         text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as from a terminal
     )
     deadline = time.monotonic() + 120
     while not list((tmp_path / "o").glob(".partial-*/chunk_*.npz")) and time.monotonic() < deadline:

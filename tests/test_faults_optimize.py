@@ -82,14 +82,17 @@ def rerun(first, tmp_path):
     return out, path, snapshot(out)
 
 
-def like_a_terminal() -> None:
-    """Ctrl-C reaches the child as from a terminal: a runner started in the background
-    (a non-interactive shell's ``&``) ignores SIGINT, and its children inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+# The command line as from a terminal: a runner started with a shell's & ignores SIGINT,
+# and its children inherit that, so each child takes Python's own handler back first.
+_INTERRUPTIBLE = (
+    "import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    "runpy.run_module('spacearm.cli', run_name='__main__', alter_sys=True)"
+)
 
 
 _HOOKED = """
 import signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from spacearm.cli import main
 from spacearm.design import run
 run._BEFORE_SWAP = lambda staging: signal.raise_signal(getattr(signal, sys.argv[1]))
@@ -109,7 +112,6 @@ def test_optimize_killed_or_interrupted_right_before_the_swap_keeps_the_old_fold
         capture_output=True,
         text=True,
         timeout=300,
-        preexec_fn=like_a_terminal,
     )
     if sig == "SIGKILL":
         assert done.returncode == -signal.SIGKILL, done.stderr
@@ -127,12 +129,11 @@ def test_optimize_interrupted_during_the_search_keeps_the_old_folder(rerun):
     """Ctrl-C from outside once the search has started: exit 130, one line, old folder whole."""
     out, path, before = rerun
     process = subprocess.Popen(
-        [sys.executable, "-u", "-m", "spacearm.cli", "optimize", str(path), "--out", str(out), "--no-baselines"],
+        [sys.executable, "-u", "-c", _INTERRUPTIBLE, "optimize", str(path), "--out", str(out), "--no-baselines"],
         env=ENV,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        preexec_fn=like_a_terminal,
     )
     assert process.stdout.readline().startswith("optimize ")  # the search starts (compiles) now
     time.sleep(0.3)

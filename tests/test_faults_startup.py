@@ -16,7 +16,10 @@ ENV = dict(os.environ, PYTHONPATH=str(ROOT / "src") + os.pathsep + os.environ.ge
 # Holds the import of jax (the slow part of `import spacearm`) until the test interrupts it:
 # the interrupt then lands inside the package's import, every time.
 _SLOW_IMPORT = """
-import sys, time
+import signal, sys, time
+# Ctrl-C as from a terminal: a runner started with a shell's & ignores SIGINT, and its
+# children inherit that.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 class HoldJax:
     def find_spec(self, name, path=None, target=None):
         if name == "jax":
@@ -31,17 +34,10 @@ sys.exit(console_main())
 """
 
 
-def like_a_terminal() -> None:
-    """Ctrl-C reaches the child as from a terminal: a runner started in the background
-    (a non-interactive shell's ``&``) ignores SIGINT, and its children inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def interrupt_during_import(entry: str) -> subprocess.CompletedProcess:
     process = subprocess.Popen(
         [sys.executable, "-c", _SLOW_IMPORT.format(entry=entry)],
         env=ENV,
-        preexec_fn=like_a_terminal,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
