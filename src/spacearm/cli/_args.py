@@ -20,23 +20,21 @@ def comma_numbers(text: str, count: int, what: str) -> np.ndarray:
     return values
 
 
-def check_limits(what: str, values, lower, upper, *, degrees, prismatic=False, names=None, first: int = 1) -> None:
+def check_limits(what: str, values, lower, upper, *, degrees, prismatic=False, names=None) -> None:
     """ConfigError naming the first of ``values`` (rad, or m where ``prismatic``) outside
-    ``[lower, upper]``, in the units the user typed: degrees where ``degrees`` is set
-    (flags per joint, or one for all).
-
-    ``first``: the number the message gives the first joint (1-based by default).
-    """
+    ``[lower, upper]``, in the units the user typed: degrees for a revolute joint when
+    ``degrees`` (flags per joint, or one for all)."""
     values, lower, upper = (np.asarray(a, dtype=float) for a in (values, lower, upper))
     outside = (values < lower) | (values > upper)
     if not np.any(outside):
         return
     j = int(np.argmax(outside))
-    scale, unit = (1.0, "m") if np.broadcast_to(prismatic, values.shape)[j] else (1.0, "rad")
-    if np.broadcast_to(degrees, values.shape)[j] and unit == "rad":
-        scale, unit = 180.0 / np.pi, "deg"
+    if np.broadcast_to(prismatic, values.shape)[j]:
+        scale, unit = 1.0, "m"
+    else:
+        scale, unit = (180.0 / np.pi, "deg") if np.broadcast_to(degrees, values.shape)[j] else (1.0, "rad")
     name = f" ({names[j]})" if names is not None else ""
     raise ConfigError(
-        f"{what}: joint {j + first}{name} = {values[j] * scale:.6g} {unit} is outside its limits "
+        f"{what}: joint {j + 1}{name} = {values[j] * scale:.6g} {unit} is outside its limits "
         f"[{lower[j] * scale:.6g}, {upper[j] * scale:.6g}] {unit}"
     )

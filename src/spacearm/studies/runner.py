@@ -230,14 +230,15 @@ def _run_locked(
     robot, points = build_designs(spec)
     total = spec.n_designs
     devices = jax.device_count()
-    chunk = max(devices, int(math.ceil(min(spec.chunk_size, total) / devices)) * devices)
+    chunk = _chunk(spec, devices)
+    per_step, design_bytes = designs_per_step(spec, devices)
     # Saved chunks are reused only by a run that would compute them bit for bit alike:
     # same resolved config, effective chunk size, precision and package versions.
     resume_key = {
         "config": spec.config,
         "axis_order": [a.name for a in spec.axes],
         "chunk": chunk,
-        "designs_per_step": designs_per_step(spec, devices)[0],
+        "designs_per_step": per_step,
         "float64": bool(jax.config.jax_enable_x64),
         "spacearm": __version__,
         "jax": jax.__version__,
@@ -249,7 +250,6 @@ def _run_locked(
     # Each device walks its share of a chunk in vmapped steps of a few designs: the
     # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
     # slower per design on CPU); the step's size comes from the metrics' memory estimate.
-    per_step, design_bytes = designs_per_step(spec, devices)
     evaluate = _evaluator(json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True), per_step, mesh)
     columns = metric_columns(spec.metrics)
 
@@ -499,6 +499,23 @@ def agree_with_peers(spec: SweepSpec, *, timeout_s: float = PEER_TIMEOUT_S, refu
         )
 
 
+def _chunk(spec: SweepSpec, devices: int) -> int:
+    """Designs per compiled chunk: ``chunk_size`` (at most the sweep), a multiple of the devices."""
+    return max(devices, int(math.ceil(min(spec.chunk_size, spec.n_designs) / devices)) * devices)
+
+
+def _largest_working_set(spec: SweepSpec) -> tuple[float, str]:
+    """The largest per-design working set of the sweep's metrics, in float64 numbers
+    (`spacearm._core.memory.working_numbers`), and the advice that makes it smaller."""
+    n = np.shape(spec.robot.joint_lower)[-1]
+    worst, advice = 0.0, ""
+    for metric in spec.metrics:
+        numbers, option = working_numbers(metric.name, metric.options, n, joint_average=metric.name in _JOINT_AVERAGES)
+        if numbers > worst:
+            worst, advice = numbers, f"lower metric '{metric.name}' option {option}" if option else ""
+    return worst, advice
+
+
 def designs_per_step(spec: SweepSpec, devices: int | None = None) -> tuple[int, float]:
     """How many designs each device evaluates side by side, and one design's working set
     in bytes (the largest of its metrics', `spacearm._core.memory.working_numbers`).
@@ -508,30 +525,20 @@ def designs_per_step(spec: SweepSpec, devices: int | None = None) -> tuple[int, 
     a robot with many joints or a metric with large sample blocks runs fewer at once.
     """
     devices = devices or jax.device_count()
-    n = np.shape(spec.robot.joint_lower)[-1]
-    chunk = max(devices, int(math.ceil(min(spec.chunk_size, spec.n_designs) / devices)) * devices)
-    design_bytes = 0.0
-    for metric in spec.metrics:
-        numbers, _ = working_numbers(metric.name, metric.options, n, joint_average=metric.name in _JOINT_AVERAGES)
-        design_bytes = max(design_bytes, 8.0 * numbers * TEMPORARIES)
+    design_bytes = 8.0 * _largest_working_set(spec)[0] * TEMPORARIES
     caps = [METRICS[m.name].designs_per_step for m in spec.metrics if METRICS[m.name].designs_per_step]
     fits = int(STEP_MEMORY_BYTES // (devices * design_bytes)) if design_bytes else DESIGNS_PER_STEP
-    return max(1, min([DESIGNS_PER_STEP, chunk // devices, fits, *caps])), design_bytes
+    return max(1, min([DESIGNS_PER_STEP, _chunk(spec, devices) // devices, fits, *caps])), design_bytes
 
 
 def memory_estimate(spec: SweepSpec, devices: int | None = None) -> tuple[float, str]:
     """Bytes a sweep holds at once (designs, results, every metric's working set of the
     designs computed side by side, `designs_per_step`) and the advice that makes it smaller."""
     devices = devices or jax.device_count()
-    n = np.shape(spec.robot.joint_lower)[-1]
-    in_flight = devices * designs_per_step(spec, devices)[0]
-    worst, advice = 0.0, ""
-    for metric in spec.metrics:
-        numbers, option = working_numbers(metric.name, metric.options, n, joint_average=metric.name in _JOINT_AVERAGES)
-        if numbers > worst:
-            worst, advice = numbers, f"lower metric '{metric.name}' option {option}" if option else ""
+    per_step, design_bytes = designs_per_step(spec, devices)
+    advice = _largest_working_set(spec)[1]
     columns = len(metric_columns(spec.metrics))
-    need = 8.0 * (in_flight * worst * TEMPORARIES + 2 * spec.n_designs * (columns + len(spec.axes)))
+    need = devices * per_step * design_bytes + 8.0 * 2 * spec.n_designs * (columns + len(spec.axes))
     return need, advice or "split the sweep into several files"
 
 
