@@ -1,4 +1,4 @@
-"""Benchmark: gradient Pareto search vs NSGA-II vs a dense grid (issue 7).
+"""Benchmark: gradient Pareto search vs NSGA-II vs a dense grid.
 
 Plain script (not collected by pytest):
 

@@ -11,7 +11,7 @@ its own compile counted too (a compile cache hit is charged the hybrid's compile
 shared value program). Printed: NSGA-II's final hypervolume, the wall time each method
 took to reach it (compile included) and their ratio (hybrid / NSGA-II: below 1 the hybrid
 is faster; "never" when the hybrid did not reach it), each method's share of the best
-known hypervolume (every design either evaluated) and the target of the issue: the
+known hypervolume (every design either evaluated) and the target: the
 hybrid's final hypervolume at least NSGA-II's after ``factor`` x its wall time, and at
 least 99.5 % of the best known. Timings on a shared machine are noisy; ratios within one
 run are the numbers to quote.

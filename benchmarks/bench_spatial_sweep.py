@@ -1,4 +1,4 @@
-"""Designs per second of a spatial sweep of the mean manipulability w-bar to 1e-3 (issue 17, item 6).
+"""Designs per second of a spatial sweep of the mean manipulability w-bar to 1e-3.
 
 One SpatialRobot batch of D designs (default 10^4: the bus mass and the mount position
 varied about configs/<robot>.yaml) goes through
@@ -14,24 +14,6 @@ expected; the point is that the program shards and scales up to the cores.
 
 Baseline in the same run: a plain Monte Carlo estimate (uniform random postures, same
 sample count per design) of the same mean, to show what QMC buys at equal cost.
-
-Measured (2 cores shared with other jobs, load average 9-12, so the scaling column says
-little; 10^4 designs of the 3-DOF arm, 4,677 postures per design on average, every
-design at relative standard error <= 1e-3):
-
-=========  =========  =======  ===========  ==================
-devices    compile    run      designs/s    vs 1 device
-=========  =========  =======  ===========  ==================
-1          20.5 s     141.5 s  71           1.00x
-2          21.3 s     170.4 s  59           0.83x
-4          26.8 s     128.5 s  78           1.10x
-=========  =========  =======  ===========  ==================
-
-One XLA CPU device already runs its kernels on both cores, and forced host devices
-share the same two cores, so no speed-up is expected here; the sharded program is
-what runs unchanged on N real devices. Baseline: plain Monte Carlo at the same 5,120
-postures per design has a relative standard deviation of 9.8e-3 against 9.5e-4 for
-the randomized QMC estimate (10x, i.e. ~100x fewer postures for the same error).
 
 Usage: PYTHONPATH=src python benchmarks/bench_spatial_sweep.py [--designs 10000]
 [--robot arm3dof-100kg] [--devices 1 2 4] [--chunk 64]

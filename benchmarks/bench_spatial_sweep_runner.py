@@ -1,4 +1,4 @@
-"""Designs per second of a spatial sweep through the sweep runner (issue 17, item 6).
+"""Designs per second of a spatial sweep through the sweep runner.
 
 A sweep file over a spatial robot (default: the 3-DOF arm on its 100 kg bus; the mount
 position x and the arm-to-bus mass ratio varied, D designs, default 10^4) with the mean
@@ -15,20 +15,8 @@ Baseline in the same run (1 device): the library call alone,
 ``analysis.averages.joint_average(batch, rtol=1e-3)`` under one ``jit`` over the same
 designs, so the ratio shows what the runner costs or saves.
 
-``benchmarks/bench_spatial_sweep.py`` (spatial-iii) times the estimator itself; this one
+``benchmarks/bench_spatial_sweep.py`` times the estimator itself; this one
 times the whole runner.
-
-Measured (2 CPU cores shared with other jobs, 3-DOF arm, w_avg to rtol 1e-3, compile
-apart, persistent compilation cache warm):
-
-- 10^4 designs, 1 device: 75.7 designs/s (run 132 s); the estimator alone in one jit
-  82.5 designs/s, runner / baseline 0.92; 4 forced devices: 90.7 designs/s (1.20x).
-- 10^3 designs: 1 device 53.2, 2 devices 49.5, 4 devices 67.3 designs/s (baseline 66.8).
-
-Forced devices beyond the cores share the same two cores, and other jobs took a varying
-share of them, so the scaling numbers are noisy. Before the joint-box averages capped
-the designs vmapped per step at 8 (the runner's default is 32), the runner ran at 0.41
-of the baseline: a vmapped adaptive loop runs until its slowest design is done.
 
 Usage: PYTHONPATH=src python benchmarks/bench_spatial_sweep_runner.py [--designs 10000]
 [--devices 1 2 4] [--robot arm3dof-100kg] [--timeout 1800]

@@ -7,7 +7,7 @@ stored in one array, as the batch stores it). The loop is the fastest exact one 
 per posture ``pin.ccrba`` (the centroidal momentum matrix A_g, which also fills the
 joint Jacobians), the two frame Jacobians and one 6x6 solve, J* = J_q - J_b A_b^-1 A_q
 (free-flyer on the bus, one URDF with prefixed copies of the arm); ``crba`` plus
-``computeJointJacobians`` (the whole mass matrix, and a second pass) is ~1.6x slower. A second baseline calls Pinocchio in the loop and does the algebra for all
+``computeJointJacobians`` (the whole mass matrix, and a second pass) is slower. A second baseline calls Pinocchio in the loop and does the algebra for all
 postures at once in NumPy (batched solve): most of the loop's time is NumPy's per-call
 overhead, not Pinocchio's. The first postures are checked against Pinocchio before
 anything is timed. Wall and CPU time are both printed, and the load average: on a loaded
