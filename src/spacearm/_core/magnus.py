@@ -179,9 +179,9 @@ def step_generators(maps: jax.Array, waypoints: jax.Array, steps: int, order=DEF
 def _ordered_product(R: jax.Array) -> jax.Array:
     """R_1 R_2 ... R_S of ``(..., S, 3, 3)``, left to right in one scan.
 
-    A scan compiles to one small loop whose reverse-mode adjoint is another: a balanced
-    tree of strided products (depth log2 S) compiled ~0.4 s slower inside the
-    reorientation optimizer's gradient, and ran no faster for these 3x3 factors.
+    A scan compiles to one small loop whose reverse-mode adjoint is another; a balanced
+    tree of strided products compiles slower inside the reorientation optimizer's
+    gradient and runs no faster for 3x3 factors.
     """
     eye = jnp.broadcast_to(jnp.eye(3, dtype=R.dtype), R.shape[:-3] + (3, 3))
     product, _ = jax.lax.scan(lambda P, E: (P @ E, None), eye, jnp.moveaxis(R, -3, 0))
@@ -211,8 +211,8 @@ def path_rotation_history(
 ) -> jax.Array:
     """``(..., (k-1) steps + 1, 3, 3)``: the bus rotation after each sub-step (the first is the identity).
 
-    The running products come from one scan (an associative scan compiled ~0.5 s slower
-    for a loop's history and ran no faster for 3x3 factors).
+    The running products come from one scan (an associative scan compiles slower and
+    runs no faster for 3x3 factors).
     """
     maps = omega_map(step_nodes(waypoints, steps, order))
     factors = expm(step_generators(maps, waypoints, steps, order))

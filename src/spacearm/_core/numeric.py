@@ -1,4 +1,4 @@
-"""Numeric settings. Nothing here runs at import time (jaxsim#322)."""
+"""Numeric settings, applied only when called: importing spacearm changes no JAX setting."""
 
 from __future__ import annotations
 
@@ -56,9 +56,8 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, min_compi
             ``$XDG_CACHE_HOME/spacearm/jax`` (or ``~/.cache/spacearm/jax``).
             ``SPACEARM_CACHE_DIR=off`` (or ``path="off"``) leaves the cache off.
         min_compile_seconds: programs that compile faster are not written. By default
-            every program is kept: loading a tiny program (an eager operation, about
-            3 kB on disk) costs a fifteenth of compiling it (62 of them: 1.8 s of CPU
-            saved in a new process).
+            every program is kept: loading even a tiny program (an eager operation, a
+            few kB on disk) is much cheaper than compiling it.
 
     Empty program files in the folder (left by a full disk) are removed.
 
@@ -187,7 +186,7 @@ def use_every_cpu_core() -> int:
     """Expose each CPU core as a JAX device, so sweeps shard their designs over all cores.
 
     XLA runs most of a CPU program on one thread; with one host device per core the
-    sweep's sharded chunks run side by side (1.5x on 2 cores, see README). Only effective
+    sweep's sharded chunks run side by side (docs/guide/performance.md). Only effective
     before JAX starts its backend, and only when ``XLA_FLAGS`` does not already set the
     count (so an explicit setting always wins) and the installed jaxlib does not deadlock
     several CPU devices (`devices_share_a_deadlock`). Returns the number of cores asked for.

@@ -308,7 +308,7 @@ def _wbar_two_link(
         # smooth function. No sin or cos at data-dependent angles: det J* = N / H is a
         # trigonometric polynomial (_fourier_forms) rotated to each panel's center c; the
         # root is that of a quartic in t = tan((phi2 - c) / 2) (_TO_QUARTIC); at the
-        # Gauss-Legendre nodes (in phi2, as before) cos and sin of phi2 - c come from
+        # Gauss-Legendre nodes cos and sin of phi2 - c come from
         # Taylor polynomials (|phi2 - c| <= half the panel width).
         half = (hi - lo) / (2 * phi2_panels)
         centers = lo + half * (2 * np.arange(phi2_panels) + 1)

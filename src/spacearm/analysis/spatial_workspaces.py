@@ -261,7 +261,7 @@ _REACH_CLOSED_FORMS = {"planar": (planar_maximum_reachable_radius, planar_maximu
 def maximum_reachable_radius(robot, **options) -> jax.Array:
     """Area 3's outer radius about the system centroid, m (the public ``sa.maximum_reachable_radius``).
 
-    Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)), exactly as before.
+    Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)).
     Spatial robots: the largest |tip| over the joint box, by `reachable_radii`.
     """
     closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
@@ -344,7 +344,7 @@ def _jet(robot, x, jacobian):
     evaluation (one chain pass for the spatial family) as n copies of the rows, each
     copy moved along one joint: every array of the pass then has one shape, primal and
     tangent alike, which compiles to fewer, larger fused loops than a ``vmap`` over
-    the tangents (measured on the UR5: 2.5 s instead of 3.6 s, the same run time).
+    the tangents (and runs as fast).
     """
     k, n = x.shape
     copies = jnp.tile(x, (n, 1))  # (n k, n): block j is moved along joint j
@@ -864,7 +864,7 @@ def singular_radius(
     (`_kkt_polish`), which moves the radius by ~1e-10 m and makes the gradient exact for
     redundant arms too (the multipliers of J_v^T u = 0; central differences on the UR5
     to ~1e-8 relative, tests/test_reach_radius.py). It costs a second Jacobian jet and
-    a least-squares solve: the UR5 radius's first call takes ~11 s of CPU instead of ~6.
+    a least-squares solve, so a longer compile.
     """
     check_joint_box(robot)
     samples, keep = _checked_sizes(samples, keep)

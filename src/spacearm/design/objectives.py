@@ -70,10 +70,9 @@ RADIUS_OBJECTIVES = ("reach_radius",)  # the path-independent workspace radius, 
 
 # The options of `reach_radius` (those of `singular_radius`) and their defaults in a design
 # problem: 4x fewer samples, half the kept postures and 80 descent steps instead of the
-# sweep metric's 2^14, 2048 and 150, half its cost (0.46 s against 0.97 s of CPU per UR5
-# design, loaded machine); on 32 UR5 mounts every radius agreed with a 2^15-sample search
-# to 4e-9 m. Fewer kept postures or candidates miss the global minimum (512 and 16: 2 of 19
-# mounts, one 28 % high).
+# sweep metric's 2^14, 2048 and 150, about half its cost; on 32 UR5 mounts every radius
+# agreed with a 2^15-sample search to 4e-9 m. Fewer kept postures or candidates (512 and
+# 16) can miss the global minimum.
 RADIUS_OPTIONS = {"samples": 4096, "keep": 1024, "candidates": 32, "descent_steps": 80, "newton_steps": 4, "seed": 0}
 
 # The objectives each robot family offers (the planar ones are the paper's closed forms).

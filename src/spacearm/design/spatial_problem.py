@@ -1,6 +1,6 @@
-"""Former home of the spatial design problem; one `DesignProblem` now serves every family.
+"""Aliases for the spatial design problem: one `DesignProblem` serves every family.
 
-Kept names: `SpatialDesignProblem` (the same class), `spatial_problem_from_mapping`,
+Names: `SpatialDesignProblem` (the same class), `spatial_problem_from_mapping`,
 `load_design_problem` and `SPATIAL_OBJECTIVES` (see `spacearm.design.problem` and
 `spacearm.design.objectives`).
 """

@@ -164,8 +164,8 @@ def rk_step(
     """One explicit Runge-Kutta step of size h (may be negative) of y' = field(y).
 
     Unrolled (default), the stages are written out at trace time: under vmap on CPU this
-    runs about 5x faster than a loop over the stages for a cheap closed-form field, at
-    the price of a longer compile (measured in benchmarks/bench_motion.py). ``rolled``
+    runs several times faster than a loop over the stages for a cheap closed-form field,
+    at the price of a longer compile (benchmarks/bench_motion.py). ``rolled``
     runs the stages in a ``lax.fori_loop`` over a stage array: one copy of the field in
     the program, for fields that hold a loop themselves (a scan over a kinematic chain),
     where unrolling multiplies the compile time and buys no speed.

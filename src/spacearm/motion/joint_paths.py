@@ -42,8 +42,7 @@ def _segment_integrals(robot, starts: jax.Array, steps: jax.Array, t, weights) -
 # Widest panel of the default rule, in rad of the largest joint excursion: 24 nodes per
 # pi/2 reach rounding level (docs/explanation/integrators.md: Table 1 and random 2-,
 # 3- and 4-link designs, segments up to 4 pi per joint; 16 nodes per pi/2 leave 7e-12
-# on 3-link designs). This is the panel width of the former fixed default, 8 panels of
-# 24 nodes, on 4 pi segments; segments up to pi/2 now take one panel (8x cheaper).
+# on 3-link designs). Segments up to pi/2 take one panel.
 _PANEL_WIDTH = 0.5 * np.pi
 _TRACED_PIECES = 8  # traced waypoints: the longest segment is unknown; 4 pi per joint
 

@@ -45,9 +45,8 @@ def lane_count(padded: int, lanes: int | None = None) -> int:
     at least 64 and at most 512.
 
     Narrow queues run faster on CPU, because a lane that finishes takes the next path
-    at once (CPU time of 1,000 random Table 1 paths: 95 ms on 64 lanes, 212 ms on 512;
-    4,000 paths: 361 ms vs 525 ms); wider ones only pay off on many-core backends, so the
-    width grows with the bucket.
+    at once; wider ones only pay off on many-core backends, so the width grows with the
+    bucket.
     """
     if lanes is not None:
         return int(max(1, min(lanes, padded)))
@@ -63,8 +62,8 @@ def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = F
     the field, and exact enough, since the end test is on ds/dsigma itself. Where the
     field holds a loop (``rolled``), nothing is evaluated here: the lane starts ``fresh``
     and `step_lane` takes its two start evaluations from its own stage loop, so the
-    program holds one copy of the field (a spatial field is a pass over the chain, about
-    1 s of CPU to compile per copy), not three (the start, the refill, the step).
+    program holds one copy of the field (a spatial field is a pass over the chain, costly
+    to compile), not three (the start, the refill, the step).
 
     ``aux`` > 0 (rolled only, static): the field returns ``(slope, aux vector (aux,))``,
     and the lane keeps the aux vector of its current y (``"aux"``, written with the
@@ -111,14 +110,12 @@ def step_lane(
             call on a fresh lane (`start_lane`) is the start: f and the slope, no step.
 
     The stall by travel. The minimum-norm flow of a redundant arm can reach a slow
-    manifold instead of the rank loss: on the UR5 every path of
-    benchmarks/bench_spatial_straight.py gets there after 54-160 steps, where the five
-    arm joints sit at the elbow singularity and only joint 6, whose axis nearly passes
-    through the tip, still moves it, through the bus reaction. ds/dsigma then stays flat
-    (1e-6 to 1.3e-4 m/rad, drifting by < 1 % per radian) until joint 6 meets its limit,
-    6 rad or more later, and the field is stiff there (Jacobian eigenvalues near
-    -0.18 / sigma_3(J*_v), -4e3 to -3e4 per rad), so explicit steps stay at 1e-4 to 1e-3
-    rad: thousands to over 100,000 steps for < 1 mm of tip travel. The path ends there,
+    manifold instead of the rank loss: on the UR5 (benchmarks/bench_spatial_straight.py)
+    the five arm joints reach the elbow singularity and only joint 6, whose axis nearly
+    passes through the tip, still moves it, through the bus reaction. ds/dsigma then
+    stays small and flat until joint 6 meets its limit, and the field is stiff there
+    (Jacobian eigenvalues near -0.18 / sigma_3(J*_v)), so explicit steps stay tiny:
+    thousands of steps for under a millimetre of tip travel. The path ends there,
     singular, when the rate's linear model rate + slope t stays positive up to the next
     joint limit h_lim (along the current joint direction) and predicts a travel
     h_lim (rate + slope h_lim / 2) <= ``tip_tol`` to it; a limit within ``max_step`` is

@@ -21,8 +21,8 @@ Each family supplies its state (`spacearm.models.RobotFamily.split_state`), its
 attitude group and the maps J*_v and A from one evaluation (``straight_maps``); a
 family may register a closed-form field (the planar one) as a fast path. The
 integrator is `spacearm.motion.lanes` (DOP853 with event location, lane refill,
-power-of-two buckets), written once; see docs/explanation/integrators.md for the
-measured comparison with diffrax, SciPy and fixed-step RK4. SO(3) coordinates are
+power-of-two buckets), written once; docs/explanation/integrators.md compares it
+with diffrax, SciPy and fixed-step RK4. SO(3) coordinates are
 integrated as 9 numbers and projected back onto the group (polar factor) at the end, a
 correction at the level of the tolerance.
 """
@@ -197,7 +197,7 @@ def generic_straight_field(robot, direction: jax.Array, sign0, *, ends: bool = F
     ``ends`` (families with the fast path ``straight_maps_and_ends``): the field returns
     ``(slope, [fixed-base J_v (3 n), tip about the centroid (3)])``, bus axes, the end
     quantities of the path at y from the same chain pass, so the ends need no pass of
-    their own (~0.6 s of CPU to compile for the UR5).
+    their own.
     """
     family = family_of(robot)
     group = family.attitude
@@ -504,9 +504,8 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
 
     def advance(y, _):
         # A loop over the substeps rather than an unrolled body: the DOP853 stages are
-        # already unrolled inside one step, so unrolling the substeps only lengthens compiles
-        # (measured, 100 intervals x 4 substeps, CPU time: compile 1.5 s looped vs 2.5 s
-        # unrolled; run 1.0 ms vs 1.4 ms for one path, 9.6 ms vs 10.5 ms for 16).
+        # already unrolled inside one step, so unrolling the substeps only lengthens
+        # compiles (and ran no faster).
         y = jax.lax.fori_loop(0, substeps, lambda _, y: rk_step(field, y, h, tableau), y)
         return y, y
 

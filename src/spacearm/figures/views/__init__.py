@@ -7,13 +7,10 @@
 - `front`: a Pareto front with the design variables on hover (``spacearm optimize``);
 - `shells`: a sweep's workspace shells, design by design (``spacearm sweep``).
 
-Library choice (measured on a UR5-sized scene, Plotly 7.1, meshcat 0.3.2, viser 1.1.1; every
-page opened from disk in headless Chromium with no network): Plotly inlines its 4.8 MB
-plotly.js and takes a page script that re-poses the arm (``Plotly.restyle``), with hover,
-zoom and turning built in. meshcat's ``static_html`` (0.86 MB) and viser's client with an
-embedded scene (0.82 MB) are smaller, but both record through a server they start on local
-ports, and their pages replay what was recorded (meshcat's has no custom controls, viser's
-call back into Python): no slider could re-pose the arm without Python. See docs/guide/views.md.
+Why Plotly: it inlines plotly.js and takes a page script that re-poses the arm
+(``Plotly.restyle``), with hover, zoom and turning built in. meshcat's and viser's static
+pages are smaller but replay what their local server recorded, so no slider could re-pose
+the arm without Python. See docs/guide/views.md.
 """
 
 from .arm import write_arm_view as write_arm_view
