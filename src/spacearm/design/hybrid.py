@@ -2,98 +2,55 @@
 hypervolume-gradient steps on the whole front at once.
 
 Pure gradient sets stall: dominated points have zero hypervolume gradient and single
-runs settle on local Pareto sets. The methods that win are hybrids (HIGA-MO: Wang,
-Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2023):
+runs settle on local Pareto sets. The methods that work are hybrids (HIGA-MO: Wang,
+Deutz, Baeck & Emmerich, EMO 2017; Hypervolume Newton: Wang et al., MCA 28(1), 2023).
+Each generation is a chain of small steps over one search state (`_GENERATION`, run by
+`hybrid_search`):
 
-1. **Exploration.** A space-filling start (a Latin hypercube sample of the unit box, two
-   populations' worth), then every generation an NSGA-II offspring batch (binary
-   tournament on rank and crowding, simulated binary crossover, polynomial mutation;
-   Deb et al., IEEE TEC 6(2), 2002) merged by non-dominated sorting and crowding.
-2. **Refinement.** Every generation, a share of the population (``gradient_share``, the
-   front first, at random within a layer) takes a step along the design-space gradient
-   of the hypervolume of its own non-dominated layer: ``g_i = J_i^T dHV/df_i``
-   (`spacearm.design.fronts.layer_face_areas`, the exact faces of the exclusive regions,
-   in NumPy for 2 and 3 objectives; the autodiff of the exact hypervolume,
-   `spacearm.design.hypervolume.layer_hypervolume_gradients`, for 4). ``J_i^T w`` comes
-   from forward differences through the value program for up to 4 variables or
-   closed-form objectives (d values, no other program to compile), else from one
-   vmapped vector-Jacobian product; a member that has not moved since its last
-   differences reuses their Jacobian (on pareto-6var 37 % of the differences had been
-   such repeats); for two objectives, a variable at a bound where moving inward lowered
-   both objectives at the last differences is not differenced (``bound_refresh``).
-   Two objectives: every front member that is not Pareto-critical (its projected
-   objective gradients not opposite) takes a Newton step onto the Pareto set
-   (``newton``): on its free variables (those not held at a bound that the combination
-   of the gradients pushes against) a critical point solves w g_0 + (1 - w) g_1 = 0 for
-   a weight w; the step solves the linearization in the design and the weight, with
-   Hessians from second differences (k (k + 1) / 2 values for k free variables), and
-   takes the least step of its solutions. On pareto-6var, whose Pareto set in its steep
-   end (w-bar above 0.161) is a curve in two free variables, 30 % of the archive front
-   there had been dominated by a design 1e-6 away (NSGA-II's front after 17 s: 41 %);
-   with the steps the search ends at 0.1577681358, 0.1577681337 and 0.1577681460
-   (seeds 0-2) in 41,088-42,144 evaluations, against 0.1577680594, 0.1577680251 and
-   0.1577680924 in 42,700-43,600 with the earlier trials along the direction raising
+1. **Exploration.** A space-filling start (a Latin hypercube of two populations), then
+   NSGA-II offspring every generation (binary tournament on rank and crowding, simulated
+   binary crossover, polynomial mutation; Deb et al., IEEE TEC 6(2), 2002), merged by
+   non-dominated sorting and crowding. Offspring fill every value batch up to a multiple
+   of the population, so the value program compiles once.
+2. **Refinement.** A share of the population (``gradient_share``, the front first)
+   steps along the design-space gradient of the hypervolume of its own non-dominated
+   layer, ``g_i = J_i^T dHV/df_i`` (`spacearm.design.fronts.layer_face_areas` for 2 and 3
+   objectives, `spacearm.design.hypervolume.layer_hypervolume_gradients` for 4), so
+   dominated points move towards the front instead of freezing and the front spreads by
+   its own slope. ``J^T w`` comes from forward differences through the value program
+   (few variables, or closed-form objectives whose values are cheap; an unmoved member
+   keeps its Jacobian, and a variable held at a bound where moving inward lowers both
+   objectives is not differenced, ``bound_refresh``) or from a vmapped vector-Jacobian
+   product. A step must pass Armijo's sufficient-increase test on the layer's
+   hypervolume (``step_rule: armijo``); for joint-box averages over many variables each
+   variable has its own length instead (Rprop: Riedmiller & Braun, ICNN 1993), so weakly
+   sensitive variables converge as fast as strong ones.
+   Two objectives: a front member that is not Pareto-critical (its projected objective
+   gradients not opposite) also takes a Newton step onto the Pareto set (``newton``): on
+   its free variables a critical point solves w g_0 + (1 - w) g_1 = 0, linearized in the
+   design and the weight with Hessians from second differences (Hillermeier 2001), and
+   the least step of its solutions is taken. Trials along the direction that raises
    both objectives (the min-norm convex combination of the normalized gradients:
-   Fliege & Svaiter 2000, Desideri 2012; ``common_ascent``, now off by default).
-   Dominated points follow their layer's gradient towards the front instead of
-   freezing; on the front the hypervolume gradient itself spreads the points (a
-   hypervolume-maximal set is spread by the front's slope). For joint-box averages over
-   more than 4 variables (``step_rule: per_variable``) every member has a step length per
-   variable in the unit box and moves each variable by its own step in the sign of its gradient (Rprop:
-   Riedmiller & Braun, ICNN 1993): a step grows by 1.2 while its variable's gradient keeps
-   its sign and halves (without a move) when the sign flips, so the weakly sensitive
-   variables (a mount's position and angles beside link lengths and masses) converge as
-   fast as the strong ones; the normalized gradient they replace moved them by a sliver of
-   each step (pareto-ur5-arm: 99.68 % of the best known after 38 generations against
-   99.2 %). A step that fails Armijo's sufficient-increase test on its layer's
-   hypervolume (linearized at the old point) is refused and its lengths halved
-   (``step_rule: armijo``, the default for fewer variables or closed-form objectives,
-   where per-variable steps ended lower: one length per member along the normalized
-   gradient, doubled after a passed test).
-   Offspring fill the value batches of the stepped designs (and of the differences):
-   with half of the population stepping (the default for joint-box averages; all of it
-   for closed-form objectives, whose values are cheap), a generation of pareto-ur5-arm
-   costs one batch of values and the vector-Jacobian products of half a batch, and
-   reached a higher hypervolume per CPU second than a step for every member (two value
-   batches and a full batch of products per generation) or for a quarter of them.
-3. **Densification.** Every generation one more batch of designs interpolated between
-   neighbouring archive-front designs (the Pareto set is a curve or a surface, and a chord
-   between near optimal designs stays second-order close to it): along the front's curve
-   where the gaps lose the most hypervolume for two objectives, 8 of them past the
-   front's ends along its curve (`_end_designs`; these join the population: on
-   pareto-6var the w-bar end lies on a curved ridge that the gradient steps crept up,
-   and 2.2e-6 of the archive's 2.4e-6 relative shortfall after 100 generations lay
-   there); for three or more, on chords from front designs drawn by the size of
-   their gap to near neighbours (`_neighbour_designs`; archive only, as in the population
-   they crowd the refined members out). The archive's hypervolume counts every evaluated
-   design, and once the population sits on the front it grows by filling the front in.
-   So, for three or more objectives, once the search has settled (the population's
-   hypervolume rose no higher in ``population_patience`` generations, and over them the
-   densified designs gained the archive more per evaluation than the steps, differences
-   and offspring, in geometric mean) the steps stop, and each generation evaluates
-   half a population of offspring and ``settled_fill`` populations at the centroids of
-   the largest triangles of the archive front (`_simplex_designs`). On pareto-mount-ur5
-   (its Pareto set a patch of the face pitch = 0.8 rad) this settled after 14
-   generations (31 with seed 1) and left a third of the shortfall after 19,000
-   evaluations (2.2e-5 against 7.2e-5 of the best known; seed 1: 2.0e-5 against 6.5e-5);
-   on pareto-ur5-arm, whose population keeps refining weak variables, the fill gained
-   0.25-0.57 of the rest per evaluation (5-generation geometric means) and the search
-   never switched in 100 generations.
+   Fliege & Svaiter 2000; Desideri 2012) are an option (``common_ascent``).
+3. **Densification.** Designs interpolated between neighbouring archive-front designs
+   (the Pareto set is a curve or a surface, and a chord between near optimal designs
+   stays second-order close to it): along the front's curve, where the gaps lose the
+   most hypervolume, and past its ends for two objectives (`_end_designs`); on chords to
+   near neighbours for more (`_neighbour_designs`, archive only, where they would crowd
+   the refined members out of the population). Once a three-objective search has
+   settled (the population's hypervolume stalls while the densified designs gain the
+   archive more per evaluation than the rest) the steps stop and the archive fills the
+   largest triangles of its front (`_simplex_designs`, ``settled_fill``).
 4. **Stopping** from the front's own convergence: the archive's hypervolume gained less
-   than ``tolerance`` (relative) over the last ``patience`` generations; or, without
-   densification, the population's own hypervolume rose no higher in the last
-   ``population_patience`` generations while the archive's gained less than
+   than ``tolerance`` over ``patience`` generations; or, without densification, the
+   population's hypervolume stalled while the archive's gained less than
    ``population_tolerance``; or a budget of generations, evaluations or seconds ran out.
-   (The population rule stopped three-objective runs while their archive still gained
-   fast: pareto-ur5-arm after 38 generations at 99.68 % of the best known, where 100
-   reach 99.94 %.)
 
-Every design is evaluated by the problem's own ``batch_function()`` in batches of the
-population (compiled once; the differences and the offspring are archived, being designs
-evaluated like any other) and, for more than 4 variables and joint-box averages, a
-vmapped VJP of ``objective_function()`` (compiled once for the stepping share); the
-hypervolume gradients of 4 objectives compile one more program; compile seconds are
-reported apart and counted in every comparison.
+Every design is evaluated by the problem's ``batch_function()`` in batches of the
+population and archived (differences, probes and offspring included); the
+vector-Jacobian product and the 4-objective hypervolume gradients compile one program
+each. Compile seconds are reported apart. docs/explanation/pareto-search.md compares the
+search with the baselines.
 """
 
 from __future__ import annotations
@@ -129,8 +86,8 @@ class HybridSettings:
         max_seconds: stop past this run time, s (None: no limit).
         patience, tolerance: stop when the archive hypervolume gained less than
             ``tolerance`` (relative) over ``patience`` generations.
-        population_patience: without densification (``densify: false``), also stop when the population's own hypervolume has not
-            risen above its best by more than ``tolerance`` (relative) for this many
+        population_patience: without densification (``densify: false``), also stop when
+            the population's own hypervolume has not risen above its best by more than ``tolerance`` (relative) for this many
             generations (0: never) while the archive's hypervolume gained less than
             ``population_tolerance`` (relative) over them.
         gradient_share: share of the population that takes a gradient step each
@@ -163,16 +120,14 @@ class HybridSettings:
             every member at that bound is not differenced (its Jacobian row is zero: no
             weights give it an inward projected gradient) except every ``bound_refresh``-th
             generation, when every difference is taken again. 0: always difference.
-            (pareto-6var's Pareto set lies on a face of the box: 4 or 5 of its 6
-            variables at a bound; this saved 11,000 of 26,000 differences.)
+            (Pareto sets on a face of the box leave many variables at a bound.)
         common_ascent: two objectives, forward differences: each generation, from every
             front member whose Jacobian is current and whose projected objective
             gradients are not opposite (so it is not Pareto-critical), designs at
             `COMMON_ASCENT_LENGTHS` along the direction that raises both objectives (the
             min-norm convex combination of the normalized gradients), evaluated in the
             steps' batch; they join the union. Off by default: beside the Newton steps
-            they cost pareto-6var 13,000 more evaluations (55,000 against 42,000) for
-            5e-9 to 1.2e-8 more hypervolume.
+            they cost many evaluations for little hypervolume.
         newton: two objectives, forward differences: each generation the same members
             (front, current Jacobian, not Pareto-critical) take a Newton step onto the
             Pareto set (`_newton_probes`, `_newton_designs`): second differences on their
@@ -182,8 +137,8 @@ class HybridSettings:
         step_rule: ``"per_variable"`` (a step length per variable, Rprop),
             ``"armijo"`` (one length per member along the normalized gradient) or
             ``"auto"`` (per variable for joint-box averages over more than 4 variables,
-            where weak and strong variables mix; Armijo otherwise: on pareto-attachment,
-            pareto-6var and pareto-mount-ur5 per-variable steps ended lower).
+            where weak and strong variables mix; Armijo otherwise, where per-variable
+            steps end lower).
         crossover_eta, mutation_eta: distribution indices of SBX and polynomial mutation.
         seed: random seed (Latin hypercube, variation).
     """
@@ -219,20 +174,17 @@ STEP_RULES = ("auto", "per_variable", "armijo")
 SOURCES = ("start", "differences", "steps", "offspring", "densified", "common_ascent", "newton_probes", "newton")
 _START, _DIFFERENCES, _STEPS, _OFFSPRING, _DENSIFIED, _ASCENT, _PROBES, _NEWTON = range(len(SOURCES))
 # Forward differences cost d values per gradient; a vector-Jacobian product through the
-# joint-box averages costs about 4 (measured on pareto-mount-ur5) and compiles a program
-# about 2.5 times as long as the values'.
+# joint-box averages costs a few values and compiles a program of its own, longer than
+# the values'. Above DIFFERENCES_UP_TO variables, differences still win when every
+# objective is a closed form (no joint-box average): values are then cheap.
 DIFFERENCES_UP_TO = 4
-# Above DIFFERENCES_UP_TO variables, differences still win when every objective is a
-# closed form (no joint-box average): the product's compile then buys more values than
-# the differences spend in a run (pareto-6var: compile 1.6 s instead of 17.5 s).
 # Forward-difference step in the unit box (the objectives are smooth float64 averages on a
 # fixed rule: truncation ~1e-6 relative, rounding ~1e-10).
 DIFFERENCE_STEP = 1e-6
 # Common-ascent trials (two objectives): unit-box lengths along the direction that raises
 # both objectives, tried from each front member with a current Jacobian whose projected,
 # normalized objective gradients are not opposite (the norm of their min-norm convex
-# combination above COMMON_ASCENT_LEAST). On pareto-6var other ladders, (1e-5, 1e-4, 1e-3),
-# (3e-5, 3e-4, 3e-3), (1e-4, 1e-3), (3e-4, 3e-3), ended within one seed's noise of it.
+# combination above COMMON_ASCENT_LEAST).
 COMMON_ASCENT_LENGTHS = (1e-4, 1e-3, 1e-2)
 COMMON_ASCENT_LEAST = 1e-3
 # Pareto-Newton steps (two objectives): the unit-box step of the second differences, the
@@ -401,10 +353,9 @@ def _simplex_designs(front_f: np.ndarray, front_z: np.ndarray, count: int, tried
     the largest is returned, each simplex once (``tried`` holds the vertex designs of the
     simplices already filled, so one whose centroid fell off the front is not drawn
     again). Where the Pareto set is flat in design space (a face of the box, as on
-    pareto-mount-ur5) the centroid of three designs on it lies on it exactly. On
-    pareto-mount-ur5, switched by `HybridSettings.settled_fill` at the same generation,
-    this fill ended 3.5e-5 (relative) short of the best known hypervolume after 19,296
-    evaluations, the same budget of random chords 17.5e-5 (docs/explanation/pareto.md).
+    pareto-mount-ur5) the centroid of three designs on it lies on it exactly, and it
+    lands in one of the front's largest gaps, where a random chord lands anywhere
+    (docs/explanation/pareto.md).
 
     Args:
         front_f: ``(n, m)`` the archive front's objectives, n > m.
@@ -633,6 +584,573 @@ def _layer_gradients(f: np.ndarray, reference: np.ndarray, ranks: np.ndarray) ->
     return np.array(_layer_gradients_jax(jnp.asarray(f), jnp.asarray(reference), jnp.asarray(ranks)))
 
 
+@dataclasses.dataclass
+class _Archive:
+    """Every evaluated design in order, the front of them all, and the checkpoints.
+
+    Values go through the problem's value program in batches of the compiled size
+    (``batch``); the last batch is padded with copies, which count as evaluations but
+    are not archived.
+    """
+
+    lower: np.ndarray
+    width: np.ndarray
+    evaluate: Any
+    batch: int
+    started: float
+    designs: list = dataclasses.field(default_factory=list)
+    unit_designs: list = dataclasses.field(default_factory=list)  # parallel to values: unit-box designs
+    values: list = dataclasses.field(default_factory=list)
+    spent: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(len(SOURCES)))  # by source
+    value_evaluations: int = 0
+    gradient_evaluations: int = 0
+    checkpoints: list = dataclasses.field(default_factory=list)
+    front_f: np.ndarray | None = None
+    front_z: np.ndarray | None = None
+    recorded: int = 0  # values[:recorded] are merged into the front
+
+    @property
+    def evaluations(self) -> int:
+        return self.value_evaluations + self.gradient_evaluations
+
+    def value_of(self, z: np.ndarray, source) -> np.ndarray:
+        """``(k, m)`` values of ``(k, d)`` unit-box designs; ``source``: one of `SOURCES`'
+        indices, or one per design."""
+        rows = z.shape[0]
+        padded = np.concatenate([z, np.repeat(z[-1:], -rows % self.batch, axis=0)]) if rows else z
+        x = self.lower + self.width * padded
+        f = np.concatenate(
+            [np.asarray(self.evaluate(jnp.asarray(x[i : i + self.batch]))) for i in range(0, x.shape[0], self.batch)]
+        )[:rows]
+        self.unit_designs.append(z)
+        np.add.at(self.spent, np.broadcast_to(np.asarray(source), (rows,)), 1)
+        self.designs.append(x[:rows])
+        self.values.append(f)
+        self.value_evaluations += padded.shape[0]
+        return f
+
+    def record(self, population_f: np.ndarray, reference: np.ndarray) -> None:
+        """Merge the values since the last record into the front; add a checkpoint."""
+        merged = np.concatenate([self.front_f, *self.values[self.recorded :]])
+        merged_z = np.concatenate([self.front_z, *self.unit_designs[self.recorded :]])
+        self.recorded = len(self.values)
+        keep = nondominated_mask(merged)
+        self.front_f, self.front_z = merged[keep], merged_z[keep]
+        self.checkpoints.append(
+            dict(
+                evaluations=self.evaluations,
+                seconds=time.perf_counter() - self.started,
+                hypervolume=hypervolume(self.front_f, reference),
+                population_hypervolume=hypervolume(population_f, reference),
+            )
+        )
+
+
+@dataclasses.dataclass
+class _Members:
+    """The population: unit-box designs ``z`` ``(n, d)``, values ``f`` ``(n, m)``, step
+    lengths (``(n, d)`` per variable, else ``(n,)``), the last gradient signs ``(n, d)``
+    (per variable), and each member's forward-difference Jacobian ``(n, d, m)``,
+    ``known`` while it has not moved since."""
+
+    z: np.ndarray
+    f: np.ndarray
+    steps: np.ndarray
+    signs: np.ndarray
+    jacobians: np.ndarray
+    known: np.ndarray
+
+    def joined(self, z: np.ndarray, f: np.ndarray, initial_step: float) -> _Members:
+        """The members followed by new designs (fresh steps, no Jacobian)."""
+        fresh = z.shape[0]
+        return _Members(
+            z=np.concatenate([self.z, z]),
+            f=np.concatenate([self.f, f]),
+            steps=np.concatenate([self.steps, np.full((fresh, *self.steps.shape[1:]), initial_step)]),
+            signs=np.concatenate([self.signs, np.zeros((fresh, self.signs.shape[1]))]),
+            jacobians=np.concatenate([self.jacobians, np.zeros((fresh, *self.jacobians.shape[1:]))]),
+            known=np.concatenate([self.known, np.zeros(fresh, dtype=bool)]),
+        )
+
+    def taken(self, rows: np.ndarray) -> _Members:
+        return _Members(*(getattr(self, field.name)[rows] for field in dataclasses.fields(self)))
+
+
+@dataclasses.dataclass
+class _Search:
+    """The state of one hybrid run, changed by the generation's steps (`_GENERATION`)."""
+
+    settings: HybridSettings
+    d: int
+    m: int
+    stepping: int  # gradient steps per generation
+    jacobian: str  # "reverse" or "differences"
+    step_rule: str  # "per_variable" or "armijo"
+    pulls: Any  # the vector-Jacobian program (reverse Jacobians)
+    rng: np.random.Generator
+    reference: np.ndarray
+    reference_from: str
+    archive: _Archive
+    members: _Members
+    # Two objectives, forward differences: (variable, lower/upper bound) where moving
+    # inward lowered every objective at the last differences (`_skipped_differences`).
+    blocked: np.ndarray
+    bound_refresh: int
+    skipped_differences: int = 0
+    accepted: int = 0
+    # Three or more objectives: the generation the search settled (`HybridSettings.settled_fill`),
+    # the log ratios of the fill's archive gain per evaluation to the rest's, and the simplices filled.
+    settled_at: int | None = None
+    gain_ratios: list = dataclasses.field(default_factory=list)
+    tried: set = dataclasses.field(default_factory=set)
+
+    @property
+    def population(self) -> int:
+        return self.settings.population
+
+    @property
+    def per_variable(self) -> bool:
+        return self.step_rule == "per_variable"
+
+    @property
+    def densifying(self) -> bool:
+        """Whether this generation evaluates densified designs (a front of two or more)."""
+        return self.settings.densify and self.archive.front_f.shape[0] >= 2
+
+    def offspring(self, count: int) -> np.ndarray:
+        """``count`` NSGA-II offspring of the current population."""
+        batches = [
+            _variation(self.rng, self.members.z, self.members.f, self.settings)
+            for _ in range(-(-count // self.population))
+        ]
+        return np.concatenate(batches)[:count] if batches else np.zeros((0, self.d))
+
+    def filled(self, count: int, least: int = 0) -> np.ndarray:
+        """Offspring that fill a batch of ``count`` designs up to a multiple of the
+        population, at least ``least`` of them."""
+        return self.offspring(-(count + least) % self.population + least)
+
+    def record(self) -> None:
+        self.archive.record(self.members.f, self.reference)
+
+
+@dataclasses.dataclass
+class _Generation:
+    """What the steps of one generation hand on to each other."""
+
+    number: int
+    new_z: list = dataclasses.field(default_factory=list)  # designs that join the union
+    new_f: list = dataclasses.field(default_factory=list)
+    count: int = 0  # members stepped
+    chosen: np.ndarray | None = None  # (count,) their indices
+    weights: np.ndarray | None = None  # (count, m) dHV/df of their layers
+    z_from: np.ndarray | None = None  # (count, d)
+    gradient: np.ndarray | None = None  # (count, d) projected J^T w
+    norm: np.ndarray | None = None  # (count, 1)
+    lengths: np.ndarray | None = None  # (count, d) the Rprop lengths (per variable)
+    z_to: np.ndarray | None = None  # (count, d) the stepped designs
+    f_to: np.ndarray | None = None
+    on: np.ndarray | None = None  # front members with a current Jacobian (two objectives)
+    trials: np.ndarray | None = None  # common-ascent designs
+    probes: dict | None = None  # `_newton_probes`
+    probed: np.ndarray | None = None  # the probes taken
+    z_newton: np.ndarray | None = None  # Newton steps not yet evaluated
+
+
+def _plan(problem, settings: HybridSettings) -> tuple[int, str, str]:
+    """The gradient steps per generation, the Jacobian and the step rule a run takes.
+
+    Closed-form objectives (no joint-box average) make values cheap: every member steps,
+    by forward differences, along the normalized gradient. Joint-box averages over more
+    than `DIFFERENCES_UP_TO` variables: half of them step, by vector-Jacobian products,
+    each variable by its own length.
+    """
+    d, closed_forms = len(problem.variables), problem.closed_form
+    share = settings.gradient_share if settings.gradient_share is not None else (1.0 if closed_forms else 0.5)
+    stepping = min(settings.population, round(share * settings.population))
+    jacobian = settings.jacobian
+    if jacobian == "auto":
+        jacobian = "differences" if d <= DIFFERENCES_UP_TO or closed_forms else "reverse"
+    step_rule = settings.step_rule
+    if step_rule == "auto":
+        step_rule = "per_variable" if d > DIFFERENCES_UP_TO and not closed_forms else "armijo"
+    return stepping, jacobian, step_rule
+
+
+def _compile(problem, evaluate, population: int, stepping: int, jacobian: str) -> tuple[Any, dict]:
+    """Compile every program once, for the population's shapes, before the timed run:
+    the value program, the vector-Jacobian product of ``stepping`` designs (reverse
+    Jacobians only) and, for four objectives, the layer hypervolume gradients. Returns
+    the vector-Jacobian program (or None) and the compile seconds by program."""
+    d, m = len(problem.variables), len(problem.objectives)
+    compile_seconds = {}
+    tic = time.perf_counter()
+    jax.block_until_ready(evaluate(jnp.asarray(np.tile(problem.lower, (population, 1)))))
+    compile_seconds["value"] = time.perf_counter() - tic
+    pulls = None
+    if jacobian == "reverse" and stepping > 0:
+        pulls = _pull_program(problem)
+        tic = time.perf_counter()
+        jax.block_until_ready(pulls(jnp.asarray(np.full((stepping, d), 0.5)), jnp.asarray(np.ones((stepping, m)))))
+        compile_seconds["gradient"] = time.perf_counter() - tic
+    if m == 4:
+        tic = time.perf_counter()
+        dummy_ranks = jnp.asarray(np.zeros(population, dtype=np.int64))
+        jax.block_until_ready(_layer_gradients_jax(jnp.ones((population, m)), jnp.zeros(m), dummy_ranks))
+        compile_seconds["hypervolume"] = time.perf_counter() - tic
+    return pulls, compile_seconds
+
+
+def _start(
+    problem, settings: HybridSettings, archive: _Archive, reference, per_variable: bool
+) -> tuple[_Members, np.ndarray, str]:
+    """1. The space-filling start: a Latin hypercube sample of two populations, of
+    which NSGA-II's selection keeps one. Returns the members, the reference point and
+    where it came from; the archive's front is the sample's."""
+    d, m, population = len(problem.variables), len(problem.objectives), settings.population
+    z_start = qmc.LatinHypercube(d, seed=settings.seed).random(2 * population)
+    f_start = archive.value_of(z_start, _START)
+    if reference is None:
+        reference = reference_from_population(f_start, settings.reference_margin)
+        reference_from = (
+            f"nadir of the first {2 * population} designs' front minus {settings.reference_margin} of its range"
+        )
+    else:
+        reference_from = "problem"
+    keep = _survivors(f_start, population)
+    members = _Members(
+        z=z_start[keep],
+        f=f_start[keep],
+        steps=np.full((population, d) if per_variable else population, settings.initial_step),
+        signs=np.zeros((population, d)),
+        jacobians=np.zeros((population, d, m)),
+        known=np.zeros(population, dtype=bool),
+    )
+    front = nondominated_mask(f_start)
+    archive.front_f, archive.front_z = f_start[front], z_start[front]
+    archive.recorded = len(archive.values)
+    return members, np.asarray(reference, dtype=np.float64), reference_from
+
+
+# The steps of a generation, run in this order by `hybrid_search` (each reads and
+# changes the search and the generation).
+
+
+def _choose_steppers(search: _Search, step: _Generation) -> None:
+    """2a. The members that step (the front first, at random within a layer) and the
+    hypervolume gradient of each one's layer."""
+    members = search.members
+    ranks = nondominated_ranks(members.f)
+    step.count = 0 if search.settled_at is not None else search.stepping
+    step.chosen = np.lexsort((search.rng.random(search.population), ranks))[: step.count]
+    weights = _layer_gradients(members.f, search.reference, ranks)[step.chosen]
+    weights = np.nan_to_num(weights, nan=0.0, posinf=0.0, neginf=0.0)
+    flat = ~np.any(weights != 0, axis=1)
+    if flat.any():
+        # Below the reference or a duplicate: climb every objective, each by its spread.
+        spread = np.ptp(members.f, axis=0)
+        weights[flat] = 1.0 / np.where(spread > 0, spread, 1.0)
+    step.weights = weights
+    step.z_from = members.z[step.chosen]
+
+
+def _design_gradients(search: _Search, step: _Generation) -> None:
+    """2a. ``J^T w`` of each stepping member, projected onto the box."""
+    if step.count == 0:
+        gradient = np.zeros((0, search.d))
+    elif search.jacobian == "reverse":
+        gradient = np.asarray(search.pulls(jnp.asarray(step.z_from), jnp.asarray(step.weights)))
+        search.archive.gradient_evaluations += step.count
+    else:
+        _difference_jacobians(search, step)
+        gradient = np.einsum("skj,sj->sk", search.members.jacobians[step.chosen], step.weights)
+    gradient = np.nan_to_num(gradient, nan=0.0, posinf=0.0, neginf=0.0)
+    step.gradient = _projected(gradient, step.z_from)
+    step.norm = np.linalg.norm(step.gradient, axis=1, keepdims=True)
+
+
+def _difference_jacobians(search: _Search, step: _Generation) -> None:
+    """Forward differences, inward at the upper bound, for the stepping members whose
+    Jacobian is not current (the values are deterministic, so an unmoved member keeps
+    its own), evaluated with offspring filling the batch (they join the union)."""
+    members, d = search.members, search.d
+    stale = step.chosen[~members.known[step.chosen]]
+    z_stale, f_stale = members.z[stale], members.f[stale]
+    h = np.where(z_stale > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (stale, d)
+    at_bound = np.stack([z_stale <= 0.0, z_stale >= 1.0], axis=-1)  # (stale, d, 2)
+    skip = _skipped_differences(search, step.number, at_bound)
+    take = ~skip
+    rows = int(take.sum())
+    shifted = z_stale[:, None, :] + h[:, :, None] * np.eye(d)[None]  # (stale, d, d)
+    children = search.filled(rows)
+    if rows + children.shape[0] == 0:
+        return
+    f_both = search.archive.value_of(
+        np.concatenate([shifted[take], children]),
+        np.repeat([_DIFFERENCES, _OFFSPRING], [rows, children.shape[0]]),
+    )
+    step.new_z.append(children)
+    step.new_f.append(f_both[rows:])
+    f_shifted = np.repeat(f_stale[:, None, :], d, axis=1)  # skipped: zero difference
+    f_shifted[take] = f_both[:rows]
+    members.jacobians[stale] = (f_shifted - f_stale[:, None, :]) / h[:, :, None]  # (stale, d, m): dF_j/dz_k
+    members.known[stale] = True
+    if search.bound_refresh:
+        lowered = np.all(f_shifted <= f_stale[:, None, :], axis=-1) & take  # (stale, d)
+        for side in range(2):
+            seen = at_bound[..., side] & take
+            counted = seen.any(axis=0)
+            search.blocked[counted, side] = np.all(lowered | ~seen, axis=0)[counted]
+        search.skipped_differences += int(skip.sum())
+
+
+def _skipped_differences(search: _Search, generation: int, at_bound: np.ndarray) -> np.ndarray:
+    """``(k, d)`` the differences not taken: a variable at a bound where, at the last
+    differences, moving inward lowered every objective (for every member there) has no
+    inward projected gradient for any weights; skipped (row zero) until the next refresh."""
+    refresh = not search.bound_refresh or (generation - 1) % search.bound_refresh == 0
+    if refresh:
+        return np.zeros(at_bound.shape[:-1], dtype=bool)
+    return np.any(at_bound & search.blocked[None], axis=-1)
+
+
+def _gradient_steps(search: _Search, step: _Generation) -> None:
+    """2a. The stepped designs: along the normalized gradient by each member's length
+    (Armijo), or each variable by its own length in the sign of its gradient (Rprop:
+    Riedmiller & Braun, ICNN 1993; longer while the sign holds, halved and no move when
+    it flips, so weakly sensitive variables move as fast as strong ones)."""
+    settings, members, chosen = search.settings, search.members, step.chosen
+    if search.per_variable:
+        sign = np.sign(step.gradient)
+        agree = sign * members.signs[chosen]
+        steps = members.steps[chosen]
+        grown = np.where(agree > 0, 1.2 * steps, np.where(agree < 0, 0.5 * steps, steps))
+        step.lengths = np.clip(grown, settings.min_step, settings.max_step)
+        move = np.where(agree < 0, 0.0, sign * step.lengths)
+        members.signs[chosen] = np.where(agree < 0, 0.0, sign)
+    else:
+        norm = step.norm
+        direction = np.where(norm > 0, step.gradient / np.where(norm > 0, norm, 1.0), 0.0)
+        move = members.steps[chosen][:, None] * direction
+    step.z_to = np.clip(step.z_from + move, 0.0, 1.0)
+
+
+def _pareto_probes(search: _Search, step: _Generation) -> None:
+    """2b. Two objectives with forward differences: from each front member with a
+    current Jacobian that is not Pareto-critical, the common-ascent trials (Fliege &
+    Svaiter 2000; Desideri 2012) and the probes of a Pareto-Newton step, both evaluated
+    in the steps' batch."""
+    settings, members = search.settings, search.members
+    step.trials = step.probed = step.z_newton = np.zeros((0, search.d))
+    if search.jacobian == "reverse" or search.m != 2 or not (settings.common_ascent or settings.newton):
+        return
+    step.on = np.flatnonzero(members.known & nondominated_mask(members.f))
+    if settings.common_ascent:
+        step.trials = _common_ascent_designs(members.z[step.on], members.jacobians[step.on])
+    if settings.newton:
+        step.probes = _newton_probes(members.z[step.on], members.jacobians[step.on])
+        step.probed = step.probes["probes"][step.probes["taken"]]
+
+
+def _evaluate_steps(search: _Search, step: _Generation) -> None:
+    """2c. The stepped designs, trials and probes in one batch that NSGA-II offspring
+    fill (half a population at least); the Newton steps from the probes' values."""
+    counts = [step.count, step.trials.shape[0], step.probed.shape[0]]
+    children = search.filled(sum(counts), least=search.population // 2)
+    f_all = search.archive.value_of(
+        np.concatenate([step.z_to, step.trials, step.probed, children]),
+        np.repeat([_STEPS, _ASCENT, _PROBES, _OFFSPRING], [*counts, children.shape[0]]),
+    )
+    step.f_to = f_all[: step.count]
+    step.new_z.extend([step.trials, step.probed, children])
+    step.new_f.append(f_all[step.count :])
+    if step.probes is None or not step.probes["members"].size:
+        return
+    members, stepped = search.members, step.on[step.probes["members"]]
+    probe_values = np.zeros((*step.probes["taken"].shape, search.m))
+    probe_values[step.probes["taken"]] = f_all[counts[0] + counts[1] :][: counts[2]]
+    step.z_newton = _newton_designs(
+        members.z[stepped], members.f[stepped], members.jacobians[stepped], step.probes, probe_values
+    )
+
+
+def _evaluate_newton_alone(search: _Search, step: _Generation) -> None:
+    """2b. The Newton steps, when no densified batch follows to carry them: offspring
+    fill their batch."""
+    if not step.z_newton.shape[0] or search.densifying:
+        return
+    children = search.filled(step.z_newton.shape[0])
+    step.new_z.extend([step.z_newton, children])
+    step.new_f.append(
+        search.archive.value_of(
+            np.concatenate([step.z_newton, children]),
+            np.repeat([_NEWTON, _OFFSPRING], [step.z_newton.shape[0], children.shape[0]]),
+        )
+    )
+    step.z_newton = np.zeros((0, search.d))
+
+
+def _accept_steps(search: _Search, step: _Generation) -> None:
+    """2a. Armijo's test on the layer hypervolume, linearized at the old point: a step's
+    gain w . (f_new - f) must reach a tenth of what the gradient promised (per variable:
+    for the move actually made). A passed step doubles the member's length (per
+    variable: keeps the grown lengths), a refused one halves it."""
+    settings, members, chosen = search.settings, search.members, step.chosen
+    gain = np.sum(step.weights * (step.f_to - members.f[chosen]), axis=1)
+    if search.per_variable:
+        promised = np.sum(step.gradient * (step.z_to - step.z_from), axis=1)
+    else:
+        promised = members.steps[chosen] * step.norm[:, 0]
+    better = (gain >= 0.1 * promised) & (promised > 0) & np.all(np.isfinite(step.f_to), axis=1)
+    members.z[chosen] = np.where(better[:, None], step.z_to, step.z_from)
+    members.f[chosen] = np.where(better[:, None], step.f_to, members.f[chosen])
+    if search.per_variable:
+        members.steps[chosen] = np.where(
+            better[:, None], step.lengths, np.maximum(0.5 * step.lengths, settings.min_step)
+        )
+    else:
+        lengths = np.where(better, 2.0 * members.steps[chosen], 0.5 * members.steps[chosen])
+        members.steps[chosen] = np.clip(lengths, settings.min_step, settings.max_step)
+    search.accepted += int(better.sum())
+    members.known[chosen[better]] = False  # moved
+
+
+def _densify_front(search: _Search, step: _Generation) -> None:
+    """2d. Designs between neighbouring archive-front designs, where the gaps lose the
+    most hypervolume: along the front's curve for two objectives, on chords to near
+    neighbours for more, and, once settled, at the centroids of the largest simplices."""
+    if not search.densifying:
+        return
+    if search.m == 2:
+        _densify_curve(search, step)
+    elif search.settled_at is None:
+        _densify_chords(search, step)
+    else:
+        _fill_simplices(search)
+
+
+def _densify_curve(search: _Search, step: _Generation) -> None:
+    """Two objectives: the Newton steps first, then designs past the front's ends (a
+    quarter of a population at most) and in its gaps, filling the batch to a multiple of
+    the population (one population at least); all join the union."""
+    archive, population, newton = search.archive, search.population, step.z_newton.shape[0]
+    order = np.argsort(archive.front_f[:, 0])
+    z_ends = _end_designs(archive.front_z[order])[: population // 4]
+    dense = -(-(population + newton) // population) * population - newton
+    z_gaps = _densify(archive.front_f[order], archive.front_z[order], dense - z_ends.shape[0])
+    z_dense = np.concatenate([z_ends, np.clip(z_gaps, 0.0, 1.0)])
+    z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(dense - z_dense.shape[0], axis=0)])
+    step.new_z.extend([step.z_newton, z_dense])
+    step.new_f.append(
+        archive.value_of(np.concatenate([step.z_newton, z_dense]), np.repeat([_NEWTON, _DENSIFIED], [newton, dense]))
+    )
+
+
+def _densify_chords(search: _Search, step: _Generation) -> None:
+    """Three or more objectives: a population of chord designs for the archive only (in
+    the population they would crowd out the members being refined), and whether the
+    search has settled (`HybridSettings.settled_fill`)."""
+    archive, settings = search.archive, search.settings
+    fill_at = len(archive.values)
+    f_fill = archive.value_of(
+        _neighbour_designs(search.rng, archive.front_f, archive.front_z, search.population), _DENSIFIED
+    )
+    wait = settings.population_patience
+    if not (settings.settled_fill and wait):
+        return
+    f_rest = np.concatenate(archive.values[archive.recorded : fill_at])
+    search.gain_ratios.append(_fill_gain_ratio(archive, f_fill, f_rest, search.reference))
+    ratios = search.gain_ratios
+    if (
+        len(ratios) >= wait
+        and np.mean(ratios[-wait:]) > 0
+        and _population_stalled(archive.checkpoints, wait, settings.tolerance)
+    ):
+        search.settled_at = step.number
+
+
+def _fill_gain_ratio(archive: _Archive, f_fill: np.ndarray, f_rest: np.ndarray, reference: np.ndarray) -> float:
+    """The log ratio of what each evaluation gained the archive this generation, the
+    fill's designs against the rest (offspring, steps, differences), each set added alone
+    to the front as it stood before the generation."""
+    old = hypervolume(archive.front_f, reference)
+    fill_gain = (hypervolume(np.concatenate([archive.front_f, f_fill]), reference) - old) / f_fill.shape[0]
+    rest_gain = (hypervolume(np.concatenate([archive.front_f, f_rest]), reference) - old) / f_rest.shape[0]
+    return np.log(np.clip(fill_gain / max(rest_gain, 1e-300), 1e-12, 1e12))
+
+
+def _population_stalled(checkpoints: list, wait: int, tolerance: float) -> bool:
+    """Whether the population's hypervolume rose no higher in the last ``wait``
+    generations than ``tolerance`` (relative) above its best before them."""
+    population_hv = [c["population_hypervolume"] for c in checkpoints]
+    if len(population_hv) <= wait:
+        return False
+    best_before = max(population_hv[:-wait])
+    return max(population_hv[-wait:]) <= best_before + tolerance * abs(best_before)
+
+
+def _fill_simplices(search: _Search) -> None:
+    """Settled: the population sits on the front; the archive grows by filling the
+    front's largest gaps (chords make up any shortfall of simplices)."""
+    archive, count = search.archive, search.settings.settled_fill * search.population
+    front_f, front_z = archive.front_f, archive.front_z
+    z_fill = (
+        _simplex_designs(front_f, front_z, count, search.tried)
+        if front_f.shape[0] > search.m
+        else np.zeros((0, search.d))
+    )
+    if z_fill.shape[0] < count:
+        z_fill = np.concatenate([z_fill, _neighbour_designs(search.rng, front_f, front_z, count - z_fill.shape[0])])
+    archive.value_of(z_fill, _DENSIFIED)
+
+
+def _select_survivors(search: _Search, step: _Generation) -> None:
+    """NSGA-II's selection over the population and every design this generation added to it."""
+    union = search.members.joined(np.concatenate(step.new_z), np.concatenate(step.new_f), search.settings.initial_step)
+    keep = _survivors(np.where(np.isfinite(union.f), union.f, -np.inf), search.population)
+    search.members = union.taken(keep)
+
+
+_GENERATION = (
+    _choose_steppers,
+    _design_gradients,
+    _gradient_steps,
+    _pareto_probes,
+    _evaluate_steps,
+    _evaluate_newton_alone,
+    _accept_steps,
+    _densify_front,
+    _select_survivors,
+)
+
+
+def _stop_reason(search: _Search) -> str | None:
+    """3. Why the search stops after this generation (None: it goes on)."""
+    settings, archive = search.settings, search.archive
+    hv = [c["hypervolume"] for c in archive.checkpoints]
+    if len(hv) > settings.patience and hv[-1] - hv[-1 - settings.patience] <= settings.tolerance * abs(hv[-1]):
+        return f"converged: hypervolume gained < {settings.tolerance:g} in {settings.patience} generations"
+    # Without densification the population is the front the search refines: once its own
+    # hypervolume stops rising (what remains are crowding fluctuations) and the archive
+    # barely gains, later generations only add designs near the same front.
+    wait = settings.population_patience
+    if (
+        not settings.densify
+        and wait
+        and _population_stalled(archive.checkpoints, wait, settings.tolerance)
+        and hv[-1] - hv[-1 - wait] <= settings.population_tolerance * abs(hv[-1])
+    ):
+        return (
+            f"converged: the population's hypervolume rose no higher in {wait} generations, "
+            f"the archive's by less than {settings.population_tolerance:g}"
+        )
+    if settings.max_evaluations is not None and archive.evaluations >= settings.max_evaluations:
+        return "max_evaluations"
+    if settings.max_seconds is not None and time.perf_counter() - archive.started >= settings.max_seconds:
+        return "max_seconds"
+    return None
+
+
 def hybrid_search(
     problem, settings: HybridSettings | None = None, reference: Sequence[float] | None = None
 ) -> SearchResult:
@@ -651,387 +1169,79 @@ def hybrid_search(
         source: `SOURCES`) and the compile seconds of each program.
     """
     settings = settings or HybridSettings()
+    search, compile_seconds = _prepare(problem, settings, reference)
+    generation, stop_reason = 0, None
+    for generation in range(1, settings.generations + 1):
+        step = _Generation(generation)
+        for run_step in _GENERATION:
+            run_step(search, step)
+        search.record()
+        stop_reason = _stop_reason(search)
+        if stop_reason is not None:
+            break
+    return _result(search, compile_seconds, generation, stop_reason or "generations")
+
+
+def _prepare(problem, settings: HybridSettings, reference) -> tuple[_Search, dict]:
+    """Compile the programs, evaluate the start and record it: the search before its
+    first generation, and the compile seconds by program."""
     if reference is None:
         reference = getattr(problem, "reference_point", None)
     d, m = len(problem.variables), len(problem.objectives)
     if m > 4:
         raise ConfigError(f"objectives: the hybrid search handles 2 to 4 objectives, got {m}; use --method scalarized")
-    population = settings.population
-    lower, width = problem.lower, problem.upper - problem.lower
     evaluate = problem.batch_function()
     rng = np.random.default_rng(settings.seed)
-    jacobian = settings.jacobian
-    # Closed-form objectives (no joint-box average) make values cheap: a batch costs
-    # 0.1-0.2 % of the value program's compile, against 3-4 % for the averages.
-    # The radius (a search per value) is no closed form either.
-    closed_forms = problem.closed_form
-    share = settings.gradient_share if settings.gradient_share is not None else (1.0 if closed_forms else 0.5)
-    stepping = min(population, round(share * population))
-    densifying = settings.densify
+    stepping, jacobian, step_rule = _plan(problem, settings)
+    pulls, compile_seconds = _compile(problem, evaluate, settings.population, stepping, jacobian)
+    archive = _Archive(problem.lower, problem.upper - problem.lower, evaluate, settings.population, time.perf_counter())
+    members, reference, reference_from = _start(problem, settings, archive, reference, step_rule == "per_variable")
+    search = _Search(
+        settings=settings,
+        d=d,
+        m=m,
+        stepping=stepping,
+        jacobian=jacobian,
+        step_rule=step_rule,
+        pulls=pulls,
+        rng=rng,
+        reference=reference,
+        reference_from=reference_from,
+        archive=archive,
+        members=members,
+        blocked=np.zeros((d, 2), dtype=bool),
+        bound_refresh=settings.bound_refresh if m == 2 else 0,  # tried on two objectives only
+    )
+    search.record()
+    return search, compile_seconds
 
-    # Compile every program once, for the population's shapes, before the timed run:
-    # the value program (every evaluation goes through it in batches of the population),
-    # the vector-Jacobian product of `stepping` designs (reverse Jacobians only) and, for
-    # four objectives, the layer hypervolume gradients.
-    compile_seconds = {}
-    tic = time.perf_counter()
-    jax.block_until_ready(evaluate(jnp.asarray(np.tile(problem.lower, (population, 1)))))
-    compile_seconds["value"] = time.perf_counter() - tic
-    if jacobian == "auto":
-        jacobian = "differences" if d <= DIFFERENCES_UP_TO or closed_forms else "reverse"
-    pulls = None
-    if jacobian == "reverse" and stepping > 0:
-        pulls = _pull_program(problem)
-        tic = time.perf_counter()
-        jax.block_until_ready(pulls(jnp.asarray(np.full((stepping, d), 0.5)), jnp.asarray(np.ones((stepping, m)))))
-        compile_seconds["gradient"] = time.perf_counter() - tic
-    if m == 4:
-        tic = time.perf_counter()
-        dummy_k = jnp.asarray(np.zeros(population, dtype=np.int64))
-        jax.block_until_ready(_layer_gradients_jax(jnp.ones((population, m)), jnp.zeros(m), dummy_k))
-        compile_seconds["hypervolume"] = time.perf_counter() - tic
 
-    start = time.perf_counter()
-    designs, values, checkpoints = [], [], []
-    unit_designs = []  # parallel to values: the unit-box designs
-    counts = dict(value=0, value_and_gradient=0)
-    spent = np.zeros(len(SOURCES))  # evaluations each source took
-
-    def value_of(z, source):
-        """Values of any number of unit-box designs, in batches of the compiled size (the
-        last one padded with copies, which are not archived)."""
-        rows = z.shape[0]
-        padded = np.concatenate([z, np.repeat(z[-1:], -rows % population, axis=0)]) if rows else z
-        x = lower + width * padded
-        f = np.concatenate(
-            [np.asarray(evaluate(jnp.asarray(x[i : i + population]))) for i in range(0, x.shape[0], population)]
-        )[:rows]
-        unit_designs.append(z)
-        np.add.at(spent, np.broadcast_to(np.asarray(source), (rows,)), 1)
-        designs.append(x[:rows])
-        values.append(f)
-        counts["value"] += padded.shape[0]
-        return f
-
-    # 1. Space-filling start: two populations of a Latin hypercube sample.
-    start_designs = qmc.LatinHypercube(d, seed=settings.seed).random(2 * population)
-    f_start = value_of(start_designs, _START)
-    if reference is None:
-        reference = reference_from_population(f_start, settings.reference_margin)
-        reference_from = (
-            f"nadir of the first {2 * population} designs' front minus {settings.reference_margin} of its range"
-        )
-    else:
-        reference_from = "problem"
-    reference = np.asarray(reference, dtype=np.float64)
-    keep = _survivors(f_start, population)
-    z, f = start_designs[keep], f_start[keep]
-    step_rule = settings.step_rule
-    if step_rule == "auto":
-        step_rule = "per_variable" if d > DIFFERENCES_UP_TO and not closed_forms else "armijo"
-    per_variable = step_rule == "per_variable"
-    steps = np.full((population, d) if per_variable else population, settings.initial_step)
-    signs = np.zeros((population, d))  # the last gradient's sign per variable (per_variable)
-    # Forward differences: each member's Jacobian dF_j/dz_k, kept while it does not move.
-    jacobians, jacobian_known = np.zeros((population, d, m)), np.zeros(population, dtype=bool)
-    blocked = np.zeros((d, 2), dtype=bool)  # (variable, lower/upper bound): inward lowers every objective
-    skipped_differences = 0
-    bound_refresh = settings.bound_refresh if m == 2 else 0  # measured on two objectives only
-    # Three or more objectives: once settled (see `HybridSettings.settled_fill`), the
-    # steps stop and the fill takes the evaluations; the log ratios of the fill's archive
-    # gain per evaluation to the rest's decide when.
-    settled_at, gain_ratios, tried = None, [], set()
-    first_front = nondominated_mask(f_start)
-    front_f, front_z = f_start[first_front], start_designs[first_front]
-
-    recorded = [len(values)]
-
-    def record():
-        nonlocal front_f, front_z
-        merged = np.concatenate([front_f, *values[recorded[0] :]])
-        merged_z = np.concatenate([front_z, *unit_designs[recorded[0] :]])
-        recorded[0] = len(values)
-        keep = nondominated_mask(merged)
-        front_f, front_z = merged[keep], merged_z[keep]
-        checkpoints.append(
-            dict(
-                evaluations=counts["value"] + counts["value_and_gradient"],
-                seconds=time.perf_counter() - start,
-                hypervolume=hypervolume(front_f, reference),
-                population_hypervolume=hypervolume(f, reference),
-            )
-        )
-
-    def offspring(count):
-        """``count`` NSGA-II offspring of the current population."""
-        batches = [_variation(rng, z, f, settings) for _ in range(-(-count // population))]
-        return np.concatenate(batches)[:count] if batches else np.zeros((0, d))
-
-    def filled(count, least=0):
-        """Offspring that fill a batch of ``count`` designs up to a multiple of the
-        population, at least ``least`` of them."""
-        return offspring(-(count + least) % population + least)
-
-    record()
-    accepted_total, generation = 0, 0
-    stop_reason = "generations"
-    for generation in range(1, settings.generations + 1):
-        new_z, new_f = [], []
-        ranks = nondominated_ranks(f)
-        stepping_now = 0 if settled_at is not None else stepping
-        # 2a. Refinement: a hypervolume-gradient step for `stepping` members (the front
-        # first, at random within a layer), each along its own layer's gradient.
-        chosen = np.lexsort((rng.random(population), ranks))[:stepping_now]
-        weights = np.nan_to_num(_layer_gradients(f, reference, ranks)[chosen], nan=0.0, posinf=0.0, neginf=0.0)
-        flat = ~np.any(weights != 0, axis=1)
-        if flat.any():
-            # Below the reference or a duplicate: climb every objective, each by its spread.
-            spread = np.ptp(f, axis=0)
-            weights[flat] = 1.0 / np.where(spread > 0, spread, 1.0)
-        z_step = z[chosen]
-        if stepping_now == 0:
-            grad = np.zeros((0, d))
-        elif jacobian == "reverse":
-            grad = np.asarray(pulls(jnp.asarray(z_step), jnp.asarray(weights)))
-            counts["value_and_gradient"] += stepping_now
-        else:
-            # Forward differences, inward at the upper bound, evaluated with offspring
-            # filling the batch (they join the union below). A member that has not moved
-            # since its last differences reuses their Jacobian (the values are
-            # deterministic): on pareto-6var 37 % of the differences were such repeats.
-            need = ~jacobian_known[chosen]
-            z_need = z_step[need]
-            h = np.where(z_need > 0.5, -DIFFERENCE_STEP, DIFFERENCE_STEP)  # (needed, d), inward at a bound
-            # A variable at a bound where, at the last differences, moving inward lowered
-            # every objective (for every member there) has no inward projected gradient
-            # for any weights: its difference is skipped (row zero) until the next refresh.
-            at_bound = np.stack([z_need <= 0.0, z_need >= 1.0], axis=-1)  # (needed, d, 2)
-            refresh = not bound_refresh or (generation - 1) % bound_refresh == 0
-            skip = np.zeros(z_need.shape, dtype=bool) if refresh else np.any(at_bound & blocked[None], axis=-1)
-            take = ~skip  # (needed, d)
-            rows = int(take.sum())
-            shifted = z_need[:, None, :] + h[:, :, None] * np.eye(d)[None]  # (needed, d, d)
-            children = filled(rows)
-            if rows + children.shape[0]:
-                f_both = value_of(
-                    np.concatenate([shifted[take], children]),
-                    np.repeat([_DIFFERENCES, _OFFSPRING], [rows, children.shape[0]]),
-                )
-                new_z.append(children)
-                new_f.append(f_both[rows:])
-                f_shifted = np.repeat(f[chosen[need]][:, None, :], d, axis=1)  # skipped: zero difference
-                f_shifted[take] = f_both[:rows]
-                # (needed, d, m): dF_j/dz_k
-                jacobians[chosen[need]] = (f_shifted - f[chosen[need]][:, None, :]) / h[:, :, None]
-                jacobian_known[chosen[need]] = True
-                if bound_refresh:
-                    lowered = np.all(f_shifted <= f[chosen[need]][:, None, :], axis=-1) & take  # (needed, d)
-                    for side in range(2):
-                        seen = at_bound[..., side] & take
-                        counted = seen.any(axis=0)
-                        blocked[counted, side] = np.all(lowered | ~seen, axis=0)[counted]
-                    skipped_differences += int(skip.sum())
-            jac = jacobians[chosen]
-            grad = np.einsum("skj,sj->sk", jac, weights)
-        grad = np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
-        grad = _projected(grad, z_step)
-        norm = np.linalg.norm(grad, axis=1, keepdims=True)
-        if per_variable:
-            # Each variable its own step (Rprop: Riedmiller & Braun, ICNN 1993): longer while
-            # its gradient keeps its sign, halved (and no move this time) when it flips, so
-            # weakly sensitive variables move as fast as strong ones.
-            sign = np.sign(grad)
-            agree = sign * signs[chosen]
-            step_c = np.clip(
-                np.where(agree > 0, 1.2 * steps[chosen], np.where(agree < 0, 0.5 * steps[chosen], steps[chosen])),
-                settings.min_step,
-                settings.max_step,
-            )
-            move = np.where(agree < 0, 0.0, sign * step_c)
-            signs[chosen] = np.where(agree < 0, 0.0, sign)
-        else:
-            direction = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
-            move = steps[chosen][:, None] * direction
-        z_stepped = np.clip(z_step + move, 0.0, 1.0)
-        trials = probed = z_newton = np.zeros((0, d))
-        newton = None
-        # Two objectives with forward differences only (three or more, or reverse
-        # Jacobians, take neither 2b nor 2b').
-        if jacobian != "reverse" and m == 2 and (settings.common_ascent or settings.newton):
-            on = np.flatnonzero(jacobian_known & nondominated_mask(f))
-            if settings.common_ascent:
-                # 2b. Common ascent (Fliege & Svaiter 2000; Desideri 2012): an unmoved front
-                # member whose projected objective gradients are not opposite is not
-                # Pareto-critical; along the min-norm convex combination of the normalized
-                # gradients both objectives rise. Its Jacobian is the one its differences
-                # gave, so each trial costs one value (in the steps' batch); the trials join
-                # the union.
-                trials = _common_ascent_designs(z[on], jacobians[on])
-            if settings.newton:
-                # 2b'. Pareto-Newton: the same members' second differences on their free
-                # variables (in the steps' batch), then a Newton step onto the Pareto set
-                # (evaluated with the densified designs, 2d); probes and steps join the union.
-                newton = _newton_probes(z[on], jacobians[on])
-                probed = newton["probes"][newton["taken"]]
-        # 2c. Exploration: NSGA-II offspring fill the batch of the stepped designs, trials and probes.
-        tried_count, probed_count = trials.shape[0], probed.shape[0]
-        children = filled(stepping_now + tried_count + probed_count, least=population // 2)
-        f_both = value_of(
-            np.concatenate([z_stepped, trials, probed, children]),
-            np.repeat(
-                [_STEPS, _ASCENT, _PROBES, _OFFSPRING], [stepping_now, tried_count, probed_count, children.shape[0]]
-            ),
-        )
-        f_stepped = f_both[:stepping_now]
-        new_z.extend([trials, probed, children])
-        new_f.append(f_both[stepping_now:])
-        if newton is not None and newton["members"].size:
-            members = on[newton["members"]]
-            probe_values = np.zeros((*newton["taken"].shape, m))
-            probe_values[newton["taken"]] = f_both[stepping_now + tried_count :][:probed_count]
-            z_newton = _newton_designs(z[members], f[members], jacobians[members], newton, probe_values)
-        if z_newton.shape[0] and not (densifying and front_f.shape[0] >= 2):
-            # No densified batch to join: offspring fill the Newton steps' batch.
-            children = filled(z_newton.shape[0])
-            new_z.extend([z_newton, children])
-            new_f.append(
-                value_of(
-                    np.concatenate([z_newton, children]),
-                    np.repeat([_NEWTON, _OFFSPRING], [z_newton.shape[0], children.shape[0]]),
-                )
-            )
-            z_newton = np.zeros((0, d))
-        # Armijo's test on the layer hypervolume, linearized at the old point: the step's
-        # gain w . (f_new - f) must reach a tenth of what the gradient promised (step |g|).
-        gain = np.sum(weights * (f_stepped - f[chosen]), axis=1)
-        # (per variable: what the gradient promised for the move actually made)
-        promised = np.sum(grad * (z_stepped - z_step), axis=1) if per_variable else steps[chosen] * norm[:, 0]
-        better = (gain >= 0.1 * promised) & (promised > 0) & np.all(np.isfinite(f_stepped), axis=1)
-        z[chosen] = np.where(better[:, None], z_stepped, z_step)
-        f[chosen] = np.where(better[:, None], f_stepped, f[chosen])
-        if per_variable:
-            steps[chosen] = np.where(better[:, None], step_c, np.maximum(0.5 * step_c, settings.min_step))
-        else:
-            steps[chosen] = np.clip(
-                np.where(better, 2.0 * steps[chosen], 0.5 * steps[chosen]), settings.min_step, settings.max_step
-            )
-        accepted_total += int(better.sum())
-        jacobian_known[chosen[better]] = False  # moved
-        if densifying and front_f.shape[0] >= 2:
-            # 2d. Designs interpolated between neighbouring archive-front designs, where the
-            # gaps lose the most hypervolume: along the front's curve for two objectives,
-            # on chords to near neighbours for more.
-            if m == 2:
-                order = np.argsort(front_f[:, 0])
-                # A quarter of them at most past the front's ends, the rest in its gaps.
-                z_ends = _end_designs(front_z[order])[: population // 4]
-                # The Newton steps (2b') go first; densified designs fill the batch to a
-                # multiple of the population, at least one population of them.
-                dense = -(-(population + z_newton.shape[0]) // population) * population - z_newton.shape[0]
-                z_dense = np.clip(_densify(front_f[order], front_z[order], dense - z_ends.shape[0]), 0.0, 1.0)
-                z_dense = np.concatenate([z_ends, z_dense])
-                z_dense = np.concatenate([z_dense, z_dense[-1:].repeat(dense - z_dense.shape[0], axis=0)])
-                new_z.extend([z_newton, z_dense])
-                new_f.append(
-                    value_of(
-                        np.concatenate([z_newton, z_dense]),
-                        np.repeat([_NEWTON, _DENSIFIED], [z_newton.shape[0], dense]),
-                    )
-                )
-            elif settled_at is None:
-                # Archive only: in the population these near-front designs would crowd
-                # the members being refined out (pareto-ur5-arm ended lower with them).
-                fill_at = len(values)
-                f_fill = value_of(_neighbour_designs(rng, front_f, front_z, population), _DENSIFIED)
-                wait = settings.population_patience
-                if settings.settled_fill and wait:
-                    # What each evaluation gained the archive this generation: the fill's
-                    # designs against the rest (offspring, steps, differences), each
-                    # added alone to the front as it stood before the generation.
-                    f_rest = np.concatenate(values[recorded[0] : fill_at])
-                    old = hypervolume(front_f, reference)
-                    fill_gain = (hypervolume(np.concatenate([front_f, f_fill]), reference) - old) / f_fill.shape[0]
-                    rest_gain = (hypervolume(np.concatenate([front_f, f_rest]), reference) - old) / f_rest.shape[0]
-                    gain_ratios.append(np.log(np.clip(fill_gain / max(rest_gain, 1e-300), 1e-12, 1e12)))
-                    population_hv = [c["population_hypervolume"] for c in checkpoints]
-                    if len(gain_ratios) >= wait and len(population_hv) > wait and np.mean(gain_ratios[-wait:]) > 0:
-                        best_before = max(population_hv[:-wait])
-                        if max(population_hv[-wait:]) <= best_before + settings.tolerance * abs(best_before):
-                            settled_at = generation
-            else:
-                # Settled: the population sits on the front; the archive grows by filling
-                # the front's largest gaps (chords make up any shortfall of simplices).
-                count = settings.settled_fill * population
-                z_fill = _simplex_designs(front_f, front_z, count, tried) if front_f.shape[0] > m else np.zeros((0, d))
-                if z_fill.shape[0] < count:
-                    z_fill = np.concatenate(
-                        [z_fill, _neighbour_designs(rng, front_f, front_z, count - z_fill.shape[0])]
-                    )
-                value_of(z_fill, _DENSIFIED)
-        z_all, f_all = np.concatenate([z, *new_z]), np.concatenate([f, *new_f])
-        fresh = z_all.shape[0] - population
-        steps_all = np.concatenate([steps, np.full((fresh, *steps.shape[1:]), settings.initial_step)])
-        signs_all = np.concatenate([signs, np.zeros((fresh, d))])
-        jacobians_all = np.concatenate([jacobians, np.zeros((fresh, d, m))])
-        known_all = np.concatenate([jacobian_known, np.zeros(fresh, dtype=bool)])
-        keep = _survivors(np.where(np.isfinite(f_all), f_all, -np.inf), population)
-        z, f, steps, signs = z_all[keep], f_all[keep], steps_all[keep], signs_all[keep]
-        jacobians, jacobian_known = jacobians_all[keep], known_all[keep]
-        record()
-        # 3. Stopping from the front's own convergence, or a budget.
-        hv = [c["hypervolume"] for c in checkpoints]
-        if len(hv) > settings.patience and hv[-1] - hv[-1 - settings.patience] <= settings.tolerance * abs(hv[-1]):
-            stop_reason = f"converged: hypervolume gained < {settings.tolerance:g} in {settings.patience} generations"
-            break
-        # Without densification the population is the front the search refines: once its
-        # own hypervolume stops rising (a set near the hypervolume-optimal distribution of
-        # its size; what remains are crowding fluctuations) and the archive barely gains,
-        # later generations only add designs near the same front. (The population alone
-        # settles early on pareto-ur5-arm, at 98.9 % of the best known, while its archive
-        # still gained 6e-3 in 5 generations; on pareto-mount-ur5, 5e-4.)
-        population_hv = [c["population_hypervolume"] for c in checkpoints]
-        wait = settings.population_patience
-        if not densifying and wait and len(population_hv) > wait:
-            best_before = max(population_hv[:-wait])
-            settled = max(population_hv[-wait:]) <= best_before + settings.tolerance * abs(best_before)
-            if settled and hv[-1] - hv[-1 - wait] <= settings.population_tolerance * abs(hv[-1]):
-                stop_reason = (
-                    f"converged: the population's hypervolume rose no higher in {wait} generations, "
-                    f"the archive's by less than {settings.population_tolerance:g}"
-                )
-                break
-        evaluations = counts["value"] + counts["value_and_gradient"]
-        if settings.max_evaluations is not None and evaluations >= settings.max_evaluations:
-            stop_reason = "max_evaluations"
-            break
-        if settings.max_seconds is not None and time.perf_counter() - start >= settings.max_seconds:
-            stop_reason = "max_seconds"
-            break
-    run_seconds = time.perf_counter() - start
+def _result(search: _Search, compile_seconds: dict, generation: int, stop_reason: str) -> SearchResult:
+    archive = search.archive
     return SearchResult(
         method="hybrid",
-        designs=np.concatenate(designs),
-        objectives=np.concatenate(values),
-        checkpoints=checkpoints,
-        evaluations=counts["value"] + counts["value_and_gradient"],
+        designs=np.concatenate(archive.designs),
+        objectives=np.concatenate(archive.values),
+        checkpoints=archive.checkpoints,
+        evaluations=archive.evaluations,
         compile_seconds=float(sum(compile_seconds.values())),
-        run_seconds=run_seconds,
+        run_seconds=time.perf_counter() - archive.started,
         extra=dict(
-            reference_point=[float(r) for r in reference],
-            reference_point_from=reference_from,
-            population=population,
+            reference_point=[float(r) for r in search.reference],
+            reference_point_from=search.reference_from,
+            population=search.population,
             generations=generation,
             stop_reason=stop_reason,
-            jacobian=jacobian,
-            step_rule=step_rule,
-            gradient_steps_per_generation=stepping,
-            value_evaluations=counts["value"],
-            value_and_gradient_evaluations=counts["value_and_gradient"],
-            accepted_gradient_steps=accepted_total,
-            settled_at_generation=settled_at,
-            evaluations_by_source={name: int(n) for name, n in zip(SOURCES, spent, strict=True)},
+            jacobian=search.jacobian,
+            step_rule=search.step_rule,
+            gradient_steps_per_generation=search.stepping,
+            value_evaluations=archive.value_evaluations,
+            value_and_gradient_evaluations=archive.gradient_evaluations,
+            accepted_gradient_steps=search.accepted,
+            settled_at_generation=search.settled_at,
+            evaluations_by_source={name: int(n) for name, n in zip(SOURCES, archive.spent, strict=True)},
             compile_seconds_by_program={k: float(v) for k, v in compile_seconds.items()},
-            settings=dataclasses.asdict(settings),
-            skipped_differences=skipped_differences,
+            settings=dataclasses.asdict(search.settings),
+            skipped_differences=search.skipped_differences,
         ),
     )
