@@ -14,6 +14,7 @@ import concurrent.futures
 import dataclasses
 import time
 from collections.abc import Callable
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -171,67 +172,24 @@ def _densify(front_f: np.ndarray, front_x: np.ndarray, count: int) -> np.ndarray
     return np.concatenate(rows)[:count]
 
 
-def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None, reference=None) -> SearchResult:
-    """Gradient-based Pareto search: vmapped projected Adam over Chebyshev scalarizations.
-
-    1. ``initial_samples`` random designs (value only) give a first front, ideal
-       point and objective scales.
-    2. ``directions`` x ``starts`` smoothed Chebyshev scalarizations run in parallel:
-       the variables are mapped to the unit box, one Adam state per run is vmapped
-       (``optax.scale_by_adam``), each update is projected back onto the box (so
-       bounds that are active at the optimum are reached exactly, which a sigmoid
-       reparametrization cannot do), and the step size decays from ``learning_rate``
-       to ``final_learning_rate`` (cosine). The first start of each direction begins
-       at the initial sample that scores best on its scalarization (``warm_start``),
-       the other starts at random designs.
-    3. The steps run in jitted chunks of ``chunk`` steps (compiled once, same shapes
-       every call). After each chunk the ideal point and scales are re-read from the
-       archive and, with ``reaim``, the rays are re-aimed at points evenly spaced by
-       arc length along the current front (`_front_rays`); the first start of
-       each direction restarts from the archived design nearest its new target, the
-       other starts continue their own trajectories. Rays then follow the front's
-       shape, so a flat or a steep stretch of the front gets its share of points, and
-       the free starts keep exploring (on the 6-variable problem the w-bar anchor at
-       b0 = 0 is a stationary point of w-bar in b0: only a free start finds the
-       steep part of the front beyond it).
-    4. The first and last rays are one-hot anchors (each objective alone, the other
-       breaking ties through the augmentation term); objective scales never fall
-       below the spread of the initial samples, so a front first seen as a flat
-       stretch does not freeze the anchors.
-
-    Every design the optimizer visits is archived (the objective values come with the
-    gradient for free); the front is the non-dominated part of the archive.
-
-    Args:
-        reference: the hypervolume reference point of the checkpoints; None takes the
-            problem's, or, when it gives none, `reference_from_population` of the initial
-            samples (margin 0.1).
-
-    Returns:
-        A `SearchResult` with every evaluated design in order.
-    """
-    settings = settings or problem.search
-    objective = problem.objective_function()
-    lower_np, width_np = problem.lower, problem.upper - problem.lower
-    dtype = jnp.result_type(float)
-    lower, width = np.asarray(lower_np, dtype), np.asarray(width_np, dtype)
-    d, m = len(problem.variables), len(problem.objectives)
-    runs = settings.directions * settings.starts
-    rng = np.random.default_rng(settings.seed)
-    ray_targets = _direction_targets(settings.directions, m)  # (directions, m)
-    first = np.arange(runs) % settings.starts == 0  # the first start of each direction
-
+def _step_sizes(settings: SearchSettings) -> np.ndarray:
+    """``(steps,)`` step sizes from ``learning_rate`` to ``final_learning_rate``: cosine,
+    or geometric (travel early, precision soon after)."""
     progress = np.arange(settings.steps) / max(settings.steps - 1, 1)
     final = settings.final_learning_rate
     if settings.schedule == "cosine":
-        step_sizes = final + 0.5 * (settings.learning_rate - final) * (1.0 + np.cos(np.pi * progress))
-    else:  # geometric: travel early, precision soon after
-        step_sizes = settings.learning_rate * (final / settings.learning_rate) ** progress
-    adam = optax.scale_by_adam()
+        return final + 0.5 * (settings.learning_rate - final) * (1.0 + np.cos(np.pi * progress))
+    return settings.learning_rate * (final / settings.learning_rate) ** progress
+
+
+def _chunk_function(objective: Callable, settings: SearchSettings, lower: np.ndarray, width: np.ndarray, adam):
+    """``run_chunk(z, state, step_sizes, weights, utopia, nadir, scale)``: a scan of
+    projected Adam steps of every run, vmapped, returning each visited design and its
+    objectives (which come with the gradient)."""
     scalar = _scalarization_builder(objective, settings.smoothing, settings.augmentation)
     if settings.gradient == "forward":
-        # d forward tangents instead of one reverse pass; measured slower on eq. 12's
-        # quadrature (about 1.7x a value vs 1.2x for reverse), kept as an option.
+        # d forward tangents instead of one reverse pass; slower on the joint-box
+        # quadratures, kept as an option.
         gradient_and_objectives = jax.jacfwd(scalar, has_aux=True)
     elif settings.gradient == "reverse":
         gradient_and_objectives = jax.grad(scalar, has_aux=True)
@@ -256,172 +214,304 @@ def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None
         (z, state), (zs, fs) = jax.lax.scan(body, (z, state), step_sizes)
         return z, state, zs, fs
 
-    evaluate_batch = problem.batch_function()
-    z_samples = rng.uniform(size=(settings.initial_samples, d))
-    z_runs = rng.uniform(size=(runs, d))
+    return run_chunk
 
-    # Adam's state starts at zeros (count, first and second moments): built in NumPy from
-    # its shapes, so no small program compiles for it.
-    state_shapes = jax.eval_shape(jax.vmap(adam.init), jax.ShapeDtypeStruct(z_runs.shape, dtype))
 
-    def initial_state():
-        return jax.tree_util.tree_map(lambda leaf: np.zeros(leaf.shape, leaf.dtype), state_shapes)
-
-    # Compile both programs first, on the real shapes (timed apart from the run), side by
-    # side: XLA compiles outside the GIL, so on two cores the value program compiles
-    # while the gradient program is traced and compiled.
-    start = time.perf_counter()
-    x_first = lower_np + width_np * z_samples
+def _compile_both(evaluate_batch, run_chunk, x_first: np.ndarray, chunk_arguments: tuple, dtype):
+    """Compile the value program and the chunk program on the real shapes, side by side:
+    XLA compiles outside the GIL, so the value program compiles while the gradient
+    program is traced and compiled. Returns the compiled chunk program."""
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
         value_ready = pool.submit(
             lambda: jax.block_until_ready(evaluate_batch(x_first))
         )  # compiles (or hits the cache)
-        chunk_shapes = (
-            z_runs,
-            state_shapes,
-            step_sizes[: settings.chunk],
-            np.ones((runs, m)),
-            np.ones(m),
-            np.zeros(m),
-            np.ones(m),
-        )
-        chunk_shapes = jax.tree_util.tree_map(
+        shapes = jax.tree_util.tree_map(
             lambda x: jax.ShapeDtypeStruct(np.shape(x), dtype) if not isinstance(x, jax.ShapeDtypeStruct) else x,
-            chunk_shapes,
+            chunk_arguments,
         )
-        run_chunk = jax.jit(run_chunk).lower(*chunk_shapes).compile()
+        compiled = jax.jit(run_chunk).lower(*shapes).compile()
         value_ready.result()
+    return compiled
+
+
+@dataclasses.dataclass
+class _Archive:
+    """Every design the scalarized search evaluated, in order, and the front of them all."""
+
+    started: float
+    reference: list
+    designs: list = dataclasses.field(default_factory=list)
+    values: list = dataclasses.field(default_factory=list)
+    checkpoints: list = dataclasses.field(default_factory=list)
+    evaluations: int = 0
+    front_f: np.ndarray | None = None
+    front_x: np.ndarray | None = None
+
+    def add(self, x: np.ndarray, f: np.ndarray) -> None:
+        """Archive ``(k, d)`` designs and their ``(k, m)`` objectives; update the front."""
+        self.designs.append(x)
+        self.values.append(f)
+        self.evaluations += f.shape[0]
+        if self.front_f is None:
+            merged_f, merged_x = f, x
+        else:
+            merged_f, merged_x = np.concatenate([self.front_f, f]), np.concatenate([self.front_x, x])
+        keep = nondominated_mask(merged_f)
+        self.front_f, self.front_x = merged_f[keep], merged_x[keep]
+
+    def checkpoint(self) -> None:
+        self.checkpoints.append(
+            dict(
+                evaluations=self.evaluations,
+                seconds=time.perf_counter() - self.started,
+                hypervolume=hypervolume(self.front_f, self.reference),
+            )
+        )
+
+    def normalization(self, spread: np.ndarray, utopia_margin: float):
+        """The nadir and scales of the front (never below ``spread``) and the utopia point."""
+        ideal, nadir = self.front_f.max(axis=0), self.front_f.min(axis=0)
+        scale = np.maximum(np.maximum(ideal - nadir, spread), 1e-12)
+        return nadir, scale, (ideal - nadir) / scale + utopia_margin
+
+
+@dataclasses.dataclass
+class _Search:
+    """What the chunks of one scalarized search share."""
+
+    settings: SearchSettings
+    lower: np.ndarray  # (d,) the variables' bounds
+    width: np.ndarray
+    dtype: Any
+    evaluate_batch: Callable
+    run_chunk: Callable  # compiled (`_chunk_function`)
+    state_shapes: Any  # Adam's state of every run
+    step_sizes: np.ndarray
+    spread: np.ndarray  # (m,) the least objective scales
+    archive: _Archive
+    value_seconds: list  # per design, of each value call
+    gradient_seconds: list = dataclasses.field(default_factory=list)  # per design, of each chunk
+    densified: int = 0
+
+
+def _run_weights(targets: np.ndarray, utopia: np.ndarray, starts: int) -> np.ndarray:
+    """``(runs, m)`` the Chebyshev weights of every run (each direction's, per start)."""
+    weights = _ray_weights(targets, utopia) if targets.shape[1] == 2 else 1.0 / (utopia - targets)
+    return np.repeat(weights, starts, axis=0)
+
+
+def _warm_starts(search, ray_targets, z_samples, f_samples, z_runs, first) -> np.ndarray:
+    """The runs' start designs: each direction's first start at the initial sample that
+    scores best on its own scalarization; further starts stay random (multi-start)."""
+    settings = search.settings
+    nadir, scale, utopia = search.archive.normalization(search.spread, settings.utopia_margin)
+    fhat = (f_samples - nadir) / scale
+    weights = _run_weights(ray_targets, utopia, settings.starts)
+    shortfall = utopia - fhat[None, :, :]
+    score = np.max(weights[:, None, :] * shortfall, axis=-1) + settings.augmentation * shortfall.sum(-1)
+    return np.where(first[:, None], z_samples[np.argmin(score, axis=1)], z_runs)
+
+
+def _densify_front(search: _Search) -> int:
+    """Two objectives: value-only designs interpolated between neighbouring front
+    designs (`_densify`), padded to the initial batch so the compiled value program
+    serves every call. Returns how many were evaluated."""
+    settings, archive = search.settings, search.archive
+    order = np.argsort(archive.front_f[:, 0])
+    x_new = _densify(archive.front_f[order], archive.front_x[order], settings.initial_samples)
+    tic = time.perf_counter()
+    f_new = np.asarray(search.evaluate_batch(pad_leading(x_new, settings.initial_samples)))[: x_new.shape[0]]
+    search.value_seconds.append((time.perf_counter() - tic) / settings.initial_samples)
+    archive.add(x_new, f_new)
+    return x_new.shape[0]
+
+
+def pareto_search(problem: DesignProblem, settings: SearchSettings | None = None, reference=None) -> SearchResult:
+    """Gradient-based Pareto search: vmapped projected Adam over Chebyshev scalarizations.
+
+    1. ``initial_samples`` random designs (value only) give a first front, ideal
+       point and objective scales.
+    2. ``directions`` x ``starts`` smoothed Chebyshev scalarizations run in parallel:
+       the variables are mapped to the unit box, one Adam state per run is vmapped
+       (``optax.scale_by_adam``), each update is projected back onto the box (so
+       bounds that are active at the optimum are reached exactly, which a sigmoid
+       reparametrization cannot do), and the step size decays from ``learning_rate``
+       to ``final_learning_rate``. The first start of each direction begins at the
+       initial sample that scores best on its scalarization (``warm_start``), the other
+       starts at random designs.
+    3. The steps run in jitted chunks of ``chunk`` steps (compiled once, same shapes
+       every call). After each chunk the ideal point and scales are re-read from the
+       archive and, with ``reaim``, the rays are re-aimed at points spread along the
+       current front (`_front_rays`); the first start of each direction restarts from
+       the archived design nearest its new target, the other starts continue their own
+       trajectories, so a flat or a steep stretch of the front gets its share of points
+       and the free starts keep exploring (a stationary point of one objective can hide
+       a part of the front that only a free start finds).
+    4. The first and last rays are one-hot anchors (each objective alone, the other
+       breaking ties through the augmentation term); objective scales never fall
+       below the spread of the initial samples, so a front first seen as a flat
+       stretch does not freeze the anchors.
+
+    Every design the optimizer visits is archived (the objective values come with the
+    gradient for free); the front is the non-dominated part of the archive.
+
+    Args:
+        reference: the hypervolume reference point of the checkpoints; None takes the
+            problem's, or, when it gives none, `reference_from_population` of the initial
+            samples (margin 0.1).
+
+    Returns:
+        A `SearchResult` with every evaluated design in order.
+    """
+    settings = settings or problem.search
+    objective = problem.objective_function()
+    lower, width = problem.lower, problem.upper - problem.lower
+    dtype = jnp.result_type(float)
+    d, m = len(problem.variables), len(problem.objectives)
+    runs = settings.directions * settings.starts
+    rng = np.random.default_rng(settings.seed)
+    adam = optax.scale_by_adam()
+    run_chunk = _chunk_function(objective, settings, np.asarray(lower, dtype), np.asarray(width, dtype), adam)
+    evaluate_batch = problem.batch_function()
+    z_samples = rng.uniform(size=(settings.initial_samples, d))
+    z_runs = rng.uniform(size=(runs, d))
+    # Adam's state starts at zeros (count, first and second moments): built in NumPy from
+    # its shapes, so no small program compiles for it.
+    state_shapes = jax.eval_shape(jax.vmap(adam.init), jax.ShapeDtypeStruct(z_runs.shape, dtype))
+    step_sizes = _step_sizes(settings)
+    arguments = (
+        z_runs,
+        state_shapes,
+        step_sizes[: settings.chunk],
+        np.ones((runs, m)),
+        np.ones(m),
+        np.zeros(m),
+        np.ones(m),
+    )
+    start = time.perf_counter()
+    run_chunk = _compile_both(evaluate_batch, run_chunk, lower + width * z_samples, arguments, dtype)
     compile_seconds = time.perf_counter() - start
 
     if reference is None:
         reference = getattr(problem, "reference_point", None)
-    two = m == 2
-    designs, values, checkpoints = [], [], []
-    start = time.perf_counter()
-    x_samples = lower_np + width_np * z_samples
-    tic = time.perf_counter()
-    f_samples = np.asarray(evaluate_batch(x_samples))
-    value_seconds = [(time.perf_counter() - tic) / settings.initial_samples]
-    designs.append(x_samples)
-    values.append(f_samples)
-    evaluations = settings.initial_samples
-    if reference is None:
-        reference = reference_from_population(f_samples, 0.1)
-    reference = [float(r) for r in reference]
-    keep = nondominated_mask(f_samples)
-    front_f, front_x = f_samples[keep], x_samples[keep]
-    checkpoints.append(
-        dict(evaluations=evaluations, seconds=time.perf_counter() - start, hypervolume=hypervolume(front_f, reference))
-    )
-
+    archive, value_seconds = _sample(evaluate_batch, lower + width * z_samples, reference)
+    f_samples = archive.values[0]
     # Objective scales never fall below the spread (10th-90th percentile) of the initial
     # samples: while the archive front covers only a flat stretch (a range near zero in
     # one objective), the front's own range would blow that objective's scale up, and
     # the anchors would refuse to trade it for the other (the fronts here are L-shaped).
     spread = np.percentile(f_samples, 90, axis=0) - np.percentile(f_samples, 10, axis=0)
-
-    def normalization():
-        ideal, nadir = front_f.max(axis=0), front_f.min(axis=0)
-        scale = np.maximum(np.maximum(ideal - nadir, spread), 1e-12)
-        return nadir, scale, (ideal - nadir) / scale + settings.utopia_margin
-
+    search = _Search(
+        settings=settings,
+        lower=lower,
+        width=width,
+        dtype=dtype,
+        evaluate_batch=evaluate_batch,
+        run_chunk=run_chunk,
+        state_shapes=state_shapes,
+        step_sizes=step_sizes,
+        spread=spread,
+        archive=archive,
+        value_seconds=value_seconds,
+    )
+    ray_targets = _direction_targets(settings.directions, m)  # (directions, m)
+    first = np.arange(runs) % settings.starts == 0  # the first start of each direction
     if settings.warm_start:
-        # Each direction's first start begins at the initial sample that scores best on
-        # its own scalarization; further starts stay random (multi-start).
-        nadir, scale, utopia = normalization()
-        fhat = (f_samples - nadir) / scale
-        weights = _ray_weights(ray_targets, utopia) if m == 2 else 1.0 / (utopia - ray_targets)
-        weights = np.repeat(weights, settings.starts, axis=0)  # (runs, m)
-        shortfall = utopia - fhat[None, :, :]
-        score = np.max(weights[:, None, :] * shortfall, axis=-1) + settings.augmentation * shortfall.sum(-1)
-        z_runs = np.where(first[:, None], z_samples[np.argmin(score, axis=1)], z_runs)
+        z_runs = _warm_starts(search, ray_targets, z_samples, f_samples, z_runs, first)
+    steps_done = _descend(search, ray_targets, z_runs, first)
+    return _result(search, compile_seconds, steps_done)
 
-    steps_done = densified = 0
-    state = None
-    gradient_seconds = []
+
+def _sample(evaluate_batch, x_samples: np.ndarray, reference) -> tuple[_Archive, list]:
+    """1. The initial samples' values: the archive (its reference point from them when
+    None is given) and the seconds per design of the value call."""
+    started = time.perf_counter()
+    tic = time.perf_counter()
+    f_samples = np.asarray(evaluate_batch(x_samples))
+    value_seconds = [(time.perf_counter() - tic) / x_samples.shape[0]]
+    if reference is None:
+        reference = reference_from_population(f_samples, 0.1)
+    archive = _Archive(started, [float(r) for r in reference])
+    archive.add(x_samples, f_samples)
+    archive.checkpoint()
+    return archive, value_seconds
+
+
+def _descend(search: _Search, ray_targets: np.ndarray, z_runs: np.ndarray, first: np.ndarray) -> int:
+    """2-3. The chunks of steps, each followed by re-aiming and densification; returns
+    the steps taken."""
+    settings, archive = search.settings, search.archive
+    two = ray_targets.shape[1] == 2
+    steps_done, state = 0, None
     while steps_done < settings.steps:
-        nadir, scale, utopia = normalization()
-        if settings.reaim and steps_done > 0 and m == 2:
+        nadir, scale, utopia = archive.normalization(search.spread, settings.utopia_margin)
+        if settings.reaim and steps_done > 0 and two:
             # The first start of each direction restarts from the front; the others keep
-            # their own trajectories (multi-start survives re-aiming: a start elsewhere
-            # can still find a part of the front the archive has not seen).
-            order = np.argsort(front_f[:, 0])
+            # their own trajectories (a start elsewhere can still find a part of the
+            # front the archive has not seen).
+            order = np.argsort(archive.front_f[:, 0])
             ray_targets, x_start = _front_rays(
-                front_f[order], front_x[order], settings.directions, nadir, scale, utopia
+                archive.front_f[order], archive.front_x[order], settings.directions, nadir, scale, utopia
             )
-            z_runs[first] = (x_start - lower_np) / width_np
-        weights = np.repeat(
-            _ray_weights(ray_targets, utopia) if m == 2 else 1.0 / (utopia - ray_targets), settings.starts, axis=0
-        )
-        sizes = step_sizes[steps_done : steps_done + settings.chunk]
-        sizes = np.concatenate([sizes, np.full(settings.chunk - sizes.size, final)])
+            z_runs[first] = (x_start - search.lower) / search.width
         if state is None or settings.reset_adam:
-            state = initial_state()
-        tic = time.perf_counter()
-        # NumPy arguments go straight to the compiled program (jnp.asarray would compile
-        # a staging program per shape).
-        z, state, zs, fs = run_chunk(
-            *(np.asarray(x, dtype) for x in (z_runs,)),
-            state,
-            *(np.asarray(x, dtype) for x in (sizes, weights, utopia, nadir, scale)),
-        )
-        z_runs = np.array(z)
-        gradient_seconds.append((time.perf_counter() - tic) / (settings.chunk * runs))
-        fs = np.asarray(fs).reshape(-1, m)
-        xs = lower_np + width_np * np.asarray(zs).reshape(-1, d)
-        designs.append(xs)
-        values.append(fs)
+            state = jax.tree_util.tree_map(lambda leaf: np.zeros(leaf.shape, leaf.dtype), search.state_shapes)
+        weights = _run_weights(ray_targets, utopia, settings.starts)
+        z_runs, state = _run_chunk(search, steps_done, z_runs, state, (weights, utopia, nadir, scale))
         steps_done += settings.chunk
-        evaluations += fs.shape[0]
-        merged_f, merged_x = np.concatenate([front_f, fs]), np.concatenate([front_x, xs])
-        keep = nondominated_mask(merged_f)
-        front_f, front_x = merged_f[keep], merged_x[keep]
-        if settings.densify and two and front_f.shape[0] >= 2:
-            # Densify: value-only designs interpolated between neighbouring front designs.
-            order = np.argsort(front_f[:, 0])
-            x_new = _densify(front_f[order], front_x[order], settings.initial_samples)
-            # Padded to the initial batch: the value program compiled above serves every call.
-            tic = time.perf_counter()
-            f_new = np.asarray(evaluate_batch(pad_leading(x_new, settings.initial_samples)))
-            f_new = f_new[: x_new.shape[0]]
-            value_seconds.append((time.perf_counter() - tic) / settings.initial_samples)
-            designs.append(x_new)
-            values.append(f_new)
-            evaluations += x_new.shape[0]
-            densified += x_new.shape[0]
-            merged_f, merged_x = np.concatenate([front_f, f_new]), np.concatenate([front_x, x_new])
-            keep = nondominated_mask(merged_f)
-            front_f, front_x = merged_f[keep], merged_x[keep]
-        checkpoints.append(
-            dict(
-                evaluations=evaluations,
-                seconds=time.perf_counter() - start,
-                hypervolume=hypervolume(front_f, reference),
-            )
-        )
-    run_seconds = time.perf_counter() - start
+        if settings.densify and two and archive.front_f.shape[0] >= 2:
+            search.densified += _densify_front(search)
+        archive.checkpoint()
+    return steps_done
+
+
+def _run_chunk(search: _Search, steps_done: int, z_runs: np.ndarray, state, aim: tuple) -> tuple[np.ndarray, Any]:
+    """One compiled chunk of steps from ``z_runs`` ``(runs, d)``; ``aim``: the weights,
+    utopia, nadir and scales. Archives every visited design; returns the runs' designs
+    and Adam's state after it."""
+    settings, dtype = search.settings, search.dtype
+    sizes = search.step_sizes[steps_done : steps_done + settings.chunk]
+    sizes = np.concatenate([sizes, np.full(settings.chunk - sizes.size, settings.final_learning_rate)])
+    tic = time.perf_counter()
+    # NumPy arguments go straight to the compiled program (jnp.asarray would compile a
+    # staging program per shape).
+    z, state, zs, fs = search.run_chunk(
+        np.asarray(z_runs, dtype), state, *(np.asarray(x, dtype) for x in (sizes, *aim))
+    )
+    z_runs = np.array(z)
+    search.gradient_seconds.append((time.perf_counter() - tic) / (settings.chunk * z_runs.shape[0]))
+    zs, fs = np.asarray(zs), np.asarray(fs)  # (chunk, runs, d), (chunk, runs, m)
+    search.archive.add(search.lower + search.width * zs.reshape(-1, zs.shape[-1]), fs.reshape(-1, fs.shape[-1]))
+    return z_runs, state
+
+
+def _result(search: _Search, compile_seconds: float, steps_done: int) -> SearchResult:
+    settings, archive = search.settings, search.archive
+    densified = search.densified
     return SearchResult(
         method="gradient",
-        designs=np.concatenate(designs),
-        objectives=np.concatenate(values),
-        checkpoints=checkpoints,
-        evaluations=evaluations,
+        designs=np.concatenate(archive.designs),
+        objectives=np.concatenate(archive.values),
+        checkpoints=archive.checkpoints,
+        evaluations=archive.evaluations,
         compile_seconds=compile_seconds,
-        run_seconds=run_seconds,
+        run_seconds=time.perf_counter() - archive.started,
         extra=dict(
-            reference_point=reference,
+            reference_point=archive.reference,
             directions=settings.directions,
             starts=settings.starts,
             steps=steps_done,
             gradient=settings.gradient,
             value_evaluations=settings.initial_samples + densified,
             densify_evaluations=densified,
-            value_and_gradient_evaluations=evaluations - settings.initial_samples - densified,
+            value_and_gradient_evaluations=archive.evaluations - settings.initial_samples - densified,
             # Seconds per design of the fastest value call and the fastest chunk of
             # value-and-gradient steps of this run: their quotient is the cost ratio,
             # read off the compiled programs the search runs anyway.
-            value_seconds_per_design=min(value_seconds),
-            value_and_gradient_seconds_per_design=min(gradient_seconds) if gradient_seconds else float("nan"),
+            value_seconds_per_design=min(search.value_seconds),
+            value_and_gradient_seconds_per_design=(
+                min(search.gradient_seconds) if search.gradient_seconds else float("nan")
+            ),
         ),
     )
 
