@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -22,7 +21,7 @@ import numpy as np
 from .._core.errors import ConfigError, RunError
 from .._core.numeric import x64_enabled
 from ..io import build_manifest, manifest as provenance, write_csv, write_json
-from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
+from ..io.folders import check_output_folder, claimed_folder, replacing_folder
 from .baselines import grid_search, nsga2_search
 from .fronts import hypervolume
 from .hybrid import HybridSettings, hybrid_search
@@ -233,51 +232,33 @@ def run_problem(
     check_output_folder(out_dir)
     # One writer at a time (a second one is refused naming the holder's PID), taken before
     # the search so that a refused run costs nothing.
-    with lock_folder(out_dir, label=f"--out {out_dir}"):
-        claim_folder(out_dir, "optimize", label=f"--out {out_dir}")
-        return _run_locked(
-            problem,
-            out_dir,
-            method=method,
-            hybrid=hybrid,
-            baselines=baselines,
-            config=config,
-            log=log,
-            outputs=outputs,
-            command=command,
-            cost_ratio=cost_ratio,
-            nsga2_time_factor=nsga2_time_factor,
+    with claimed_folder(out_dir, "optimize", label=f"--out {out_dir}"):
+        code_state = provenance.git_state()  # before anything under out_dir (perhaps tracked) changes
+        started = time.perf_counter()
+        log(
+            f"optimize {problem.name} ({method}): {len(problem.variables)} variables "
+            f"({', '.join(problem.variable_names)}), objectives {', '.join(problem.objectives)}"
         )
+        main_key, main = _main_search(problem, method, hybrid, cost_ratio, log)
+        results = {main_key: main}
+        grid_rows = _baselines(problem, results, main, baselines, nsga2_time_factor, log)
+        summary = _summary(problem, main_key, results, grid_rows)
+        for name, result in results.items():
+            check_finite_objectives(problem, name, result)
+        run = dict(config=config, command=command, git=code_state, started=started)
+        _write_results(problem, out_dir, results, summary, outputs, run)
+        log(summary_table(summary))
+        log(f"  wrote {out_dir}: {', '.join(summary['files'])}")
+    return summary
 
 
-def _run_locked(
-    problem: DesignProblem,
-    out_dir: Path,
-    *,
-    method: str,
-    hybrid: HybridSettings | None,
-    baselines: bool,
-    config: Mapping | None,
-    log: Callable[[str], None],
-    outputs: Sequence[ProblemOutput],
-    command: Sequence[str] | None,
-    cost_ratio: str,
-    nsga2_time_factor: float,
-) -> dict:
-    """`run_problem` under the folder's lock: the searches, then every file written into a
-    staging folder that replaces ``out_dir`` as a whole."""
-    code_state = provenance.git_state()  # before anything under out_dir (perhaps tracked) changes
-    started = time.perf_counter()
-    log(
-        f"optimize {problem.name} ({method}): {len(problem.variables)} variables "
-        f"({', '.join(problem.variable_names)}), objectives {', '.join(problem.objectives)}"
-    )
+def _main_search(problem: DesignProblem, method: str, hybrid: HybridSettings | None, cost_ratio: str, log):
+    """The main search's results key and result; the scalarized search's value-and-gradient
+    cost ratio (read off its own timed calls, or ``"measured"`` apart) in its ``extra``."""
     if method == "hybrid":
-        main_key = "hybrid"
-        main = hybrid_search(problem, hybrid)
+        main_key, main = "hybrid", hybrid_search(problem, hybrid)
     else:
-        main_key = "gradient"
-        main = pareto_search(problem)
+        main_key, main = "gradient", pareto_search(problem)
         if cost_ratio == "measured":
             ratio = value_and_grad_cost_ratio(
                 problem, gradient=problem.search.gradient, batch=problem.search.initial_samples
@@ -289,19 +270,17 @@ def _run_locked(
         main.extra["equivalent_value_evaluations"] = (
             main.extra["value_evaluations"] + ratio * main.extra["value_and_gradient_evaluations"]
         )
-    reference = [float(r) for r in main.extra["reference_point"]]
-    reference_from = (
-        "problem"
-        if getattr(problem, "reference_point", None) is not None
-        else (main.extra.get("reference_point_from", "the main search's first designs"))
-    )
-    main_wall = main.compile_seconds + main.run_seconds
     log(
         f"  {main_key}: {main.evaluations} evaluations, compile {main.compile_seconds:.1f} s, "
         f"run {main.run_seconds:.2f} s, hypervolume {main.checkpoints[-1]['hypervolume']:.7g}"
     )
+    return main_key, main
 
-    results = {main_key: main}
+
+def _baselines(problem, results: dict, main: SearchResult, baselines: bool, nsga2_time_factor: float, log):
+    """Run the declared baselines into ``results`` (``grid``, ``nsga2``) at the main
+    search's reference point; returns the grid's nested-grid rows (None without a grid)."""
+    reference = [float(r) for r in main.extra["reference_point"]]
     grid_rows = None
     if baselines and problem.grid_points is not None:
         grid = grid_search(problem, reference=reference)
@@ -312,30 +291,63 @@ def _run_locked(
             f"run {grid.run_seconds:.2f} s, hypervolume {grid.checkpoints[-1]['hypervolume']:.7g}"
         )
     if baselines and problem.nsga2 is not None:
-        options = dict(problem.nsga2)
-        population = int(options.get("population", 40))
-        # NSGA-II needs the value program too: when the main search compiled it for the
-        # same shape (a cache hit here), NSGA-II is charged the main search's compile of it.
-        value_compile = main.extra.get("compile_seconds_by_program", {}).get("value", 0.0)
-        charged = value_compile if population == main.extra.get("population") else 0.0
-        limit = nsga2_time_factor * main_wall - charged
-        if options.get("time_limit") is not None:
-            limit = min(limit, float(options["time_limit"]))
-        nsga = nsga2_search(
-            problem,
-            population=population,
-            evaluations=10**12,
-            seed=int(options.get("seed", 0)),
-            time_limit=max(limit, 1e-3),
-            reference=reference,
-        )
-        nsga.compile_seconds = max(nsga.compile_seconds, charged)
-        results["nsga2"] = nsga
-        log(
-            f"  nsga2 (population {population}): {nsga.evaluations} evaluations, "
-            f"run {nsga.run_seconds:.2f} s, hypervolume {nsga.checkpoints[-1]['hypervolume']:.7g}"
-        )
+        results["nsga2"] = _nsga2(problem, main, reference, nsga2_time_factor, log)
+    return grid_rows
 
+
+def _nsga2(problem, main: SearchResult, reference: list[float], nsga2_time_factor: float, log) -> SearchResult:
+    """NSGA-II until its wall time (compile included) is ``nsga2_time_factor`` times the
+    main search's, or the file's ``time_limit``."""
+    options = dict(problem.nsga2)
+    population = int(options.get("population", 40))
+    # NSGA-II needs the value program too: when the main search compiled it for the
+    # same shape (a cache hit here), NSGA-II is charged the main search's compile of it.
+    value_compile = main.extra.get("compile_seconds_by_program", {}).get("value", 0.0)
+    charged = value_compile if population == main.extra.get("population") else 0.0
+    limit = nsga2_time_factor * (main.compile_seconds + main.run_seconds) - charged
+    if options.get("time_limit") is not None:
+        limit = min(limit, float(options["time_limit"]))
+    nsga = nsga2_search(
+        problem,
+        population=population,
+        evaluations=10**12,
+        seed=int(options.get("seed", 0)),
+        time_limit=max(limit, 1e-3),
+        reference=reference,
+    )
+    nsga.compile_seconds = max(nsga.compile_seconds, charged)
+    log(
+        f"  nsga2 (population {population}): {nsga.evaluations} evaluations, "
+        f"run {nsga.run_seconds:.2f} s, hypervolume {nsga.checkpoints[-1]['hypervolume']:.7g}"
+    )
+    return nsga
+
+
+# How summary.json explains its counts and timings.
+_EVALUATION_COUNTING = (
+    "one evaluation = the objective vector of one design. A value-and-gradient (the hybrid's "
+    "vector-Jacobian products, the scalarized search's steps) counts as one evaluation; the hybrid reports "
+    "value_evaluations (its forward differences included: each is a design's values) and "
+    "value_and_gradient_evaluations apart, the scalarized search its measured value_and_gradient_cost_"
+    "ratio. Grid and NSGA-II evaluate values only."
+)
+_TIMING = (
+    "run_seconds exclude compilation (compile_seconds, measured apart); wall_seconds = both. Every "
+    "comparison against NSGA-II counts compile on both sides. Checkpoints include each method's own "
+    "bookkeeping (pymoo's overhead for NSGA-II); archive hypervolumes are computed after the run for "
+    "NSGA-II and the grid, inside the run for the main search"
+)
+
+
+def _summary(problem: DesignProblem, main_key: str, results: Mapping[str, SearchResult], grid_rows) -> dict:
+    """The summary of every search (written to ``summary.json``)."""
+    main = results[main_key]
+    reference = [float(r) for r in main.extra["reference_point"]]
+    reference_from = (
+        "problem"
+        if getattr(problem, "reference_point", None) is not None
+        else (main.extra.get("reference_point_from", "the main search's first designs"))
+    )
     grid_hv = results["grid"].checkpoints[-1]["hypervolume"] if "grid" in results else None
     # The best-known hypervolume: every design any method evaluated, together.
     best_known = hypervolume(np.concatenate([r.objectives for r in results.values()]), reference)
@@ -355,66 +367,73 @@ def _run_locked(
             name: r.checkpoints[-1]["hypervolume"] / best_known if best_known > 0 else None
             for name, r in results.items()
         },
-        evaluation_counting=(
-            "one evaluation = the objective vector of one design. A value-and-gradient (the hybrid's "
-            "vector-Jacobian products, the scalarized search's steps) counts as one evaluation; the hybrid reports "
-            "value_evaluations (its forward differences included: each is a design's values) and "
-            "value_and_gradient_evaluations apart, the scalarized search its measured value_and_gradient_cost_"
-            "ratio. Grid and NSGA-II evaluate values only."
-        ),
-        timing=(
-            "run_seconds exclude compilation (compile_seconds, measured apart); wall_seconds = both. Every "
-            "comparison against NSGA-II counts compile on both sides. Checkpoints include each method's own "
-            "bookkeeping (pymoo's overhead for NSGA-II); archive hypervolumes are computed after the run for "
-            "NSGA-II and the grid, inside the run for the main search"
-        ),
+        evaluation_counting=_EVALUATION_COUNTING,
+        timing=_TIMING,
         methods={name: _method_summary(result, grid_hv) for name, result in results.items()},
     )
     if grid_rows is not None:
         summary["methods"]["grid"]["nested_grids"] = grid_rows
     if grid_hv is not None:
-        target = TARGET_FRACTION * grid_hv
-        comparison = dict(
-            kind="time to reach the target hypervolume",
-            grid_hypervolume=grid_hv,
-            target_fraction=TARGET_FRACTION,
-            target_hypervolume=target,
-            main_seconds=main.seconds_to(target),
-            main_evaluations=main.evaluations_to(target),
-        )
-        if "nsga2" in results:
-            nsga = results["nsga2"]
-            comparison.update(nsga2_seconds=nsga.seconds_to(target), nsga2_evaluations=nsga.evaluations_to(target))
-        summary["comparison"] = comparison
+        summary["comparison"] = _grid_comparison(main, results.get("nsga2"), grid_hv)
     if "nsga2" in results:
-        nsga = results["nsga2"]
-        nsga_final = nsga.checkpoints[-1]["hypervolume"]
-        main_to = _wall_to(main, nsga_final)
-        nsga_to = _wall_to(nsga, nsga_final)
-        main_hv = main.checkpoints[-1]["hypervolume"]
-        summary["against_nsga2"] = dict(
-            kind="NSGA-II's final hypervolume and the wall time (compile included) each method took to reach it",
-            main_wall_seconds=main_wall,
-            nsga2_wall_seconds=nsga.compile_seconds + nsga.run_seconds,
-            nsga2_wall_factor=(nsga.compile_seconds + nsga.run_seconds) / main_wall,
-            nsga2_final_hypervolume=nsga_final,
-            nsga2_hypervolume_at_main_wall=nsga.hypervolume_at(main_wall - nsga.compile_seconds),
-            main_hypervolume=main_hv,
-            main_wall_seconds_to_nsga2_final=main_to,
-            nsga2_wall_seconds_to_own_final=nsga_to,
-            wall_time_ratio=None if main_to is None or not nsga_to else main_to / nsga_to,
-            main_share_of_best_known=main_hv / best_known if best_known > 0 else None,
-            met=bool(main_hv >= nsga_final and best_known > 0 and main_hv >= 0.995 * best_known),
-        )
+        summary["against_nsga2"] = _against_nsga2(main, results["nsga2"], best_known)
+    return summary
 
-    for name, result in results.items():
-        check_finite_objectives(problem, name, result)
-    # Every file goes into a staging folder beside out_dir, which then replaces out_dir in
-    # one step: a reader never sees files of two runs, and a run that dies before the swap
-    # leaves the old folder as it was. Files an earlier run did not write are kept.
+
+def _grid_comparison(main: SearchResult, nsga: SearchResult | None, grid_hv: float) -> dict:
+    """The time and evaluations each method took to reach ``TARGET_FRACTION`` of the grid's hypervolume."""
+    target = TARGET_FRACTION * grid_hv
+    comparison = dict(
+        kind="time to reach the target hypervolume",
+        grid_hypervolume=grid_hv,
+        target_fraction=TARGET_FRACTION,
+        target_hypervolume=target,
+        main_seconds=main.seconds_to(target),
+        main_evaluations=main.evaluations_to(target),
+    )
+    if nsga is not None:
+        comparison.update(nsga2_seconds=nsga.seconds_to(target), nsga2_evaluations=nsga.evaluations_to(target))
+    return comparison
+
+
+def _against_nsga2(main: SearchResult, nsga: SearchResult, best_known: float) -> dict:
+    """NSGA-II's final hypervolume and the wall time (compile included) each method took to reach it."""
+    main_wall = main.compile_seconds + main.run_seconds
+    nsga_final = nsga.checkpoints[-1]["hypervolume"]
+    main_to = _wall_to(main, nsga_final)
+    nsga_to = _wall_to(nsga, nsga_final)
+    main_hv = main.checkpoints[-1]["hypervolume"]
+    return dict(
+        kind="NSGA-II's final hypervolume and the wall time (compile included) each method took to reach it",
+        main_wall_seconds=main_wall,
+        nsga2_wall_seconds=nsga.compile_seconds + nsga.run_seconds,
+        nsga2_wall_factor=(nsga.compile_seconds + nsga.run_seconds) / main_wall,
+        nsga2_final_hypervolume=nsga_final,
+        nsga2_hypervolume_at_main_wall=nsga.hypervolume_at(main_wall - nsga.compile_seconds),
+        main_hypervolume=main_hv,
+        main_wall_seconds_to_nsga2_final=main_to,
+        nsga2_wall_seconds_to_own_final=nsga_to,
+        wall_time_ratio=None if main_to is None or not nsga_to else main_to / nsga_to,
+        main_share_of_best_known=main_hv / best_known if best_known > 0 else None,
+        met=bool(main_hv >= nsga_final and best_known > 0 and main_hv >= 0.995 * best_known),
+    )
+
+
+def _write_results(
+    problem: DesignProblem,
+    out_dir: Path,
+    results: Mapping[str, SearchResult],
+    summary: dict,
+    outputs: Sequence[ProblemOutput],
+    run: Mapping[str, Any],
+) -> None:
+    """Write the fronts, the outputs, ``summary.json`` and ``manifest.json`` into a folder
+    that replaces ``out_dir`` as a whole; files an earlier run did not write are kept.
+    ``run``: the ``config``, ``command``, ``git`` state and ``started`` time of the run."""
+    config = run["config"]
     previous = _previous_files(out_dir)
-    staging = stage_folder(out_dir, keep=lambda name: name not in previous)
-    try:
+    with replacing_folder(out_dir, keep=lambda name: name not in previous, before_swap=_BEFORE_SWAP) as staging:
+        main = results[summary["method"]]
         written = [write_csv(staging / "pareto.csv", _front_table(problem, main))]
         for name in ("grid", "nsga2"):
             if name in results:
@@ -425,24 +444,14 @@ def _run_locked(
         if config is not None:
             summary["config"] = dict(config)
         write_json(staging / "summary.json", summary)
-        timings = {"wall": time.perf_counter() - started}
         data = build_manifest(
             dict(config) if config is not None else {"problem": problem.name},
-            command=list(command) if command is not None else sys.argv,
-            timings=timings,
-            git=code_state,
+            command=list(run["command"]) if run["command"] is not None else sys.argv,
+            timings={"wall": time.perf_counter() - run["started"]},
+            git=run["git"],
             extra={"kind": "optimize", "files": summary["files"]},
         )
         write_json(staging / "manifest.json", data)
-        if _BEFORE_SWAP is not None:
-            _BEFORE_SWAP(staging)
-        swap_in(staging, out_dir)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    log(summary_table(summary))
-    log(f"  wrote {out_dir}: {', '.join(summary['files'])}")
-    return summary
 
 
 def check_finite_objectives(problem: DesignProblem, method: str, result: SearchResult) -> None:

@@ -33,9 +33,11 @@ __all__ = [
     "FolderLocked",
     "check_output_folder",
     "claim_folder",
+    "claimed_folder",
     "folder_owner",
     "lock_folder",
     "lock_path",
+    "replacing_folder",
     "stage_folder",
     "swap_in",
 ]
@@ -301,3 +303,43 @@ def swap_in(staging: str | os.PathLike, folder: str | os.PathLike) -> None:
     os.rename(folder, aside)
     os.rename(staging, folder)
     shutil.rmtree(aside, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def claimed_folder(folder: str | os.PathLike, kind: str, *, label: str | None = None) -> Iterator[Path]:
+    """Hold ``folder``'s write lock (`lock_folder`) for the ``with`` block, once `claim_folder`
+    finds no other command's results in it: how every command that writes a results
+    folder starts, before it computes anything, so a refused run costs nothing.
+
+    Raises:
+        FolderLocked: another process holds the lock.
+        ConfigError: ``folder`` holds another command's results.
+    """
+    with lock_folder(folder, label=label):
+        claim_folder(folder, kind, label=label)
+        yield Path(folder)
+
+
+@contextlib.contextmanager
+def replacing_folder(
+    folder: str | os.PathLike, *, keep: Callable[[str], bool], before_swap: Callable[[Path], None] | None = None
+) -> Iterator[Path]:
+    """A staging folder beside ``folder`` (`stage_folder`, with the entries ``keep``
+    accepts) that replaces ``folder`` in one step (`swap_in`) when the ``with`` block ends
+    without an error, and is removed when it fails: a reader never sees files of two runs,
+    and a run that dies first leaves the old folder as it was. The caller holds the lock
+    (`claimed_folder`).
+
+    Args:
+        before_swap: called with the staging folder right before the swap (a test hook:
+            the fault-injection tests kill the run there).
+    """
+    staging = stage_folder(folder, keep)
+    try:
+        yield staging
+        if before_swap is not None:
+            before_swap(staging)
+        swap_in(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
