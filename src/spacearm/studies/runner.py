@@ -37,7 +37,7 @@ from .._core.numeric import PEER_TIMEOUT_S, STALL_S, wait_until_ready
 from .._core.schema import check_memory
 from .._version import __version__
 from ..io import build_manifest, config_hash, manifest as provenance, write_csv, write_json, write_npz
-from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
+from ..io.folders import check_output_folder, claimed_folder, replacing_folder
 from .designs import build_designs, design_columns
 from .metrics import METRICS, MetricSpec, design_function, metric_columns
 from .spec import SweepSpec
@@ -194,8 +194,7 @@ def run_sweep(
         refusal = None
         if jax.process_index() == 0:  # the one writer: refuse a second one before computing
             try:
-                stack.enter_context(lock_folder(out_dir, label=f"--out {out_dir}"))
-                claim_folder(out_dir, "sweep", label=f"--out {out_dir}")
+                stack.enter_context(claimed_folder(out_dir, "sweep", label=f"--out {out_dir}"))
             except ConfigError as error:
                 if jax.process_count() == 1:
                     raise
@@ -228,35 +227,66 @@ def _run_locked(
     """`run_sweep` once this process may write ``out_dir``."""
     code_state = provenance.git_state()  # before this run changes any tracked result file
     robot, points = build_designs(spec)
-    total = spec.n_designs
     devices = jax.device_count()
-    chunk = _chunk(spec, devices)
-    per_step, design_bytes = designs_per_step(spec, devices)
-    # Saved chunks are reused only by a run that would compute them bit for bit alike:
-    # same resolved config, effective chunk size, precision and package versions.
+    plan = _Plan(spec, devices, _chunk(spec, devices), *designs_per_step(spec, devices))
+    partial = _partial_folder(plan, out_dir)
+    spans = _chunks(spec.n_designs, plan.chunk)
+    columns = metric_columns(spec.metrics)
+    pieces = _saved_pieces(partial, spans, columns)
+    todo = [n for n in range(len(spans)) if n not in pieces]
+    run_start = time.perf_counter()
+    compile_s = _compute_chunks(plan, robot, spans, todo, pieces, partial, progress, stop_after_chunks, stall_s)
+    run_s = time.perf_counter() - run_start - compile_s
+    if jax.process_index() != 0:  # multi-host: the first process writes the results
+        return SweepResult(out_dir, {}, {}, [])
+    metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
+    check_finite(spec, metric_values, points)
+    table: dict[str, np.ndarray] = {"design": np.arange(spec.n_designs)}
+    table.update(points)
+    table.update(design_columns(robot, spec.axes))
+    table.update(metric_values)
+    timings = {"compile": compile_s, "run": run_s}
+    run = dict(command=command, git=code_state, wall_start=wall_start, resumed=len(spans) - len(todo))
+    data, files = _write_sweep(plan, out_dir, partial, table, outputs, timings, run)
+    shutil.rmtree(partial, ignore_errors=True)
+    _note_other_partials(out_dir)
+    return SweepResult(out_dir, table, data, files)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Plan:
+    """How one sweep runs here: designs per compiled chunk, per vmapped step on each
+    device (`designs_per_step`), and one design's working set in bytes."""
+
+    spec: SweepSpec
+    devices: int
+    chunk: int
+    per_step: int
+    design_bytes: float
+
+
+def _partial_folder(plan: _Plan, out_dir: Path) -> Path:
+    """Where finished chunks are kept. Saved chunks are reused only by a run that would
+    compute them bit for bit alike: same resolved config, effective chunk size, precision
+    and package versions."""
     resume_key = {
-        "config": spec.config,
-        "axis_order": [a.name for a in spec.axes],
-        "chunk": chunk,
-        "designs_per_step": per_step,
+        "config": plan.spec.config,
+        "axis_order": [a.name for a in plan.spec.axes],
+        "chunk": plan.chunk,
+        "designs_per_step": plan.per_step,
         "float64": bool(jax.config.jax_enable_x64),
         "spacearm": __version__,
         "jax": jax.__version__,
     }
-    partial = out_dir / f".partial-{config_hash(resume_key)[:16]}"
+    return out_dir / f".partial-{config_hash(resume_key)[:16]}"
 
-    mesh = _mesh()
-    sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("designs"))
-    # Each device walks its share of a chunk in vmapped steps of a few designs: the
-    # quadratures' intermediates then stay in cache (a whole chunk in one vmap is 3-7x
-    # slower per design on CPU); the step's size comes from the metrics' memory estimate.
-    evaluate = _evaluator(json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True), per_step, mesh)
-    columns = metric_columns(spec.metrics)
 
-    compile_s = 0.0
-    compiled = None
-    pieces: dict[int, dict[str, np.ndarray]] = {}
-    spans = _chunks(total, chunk)
+def _saved_pieces(partial: Path, spans: list[tuple[int, int]], columns: Sequence[str]) -> dict:
+    """The chunks an earlier run finished, by number: their metric columns (a damaged file
+    is removed and computed again). Many processes: process 0's saved chunks decide (only
+    it writes them, and the others may not share its disk); every process must run the
+    same chunks, so the others hold None for each."""
+    pieces: dict[int, dict[str, np.ndarray] | None] = {}
     for number, (start, stop) in enumerate(spans):
         saved = partial / f"chunk_{number:06d}.npz"
         if saved.exists():
@@ -269,14 +299,29 @@ def _run_locked(
             if all(v.shape == (stop - start,) for v in piece.values()):
                 pieces[number] = piece
     if jax.process_count() > 1:
-        # Many processes: process 0's saved chunks decide (only it writes them, and the
-        # others may not share its disk); every process must run the same chunks.
         saved_mask = np.array([n in pieces for n in range(len(spans))])
         saved_mask = np.asarray(multihost_utils.broadcast_one_to_all(saved_mask)).astype(bool)
         if jax.process_index() != 0:
             pieces = {n: None for n in np.flatnonzero(saved_mask)}
-    todo = [n for n in range(len(spans)) if n not in pieces]
-    run_start = time.perf_counter()
+    return pieces
+
+
+def _compute_chunks(
+    plan: _Plan, robot, spans, todo: list[int], pieces: dict, partial: Path, progress: bool, stop_after, stall_s
+) -> float:
+    """Evaluate the chunks numbered ``todo`` into ``pieces`` (process 0 saves each under
+    ``partial``) with a progress bar; returns the compile seconds.
+
+    Each device walks its share of a chunk in vmapped steps of a few designs: the
+    quadratures' intermediates then stay in cache; the step's size comes from the
+    metrics' memory estimate.
+    """
+    spec, total = plan.spec, plan.spec.n_designs
+    mesh = _mesh()
+    sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("designs"))
+    evaluate = _evaluator(json.dumps([[m.name, m.options] for m in spec.metrics], sort_keys=True), plan.per_step, mesh)
+    columns = metric_columns(spec.metrics)
+    compile_s, compiled = 0.0, None
     bar = tqdm(
         total=total,
         desc=f"sweep {spec.name}",
@@ -287,10 +332,10 @@ def _run_locked(
     )
     try:
         for done, number in enumerate(todo):
-            if stop_after_chunks is not None and done >= stop_after_chunks:
+            if stop_after is not None and done >= stop_after:
                 raise KeyboardInterrupt
             start, stop = spans[number]
-            batch = _shard(_take(robot, start, stop, chunk, devices), sharding)
+            batch = _shard(_take(robot, start, stop, plan.chunk, plan.devices), sharding)
             if compiled is None:
                 t0 = time.perf_counter()
                 compiled = evaluate.lower(batch).compile()
@@ -303,76 +348,88 @@ def _run_locked(
             pieces[number] = piece
             bar.update(stop - start)
     except Exception as error:
-        if isinstance(error, Stalled):
-            raise Stalled(f"{error}; {_kept_line(spans, pieces, total, partial)}") from None
-        if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError, OSError)):
+        failure = _chunk_failure(error, _kept_line(spans, pieces, total, partial))
+        if failure is error:
             raise
-        # Under jax.distributed a peer that died surfaces here as a collective's error.
-        reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
-        raise RunError(
-            f"process {jax.process_index()} of {jax.process_count()}: a peer process stopped or failed "
-            f"during the sweep ({reason}); finished chunks are kept: start every process again "
-            "to resume"
-        ) from None
+        raise failure from None
     except KeyboardInterrupt:
         bar.close()
         print(_kept_line(spans, pieces, total, partial), file=sys.stderr)
         raise
     finally:
         bar.close()
-    run_s = time.perf_counter() - run_start - compile_s
+    return compile_s
 
-    if jax.process_index() != 0:  # multi-host: the first process writes the results
-        return SweepResult(out_dir, {}, {}, [])
-    metric_values = {c: np.concatenate([pieces[n][c] for n in range(len(spans))]) for c in columns}
-    check_finite(spec, metric_values, points)
-    table: dict[str, np.ndarray] = {"design": np.arange(total)}
-    table.update(points)
-    table.update(design_columns(robot, spec.axes))
-    table.update(metric_values)
-    # Every result is written into a staging folder beside out_dir, which then replaces
-    # out_dir in one step: a reader never sees files of two runs, and a run that dies
-    # before the swap leaves the old folder as it was.
+
+def _chunk_failure(error: Exception, kept: str) -> Exception:
+    """What a failed chunk raises: a stall names the chunks kept; under ``jax.distributed``
+    a peer that died surfaces as a collective's error, said as such."""
+    if isinstance(error, Stalled):
+        return Stalled(f"{error}; {kept}")
+    if jax.process_count() == 1 or isinstance(error, (ConfigError, RunError, OSError)):
+        return error
+    reason = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
+    return RunError(
+        f"process {jax.process_index()} of {jax.process_count()}: a peer process stopped or failed "
+        f"during the sweep ({reason}); finished chunks are kept: start every process again "
+        "to resume"
+    )
+
+
+def _write_sweep(
+    plan: _Plan, out_dir: Path, partial: Path, table: dict, outputs: Sequence[SweepOutput], timings: dict, run: dict
+) -> tuple[dict, list[Path]]:
+    """Write the table, the grids, the report, the outputs and the manifest into a folder
+    that replaces ``out_dir`` as a whole; returns the manifest and the files written.
+    ``run``: the ``command``, ``git`` state, ``wall_start`` and ``resumed`` chunks."""
+    spec = plan.spec
     previous = _previous_files(out_dir)
-    staging = stage_folder(out_dir, keep=lambda name: name not in previous and name != partial.name)
-    try:
+    keep = lambda name: name not in previous and name != partial.name
+    with replacing_folder(out_dir, keep=keep, before_swap=_BEFORE_SWAP) as staging:
         files = [write_csv(staging / "table.csv", table)]
-        grid_arrays = {f"axis/{a.name}": a.values for a in spec.axes}
-        grid_arrays.update({f"metric/{c}": metric_values[c].reshape(spec.shape) for c in columns})
-        grid_arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
-        files.append(write_npz(staging / "grids.npz", **grid_arrays))
+        files.append(write_npz(staging / "grids.npz", **_grid_arrays(spec, table)))
         if spec.report:
-            rows = [{k: float(v[i]) for k, v in table.items()} for i in range(total)]
+            rows = [{k: float(v[i]) for k, v in table.items()} for i in range(spec.n_designs)]
             files.extend(REPORTS[spec.report](staging, rows, spec))
         for output in outputs:
             files.extend(output(spec, staging, table))
-        timings = {"compile": compile_s, "run": run_s, "wall": time.perf_counter() - wall_start}
+        timings = {**timings, "wall": time.perf_counter() - run["wall_start"]}
         data = build_manifest(
             spec.config,
-            command=command,
+            command=run["command"],
             timings=timings,
-            git=code_state,
-            extra={
-                "kind": "sweep",
-                "robot_file": spec.robot_source,
-                "n_designs": total,
-                "chunk_size": chunk,
-                "designs_per_step": per_step,  # side by side on each device, from the memory estimate
-                "memory_estimate_bytes": round(memory_estimate(spec, devices)[0]),
-                "design_working_set_bytes": round(design_bytes),
-                "resumed_chunks": len(spans) - len(todo),
-                "files": sorted(str(p.relative_to(staging)) for p in files),
-            },
+            git=run["git"],
+            extra=_manifest_extra(plan, run, files, staging),
         )
         files.append(write_json(staging / "manifest.json", data))
-        if _BEFORE_SWAP is not None:
-            _BEFORE_SWAP(staging)
-        swap_in(staging, out_dir)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    files = [out_dir / p.relative_to(staging) for p in files]
-    shutil.rmtree(partial, ignore_errors=True)
+    return data, [out_dir / p.relative_to(staging) for p in files]
+
+
+def _grid_arrays(spec: SweepSpec, table: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``grids.npz``: each axis's values, each metric column on the sweep's grid, and the dims."""
+    arrays = {f"axis/{a.name}": a.values for a in spec.axes}
+    arrays.update({f"metric/{c}": table[c].reshape(spec.shape) for c in metric_columns(spec.metrics)})
+    arrays["dims"] = np.array([a.name for a in spec.axes] if spec.combine == "product" else ["design"])
+    return arrays
+
+
+def _manifest_extra(plan: _Plan, run: dict, files: list[Path], staging: Path) -> dict:
+    """The sweep's own fields of its manifest."""
+    return {
+        "kind": "sweep",
+        "robot_file": plan.spec.robot_source,
+        "n_designs": plan.spec.n_designs,
+        "chunk_size": plan.chunk,
+        "designs_per_step": plan.per_step,  # side by side on each device, from the memory estimate
+        "memory_estimate_bytes": round(memory_estimate(plan.spec, plan.devices)[0]),
+        "design_working_set_bytes": round(plan.design_bytes),
+        "resumed_chunks": run["resumed"],
+        "files": sorted(str(p.relative_to(staging)) for p in files),
+    }
+
+
+def _note_other_partials(out_dir: Path) -> None:
+    """Point out the chunks of other sweeps kept in ``out_dir``."""
     others = sorted(p.name for p in out_dir.glob(".partial-*") if p.is_dir())
     if others:
         print(
@@ -380,7 +437,6 @@ def _run_locked(
             "delete them if no run needs them)",
             file=sys.stderr,
         )
-    return SweepResult(out_dir, table, data, files)
 
 
 # Columns where +inf is a documented value, not a failure ("none found").
