@@ -14,33 +14,24 @@ move; default all, so the other arms move too), through
 from __future__ import annotations
 
 import argparse
-import contextlib
-import shutil
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from .._core.errors import ConfigError, RunError
-from ..io.folders import check_output_folder, claim_folder, lock_folder, stage_folder, swap_in
+from ..io.folders import check_output_folder, claimed_folder, replacing_folder
 from ._args import check_limits, comma_numbers
 
 # The files a reach run writes; the other entries of --out are kept.
 _REACH_FILES = frozenset({"reach.png", "reach.npz", "reach.gif", "reach.html"})
 
 
-@contextlib.contextmanager
-def _result_folder(out: Path) -> Iterator[Path]:
+def _result_folder(out: Path):
     """A staging folder beside ``out`` (with the entries of ``out`` that are not a reach
     run's files) that replaces ``out`` as a whole when the block ends without an error
-    (`spacearm.io.folders`); the caller holds the folder's lock."""
-    staging = stage_folder(out, keep=lambda name: name not in _REACH_FILES)
-    try:
-        yield staging
-        swap_in(staging, out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+    (`spacearm.io.folders.replacing_folder`); the caller holds the folder's lock."""
+    return replacing_folder(out, keep=lambda name: name not in _REACH_FILES)
 
 
 def _check_finite(arrays: Mapping[str, object]) -> None:
@@ -173,8 +164,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(out)
     # One writer at a time (a second one is refused naming the holder's PID); the files are
     # written into a staging folder that replaces --out as a whole.
-    with lock_folder(out, label=f"--out {out}"):
-        claim_folder(out, "reach", label=f"--out {out}")
+    with claimed_folder(out, "reach", label=f"--out {out}"):
         if args.target_rpy is not None:
             return _run_pose(args, robot, out)
         return _run_spatial(args, robot, out) if spatial else _run_planar(args, robot, out)
