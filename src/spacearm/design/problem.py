@@ -414,135 +414,27 @@ def problem_from_mapping(
     if "name" not in config:
         raise ConfigError(f"{source}: name: missing required key (it names the result folder, results/<name>/)")
     name = check_name(f"{source}: name", config["name"])
-    description = str(config.get("description", ""))
-
-    # The base design: a robot file, or a planar ``fixed:`` section.
-    if ("robot" in config) == ("fixed" in config):
-        raise ConfigError(f"{source}: give either robot: (a robot file) or fixed: (a planar arm's reference values)")
-    fixed_values: dict[str, float] = {}
-    robot_file = ""
-    if "robot" in config:
-        robot_entry = config["robot"]
-        if not isinstance(robot_entry, str):
-            raise ConfigError(f"{source}: robot: a robot file path is required")
-        folder = os.fspath(base_dir) if base_dir is not None else os.getcwd()
-        path = robot_entry if os.path.isabs(robot_entry) else os.path.join(folder, robot_entry)
-        if not os.path.isfile(path):
-            raise ConfigError(f"{source}: robot: no such robot file '{robot_entry}' (looked in {folder})")
-        base = load_robot(path)
-        robot_file = robot_entry
-    else:
-        base, fixed_summary, fixed_values = _planar_fixed(source, config)
+    base, fixed_summary, fixed_values, robot_file = _base_design(source, config, base_dir)
     family = family_of(base)
-    fields = family.fields
     n = family.joint_count(base)
-
-    # Variables: the family's design fields (first-generation planar names accepted).
-    raw = config.get("variables")
-    if not isinstance(raw, Mapping) or not raw:
-        raise ConfigError(f"{source}: variables: a mapping field: [lower, upper] with at least one entry is required")
-    variables = []
-    for key, bounds in raw.items():
-        where = f"{source}: variables.{key}"
-        field = fields.check_field(where, fields.canonical_name(key), base)
-        if not isinstance(bounds, (list, tuple)) or len(bounds) != 2:
-            raise ConfigError(f"{where}: must be a list [lower, upper]")
-        lower, upper = number(f"{where}[0]", bounds[0]), number(f"{where}[1]", bounds[1])
-        if not lower < upper:
-            raise ConfigError(f"{where}: the lower bound must be below the upper bound, got [{lower}, {upper}]")
-        if (field in _POSITIVE or field in fields.FACTOR_FIELDS or field.endswith(".length")) and lower <= 0:
-            raise ConfigError(f"{where}: must stay positive, got lower bound {lower}")
-        variables.append(Variable(str(key), lower, upper, field))
-    for i, first in enumerate(variables):
-        for second in variables[i + 1 :]:
-            if fields.conflicting_number(first.field, second.field, base):
-                raise ConfigError(f"{source}: variables: {first.name} and {second.name} set the same design number")
-
-    # Fixed field values (planar ``fixed:`` extras such as b0), then the physical box.
-    chosen = {v.field for v in variables}
-    settings = []
-    for key, value in fixed_values.items():
-        field = fields.check_field(f"{source}: fixed.{key}", fields.canonical_name(key), base)
-        if field not in chosen:
-            settings.append((field, value))
-    for field, value in sorted(settings, key=lambda p: fields.field_stage(p[0])):
-        base = fields.set_field(base, field, value)
-    if family.name == "planar":
-        box = {v.field: (v.lower, v.upper, v.name) for v in variables}
-        if "base.attach" not in box and "b0" not in fixed_values:
-            raise ConfigError(f"{source}: b0: give it in fixed (a value) or in variables (bounds)")
-        _check_planar_ranges(source, box, n)
-    try:
-        base = base.replace()  # validated
-    except ConfigError as error:
-        raise ConfigError(f"{source}: the base design is not a valid robot: {error}") from None
+    variables = _parse_variables(source, config.get("variables"), family.fields, base)
+    base = _fixed_base(source, base, n, variables, fixed_values)
     if "robot" in config:
         fixed_summary = {"robot": robot_file}
-
-    # Objectives of the family, their options.
-    allowed = objectives_for(family.name)
-    tips = family.tip_count(base)
-    default = ["w_avg", "low_disturbance"]
-    if tips is not None and tips > 1:  # several arms: each tip's w_avg, and the system's disturbance
-        default = [{"name": "w_avg", "tip": t} for t in range(tips)] + ["low_disturbance"]
-    raw_objectives = config.get("objectives", list(allowed[:2]) if family.name == "planar" else default)
-    if not isinstance(raw_objectives, (list, tuple)):
-        raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
-    if len(raw_objectives) > MAX_OBJECTIVES:
-        raise ConfigError(
-            f"{source}: objectives: {len(raw_objectives)} listed; at most {MAX_OBJECTIVES} (the hypervolume's "
-            "cost grows exponentially with their number)"
-        )
-    objectives = tuple(
-        _objective_entry(f"{source}: objectives[{i}]", v, allowed, base) for i, v in enumerate(raw_objectives)
-    )
-    if len(objectives) < 2 or len(set(objectives)) != len(objectives):
-        raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
+    objectives = _parse_objectives(source, config, family, base)
     averaged = any(split_objective(name)[0] in AVERAGE_OBJECTIVES for name in objectives)
     with_radius = any(name in RADIUS_OBJECTIVES for name in objectives)
     radius_options = _radius_options(source, config.get("radius"), with_radius)
-    # Optional where an objective has no natural zero: absent, the search takes it below
-    # the nadir of its first population (and writes it to the summary). The radius is
-    # positive, but a few mm on a UR5: a zero reference would dwarf its differences.
-    reference = config.get("reference_point", None if averaged or with_radius else [0.0] * len(objectives))
-    if reference is not None:
-        if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
-            raise ConfigError(
-                f"{source}: reference_point: one number per objective, or none (objectives maximized; "
-                "low_disturbance is minus the mean ||C_w||_F)"
-            )
-        reference = tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
-
-    wbar = config.get("wbar", {}) or {}
-    if not isinstance(wbar, Mapping):
-        raise ConfigError(f"{source}: wbar: must be a mapping of options for analysis.average_manipulability")
-    check_keys(f"{source}: wbar: ", wbar, WBAR_OPTIONS)
-    check_average_options(where=f"{source}: wbar.", **wbar)
-    if "wbar" in objectives and n != 2 and wbar.get("measure", "area") == "area":
-        raise ConfigError(
-            f"{source}: wbar: the area average (eq. 12) is defined for 2 links, "
-            f"{'fixed.links is' if 'fixed' in config else 'the robot has'} {n}; "
-            "set wbar: {measure: joint}"
-        )
+    reference = _reference_point(source, config, objectives, averaged or with_radius)
+    wbar = _parse_wbar(source, config, objectives, n)
     guaranteed = choice(f"{source}: guaranteed", config.get("guaranteed", "clamped"), ("clamped", "paper"))
-
-    average = config.get("average", {}) or {}
-    if not isinstance(average, Mapping):
-        raise ConfigError(f"{source}: average: must be a mapping (samples, randomizations, seed)")
-    check_keys(f"{source}: average: ", average, _AVERAGE_KEYS)
-    randomizations = integer(f"{source}: average.randomizations", average.get("randomizations", 8), least=2)
-    samples = integer(f"{source}: average.samples", average.get("samples", 2048), least=randomizations)
-    per = samples // randomizations
-    if samples % randomizations or per & (per - 1):
-        raise ConfigError(f"{source}: average.samples: must be randomizations x a power of two, got {samples}")
-    seed = integer(f"{source}: average.seed", average.get("seed", 0), least=0)
+    samples, randomizations, seed = _parse_average(source, config.get("average", {}) or {})
     if averaged:
         check_joint_box(base)
         fixed_summary.update(samples=samples, randomizations=randomizations, seed=seed)
     if with_radius:
         check_joint_box(base)
         fixed_summary.update(radius={**RADIUS_OPTIONS, **radius_options})
-
     search = parse_search(source, config.get("search", {}))
     grid_points, grid_chunk, nsga2 = parse_baselines(
         source, config.get("baselines", {}), len(variables), len(objectives)
@@ -564,9 +456,147 @@ def problem_from_mapping(
         grid_points=grid_points,
         grid_chunk=grid_chunk,
         nsga2=nsga2,
-        description=description,
+        description=str(config.get("description", "")),
         radius_options=radius_options,
     )
+
+
+def _base_design(source: str, config: Mapping[str, Any], base_dir) -> tuple[Any, dict, dict, str]:
+    """The base design: a robot file, or a planar ``fixed:`` section. Returns the robot,
+    the fixed summary (planar), the ``fixed:`` field values and the robot file ("" for none)."""
+    if ("robot" in config) == ("fixed" in config):
+        raise ConfigError(f"{source}: give either robot: (a robot file) or fixed: (a planar arm's reference values)")
+    if "fixed" in config:
+        base, fixed_summary, fixed_values = _planar_fixed(source, config)
+        return base, fixed_summary, fixed_values, ""
+    robot_entry = config["robot"]
+    if not isinstance(robot_entry, str):
+        raise ConfigError(f"{source}: robot: a robot file path is required")
+    folder = os.fspath(base_dir) if base_dir is not None else os.getcwd()
+    path = robot_entry if os.path.isabs(robot_entry) else os.path.join(folder, robot_entry)
+    if not os.path.isfile(path):
+        raise ConfigError(f"{source}: robot: no such robot file '{robot_entry}' (looked in {folder})")
+    return load_robot(path), {}, {}, robot_entry
+
+
+def _parse_variables(source: str, raw: Any, fields, base) -> list[Variable]:
+    """The ``variables:`` section: the family's design fields (first-generation planar
+    names accepted) with their bounds, no two setting the same design number."""
+    if not isinstance(raw, Mapping) or not raw:
+        raise ConfigError(f"{source}: variables: a mapping field: [lower, upper] with at least one entry is required")
+    variables = []
+    for key, bounds in raw.items():
+        where = f"{source}: variables.{key}"
+        field = fields.check_field(where, fields.canonical_name(key), base)
+        if not isinstance(bounds, (list, tuple)) or len(bounds) != 2:
+            raise ConfigError(f"{where}: must be a list [lower, upper]")
+        lower, upper = number(f"{where}[0]", bounds[0]), number(f"{where}[1]", bounds[1])
+        if not lower < upper:
+            raise ConfigError(f"{where}: the lower bound must be below the upper bound, got [{lower}, {upper}]")
+        if (field in _POSITIVE or field in fields.FACTOR_FIELDS or field.endswith(".length")) and lower <= 0:
+            raise ConfigError(f"{where}: must stay positive, got lower bound {lower}")
+        variables.append(Variable(str(key), lower, upper, field))
+    for i, first in enumerate(variables):
+        for second in variables[i + 1 :]:
+            if fields.conflicting_number(first.field, second.field, base):
+                raise ConfigError(f"{source}: variables: {first.name} and {second.name} set the same design number")
+    return variables
+
+
+def _fixed_base(source: str, base, n: int, variables: list[Variable], fixed_values: dict):
+    """The base design (``n`` joints) with its fixed field values (planar ``fixed:``
+    extras such as b0) set, the planar box checked, validated."""
+    family = family_of(base)
+    fields = family.fields
+    chosen = {v.field for v in variables}
+    settings = []
+    for key, value in fixed_values.items():
+        field = fields.check_field(f"{source}: fixed.{key}", fields.canonical_name(key), base)
+        if field not in chosen:
+            settings.append((field, value))
+    for field, value in sorted(settings, key=lambda p: fields.field_stage(p[0])):
+        base = fields.set_field(base, field, value)
+    if family.name == "planar":
+        box = {v.field: (v.lower, v.upper, v.name) for v in variables}
+        if "base.attach" not in box and "b0" not in fixed_values:
+            raise ConfigError(f"{source}: b0: give it in fixed (a value) or in variables (bounds)")
+        _check_planar_ranges(source, box, n)
+    try:
+        return base.replace()  # validated
+    except ConfigError as error:
+        raise ConfigError(f"{source}: the base design is not a valid robot: {error}") from None
+
+
+def _parse_objectives(source: str, config: Mapping[str, Any], family, base) -> tuple[str, ...]:
+    """The ``objectives:`` list: at least two distinct objectives of the family (default:
+    the planar pair, or each tip's w_avg and the system's disturbance)."""
+    allowed = objectives_for(family.name)
+    raw = config.get("objectives")
+    if "objectives" not in config:
+        tips = family.tip_count(base)
+        default = ["w_avg", "low_disturbance"]
+        if tips is not None and tips > 1:  # several arms: each tip's w_avg, and the system's disturbance
+            default = [{"name": "w_avg", "tip": t} for t in range(tips)] + ["low_disturbance"]
+        raw = list(allowed[:2]) if family.name == "planar" else default
+    if not isinstance(raw, (list, tuple)):
+        raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
+    if len(raw) > MAX_OBJECTIVES:
+        raise ConfigError(
+            f"{source}: objectives: {len(raw)} listed; at most {MAX_OBJECTIVES} (the hypervolume's "
+            "cost grows exponentially with their number)"
+        )
+    objectives = tuple(_objective_entry(f"{source}: objectives[{i}]", v, allowed, base) for i, v in enumerate(raw))
+    if len(objectives) < 2 or len(set(objectives)) != len(objectives):
+        raise ConfigError(f"{source}: objectives: at least two distinct objectives are required")
+    return objectives
+
+
+def _reference_point(source: str, config: Mapping[str, Any], objectives: tuple[str, ...], no_zero: bool):
+    """The ``reference_point:``, one number per objective. Optional where an objective
+    has no natural zero (``no_zero``: averages and the radius): absent, the search takes it
+    below the nadir of its first population. The radius is positive, but a few mm on a
+    UR5: a zero reference would dwarf its differences."""
+    reference = config.get("reference_point", None if no_zero else [0.0] * len(objectives))
+    if reference is None:
+        return None
+    if not isinstance(reference, (list, tuple)) or len(reference) != len(objectives):
+        raise ConfigError(
+            f"{source}: reference_point: one number per objective, or none (objectives maximized; "
+            "low_disturbance is minus the mean ||C_w||_F)"
+        )
+    return tuple(number(f"{source}: reference_point[{i}]", r) for i, r in enumerate(reference))
+
+
+def _parse_wbar(source: str, config: Mapping[str, Any], objectives: tuple[str, ...], n: int) -> Mapping:
+    """The ``wbar:`` options of `spacearm.analysis.average_manipulability` (the area
+    average, eq. 12, is defined for 2 links only)."""
+    wbar = config.get("wbar", {}) or {}
+    if not isinstance(wbar, Mapping):
+        raise ConfigError(f"{source}: wbar: must be a mapping of options for analysis.average_manipulability")
+    check_keys(f"{source}: wbar: ", wbar, WBAR_OPTIONS)
+    check_average_options(where=f"{source}: wbar.", **wbar)
+    if "wbar" in objectives and n != 2 and wbar.get("measure", "area") == "area":
+        raise ConfigError(
+            f"{source}: wbar: the area average (eq. 12) is defined for 2 links, "
+            f"{'fixed.links is' if 'fixed' in config else 'the robot has'} {n}; "
+            "set wbar: {measure: joint}"
+        )
+    return wbar
+
+
+def _parse_average(source: str, average: Any) -> tuple[int, int, int]:
+    """The ``average:`` section of the joint-box averages: samples (randomizations x a
+    power of two), randomizations and seed."""
+    if not isinstance(average, Mapping):
+        raise ConfigError(f"{source}: average: must be a mapping (samples, randomizations, seed)")
+    check_keys(f"{source}: average: ", average, _AVERAGE_KEYS)
+    randomizations = integer(f"{source}: average.randomizations", average.get("randomizations", 8), least=2)
+    samples = integer(f"{source}: average.samples", average.get("samples", 2048), least=randomizations)
+    per = samples // randomizations
+    if samples % randomizations or per & (per - 1):
+        raise ConfigError(f"{source}: average.samples: must be randomizations x a power of two, got {samples}")
+    seed = integer(f"{source}: average.seed", average.get("seed", 0), least=0)
+    return samples, randomizations, seed
 
 
 def _radius_options(source: str, section: Any, with_radius: bool) -> dict[str, int]:
