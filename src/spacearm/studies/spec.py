@@ -22,6 +22,7 @@ import os
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import jax
 import numpy as np
@@ -194,100 +195,18 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     Raises:
         ConfigError: naming the key (and the sweep point) and the reason.
     """
-    if isinstance(source, Mapping):
-        config, where, base_dir = dict(source), "sweep", Path.cwd()
-    else:
-        path = Path(source)
-        config, where, base_dir = read_yaml(path, what="sweep file"), str(path), path.resolve().parent
-        if not isinstance(config, dict):
-            raise ConfigError(f"{where}: a sweep file must be a mapping with robot, axes and metrics")
+    config, where, base_dir = _read_sweep(source)
     config = apply_overrides(config, overrides)
     check_keys(f"{where}: ", config, _TOP_KEYS)
     name = config.get("name", Path(where).stem if where != "sweep" else "sweep")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
         raise ConfigError(f"{where}: name: must be a plain name (letters, digits, _ . -), got {name!r}")
-
-    # The base robot: a path (relative to the sweep file) or an inline mapping.
-    if "robot" not in config:
-        raise ConfigError(f"{where}: robot: missing required key (a robot file path or an inline robot)")
-    robot_entry = config["robot"]
-    if isinstance(robot_entry, str):
-        robot_path = Path(robot_entry)
-        if not robot_path.is_absolute():
-            candidate = base_dir / robot_path
-            robot_path = candidate if candidate.exists() or not robot_path.exists() else robot_path
-        if not robot_path.exists():
-            raise ConfigError(f"{where}: robot: no such robot file '{robot_entry}' (looked in {base_dir})")
-        if robot_path.is_dir():
-            raise ConfigError(f"{where}: robot: '{robot_entry}' is a folder, not a robot file")
-        robot = load_robot(robot_path)
-        robot_source = str(robot_entry)
-        robot_mapping = _resolved_robot(robot, robot_path, lambda: read_yaml(robot_path, what="robot file"))
-    elif isinstance(robot_entry, Mapping):
-        robot = robot_from_file_mapping(robot_entry, source=f"{where}: robot", base_dir=base_dir)
-        robot_source = "inline"
-        robot_mapping = _resolved_robot(robot, base_dir / "robot.yaml", lambda: robot_entry)
-    else:
-        raise ConfigError(f"{where}: robot: must be a file path or an inline robot mapping")
-
-    family = family_of(robot).name
-    # Numbers per design (float64 leaves), for the memory check of the batched designs.
-    size = sum(int(np.size(leaf)) for leaf in jax.tree_util.tree_leaves(robot))
-    axes_entry = config.get("axes")
-    if not isinstance(axes_entry, Mapping) or not axes_entry:
-        raise ConfigError(f"{where}: axes: must be a non-empty mapping of axis name -> {{field, values | range}}")
-    axes = []
-    for axis_name, spec in axes_entry.items():
-        at = f"{where}: axes.{axis_name}"
-        if not isinstance(axis_name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", axis_name):
-            raise ConfigError(f"{at}: axis names must be identifiers (letters, digits, _)")
-        if not isinstance(spec, Mapping):
-            raise ConfigError(f"{at}: must be a mapping with field and values or range")
-        check_keys(f"{at}: ", spec, _AXIS_KEYS)
-        if "field" not in spec:
-            raise ConfigError(f"{at}.field: missing required key; fields: {FIELD_HELP}")
-        field = check_field(at, spec["field"], robot)
-        relative = spec.get("relative", False)
-        if not isinstance(relative, bool):
-            raise ConfigError(f"{at}.relative: must be true or false, got {relative!r}")
-        axes.append(Axis(axis_name, field, _axis_values(at, spec, size), relative, family))
-
-    check_axes_compatible(where, axes, robot)
-    if config.get("combine", "product") == "product":
-        _check_size(
-            f"{where}: axes", math.prod(len(a.values) for a in axes), " x ".join(str(len(a.values)) for a in axes), size
-        )
-
-    combine = config.get("combine", "product")
-    if combine not in ("product", "zip"):
-        raise ConfigError(f"{where}: combine: must be 'product' or 'zip', got {combine!r}")
-    if combine == "zip" and len({len(a.values) for a in axes}) > 1:
-        sizes = ", ".join(f"{a.name}: {len(a.values)}" for a in axes)
-        raise ConfigError(f"{where}: combine: zip needs axes of equal length ({sizes})")
-
+    robot, robot_source, robot_mapping = _base_robot(where, config, base_dir)
+    axes = _parse_axes(where, config.get("axes"), robot)
+    combine = _check_combine(where, config, axes, robot)
     metrics = metric_specs(f"{where}: metrics", config.get("metrics"))
-    chunk_size = config.get("chunk_size", 256)
-    if not isinstance(chunk_size, int) or isinstance(chunk_size, bool) or chunk_size < 1:
-        raise ConfigError(f"{where}: chunk_size: must be a positive integer, got {chunk_size!r}")
-    integer(f"{where}: chunk_size", chunk_size, least=1)  # its upper bound (SIZE_LIMITS)
-    output = config.get("output", f"results/{name}")
-    if not isinstance(output, str) or not output or "\0" in output:
-        raise ConfigError(f"{where}: output: must be a folder path (a non-empty string with no NUL byte)")
-    report = config.get("report")
-    if report is not None and report not in REPORTS:
-        raise ConfigError(f"{where}: report: unknown report {report!r}; known: {', '.join(sorted(REPORTS))}")
-
-    for i, metric in enumerate(metrics):
-        entry = METRICS[metric.name]
-        if family not in entry.families:
-            others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
-            raise ConfigError(
-                f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
-                f"robots; the robot is {family}; its metrics: {others}"
-            )
-        entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
-    metrics = resolve_tips(f"{where}: metrics", metrics, robot)  # a tip index becomes the tip's name
-
+    chunk_size, output, report = _run_settings(where, config, name)
+    metrics = _check_metrics(where, metrics, robot)
     resolved = {
         "name": name,
         "description": config.get("description", ""),
@@ -316,6 +235,116 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
         REPORT_CHECKS[report](spec)
     build_designs(spec)  # validates every sweep point before anything is written
     return spec
+
+
+def _read_sweep(source: str | os.PathLike | Mapping) -> tuple[dict, str, Path]:
+    """The sweep's mapping, its label for messages and the folder relative paths start from."""
+    if isinstance(source, Mapping):
+        return dict(source), "sweep", Path.cwd()
+    path = Path(source)
+    config, where = read_yaml(path, what="sweep file"), str(path)
+    if not isinstance(config, dict):
+        raise ConfigError(f"{where}: a sweep file must be a mapping with robot, axes and metrics")
+    return config, where, path.resolve().parent
+
+
+def _base_robot(where: str, config: Mapping, base_dir: Path) -> tuple[Any, str, dict]:
+    """The base robot: a path (relative to the sweep file) or an inline mapping. Returns
+    the robot, where it came from (the path, or "inline") and its resolved mapping."""
+    if "robot" not in config:
+        raise ConfigError(f"{where}: robot: missing required key (a robot file path or an inline robot)")
+    robot_entry = config["robot"]
+    if isinstance(robot_entry, Mapping):
+        robot = robot_from_file_mapping(robot_entry, source=f"{where}: robot", base_dir=base_dir)
+        return robot, "inline", _resolved_robot(robot, base_dir / "robot.yaml", lambda: robot_entry)
+    if not isinstance(robot_entry, str):
+        raise ConfigError(f"{where}: robot: must be a file path or an inline robot mapping")
+    robot_path = Path(robot_entry)
+    if not robot_path.is_absolute():
+        candidate = base_dir / robot_path
+        robot_path = candidate if candidate.exists() or not robot_path.exists() else robot_path
+    if not robot_path.exists():
+        raise ConfigError(f"{where}: robot: no such robot file '{robot_entry}' (looked in {base_dir})")
+    if robot_path.is_dir():
+        raise ConfigError(f"{where}: robot: '{robot_entry}' is a folder, not a robot file")
+    robot = load_robot(robot_path)
+    return robot, str(robot_entry), _resolved_robot(robot, robot_path, lambda: read_yaml(robot_path, what="robot file"))
+
+
+def _design_size(robot) -> int:
+    """Numbers per design (float64 leaves), for the memory check of the batched designs."""
+    return sum(int(np.size(leaf)) for leaf in jax.tree_util.tree_leaves(robot))
+
+
+def _parse_axes(where: str, axes_entry: Any, robot) -> list[Axis]:
+    """The ``axes:`` mapping: each axis's design field, values and whether they are relative."""
+    family = family_of(robot).name
+    size = _design_size(robot)
+    if not isinstance(axes_entry, Mapping) or not axes_entry:
+        raise ConfigError(f"{where}: axes: must be a non-empty mapping of axis name -> {{field, values | range}}")
+    axes = []
+    for axis_name, spec in axes_entry.items():
+        at = f"{where}: axes.{axis_name}"
+        if not isinstance(axis_name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", axis_name):
+            raise ConfigError(f"{at}: axis names must be identifiers (letters, digits, _)")
+        if not isinstance(spec, Mapping):
+            raise ConfigError(f"{at}: must be a mapping with field and values or range")
+        check_keys(f"{at}: ", spec, _AXIS_KEYS)
+        if "field" not in spec:
+            raise ConfigError(f"{at}.field: missing required key; fields: {FIELD_HELP}")
+        field = check_field(at, spec["field"], robot)
+        relative = spec.get("relative", False)
+        if not isinstance(relative, bool):
+            raise ConfigError(f"{at}.relative: must be true or false, got {relative!r}")
+        axes.append(Axis(axis_name, field, _axis_values(at, spec, size), relative, family))
+    return axes
+
+
+def _check_combine(where: str, config: Mapping, axes: list[Axis], robot) -> str:
+    """How the axes combine (``product``: every combination, within the size limit;
+    ``zip``: axes of equal length, side by side)."""
+    check_axes_compatible(where, axes, robot)
+    if config.get("combine", "product") == "product":
+        count = math.prod(len(a.values) for a in axes)
+        _check_size(f"{where}: axes", count, " x ".join(str(len(a.values)) for a in axes), _design_size(robot))
+    combine = config.get("combine", "product")
+    if combine not in ("product", "zip"):
+        raise ConfigError(f"{where}: combine: must be 'product' or 'zip', got {combine!r}")
+    if combine == "zip" and len({len(a.values) for a in axes}) > 1:
+        sizes = ", ".join(f"{a.name}: {len(a.values)}" for a in axes)
+        raise ConfigError(f"{where}: combine: zip needs axes of equal length ({sizes})")
+    return combine
+
+
+def _run_settings(where: str, config: Mapping, name: str) -> tuple[int, str, str | None]:
+    """``chunk_size``, ``output`` (default ``results/<name>``) and ``report``, checked."""
+    chunk_size = config.get("chunk_size", 256)
+    if not isinstance(chunk_size, int) or isinstance(chunk_size, bool) or chunk_size < 1:
+        raise ConfigError(f"{where}: chunk_size: must be a positive integer, got {chunk_size!r}")
+    integer(f"{where}: chunk_size", chunk_size, least=1)  # its upper bound (SIZE_LIMITS)
+    output = config.get("output", f"results/{name}")
+    if not isinstance(output, str) or not output or "\0" in output:
+        raise ConfigError(f"{where}: output: must be a folder path (a non-empty string with no NUL byte)")
+    report = config.get("report")
+    if report is not None and report not in REPORTS:
+        raise ConfigError(f"{where}: report: unknown report {report!r}; known: {', '.join(sorted(REPORTS))}")
+    return chunk_size, output, report
+
+
+def _check_metrics(where: str, metrics: tuple[MetricSpec, ...], robot) -> tuple[MetricSpec, ...]:
+    """The metrics, each checked against the robot's family and the robot; a tip index
+    becomes the tip's name."""
+    family = family_of(robot).name
+    for i, metric in enumerate(metrics):
+        entry = METRICS[metric.name]
+        if family not in entry.families:
+            others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
+            raise ConfigError(
+                f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
+                f"robots; the robot is {family}; its metrics: {others}"
+            )
+        entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
+    return resolve_tips(f"{where}: metrics", metrics, robot)
 
 
 def _resolved_robot(robot, path: Path, mapping) -> dict:
