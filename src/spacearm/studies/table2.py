@@ -124,32 +124,17 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
     for r in readings:
         r["max"], r["rms"] = relative_errors(r["values"], printed)
         r["shape"] = shape_error(r["values"], printed)
-    finite = [r for r in readings if np.all(np.isfinite(r["values"]))]
-    rank = sorted(finite, key=lambda r: r["rms"])
-    growth = printed[-1] / printed[0]
-    best = rank[0]
-    best_single = min(
-        (r for r in finite if r["departures"] <= 1 and r["name"] != "faithful / area"), key=lambda r: r["rms"]
-    )
-    best_area = min(
-        (r for r in finite if r["name"].endswith("/ area") and r["name"] != "faithful / area"), key=lambda r: r["rms"]
-    )
-    by_max = min(finite, key=lambda r: r["max"])
-    faithful = next(r for r in readings if r["name"] == "faithful / area")["values"]
-    fraction, median = chance_level(np.array([r["values"] for r in readings]), printed)
-    shaped = [r for r in finite if np.isfinite(r["shape"])]
-    # Rules that scale every row alike (area, square, area / joint volume) tie in shape: prefer fewer departures.
-    by_shape = min(shaped, key=lambda r: (round(r["shape"], 9), r["departures"]))
-    by_shape_single = min(
-        (r for r in shaped if len(r.get("model", "").split(" + ")) == 1 and r.get("model") != "faithful"),
-        key=lambda r: (round(r["shape"], 9), r["departures"]),
-    )
-    shape_fraction, shape_median = chance_level(np.array([r["values"] for r in readings]), printed, statistic="shape")
-    header = " | ".join(f"b0/B0={r:g}" for r in ratios)
-    fmt = lambda r: (
-        f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
-    )
-    lines = [
+    return [
+        *_variants_lines(),
+        *_verdict_lines(readings, printed),
+        *_rms_grid_lines(readings),
+        *_every_reading_lines(readings, ratios, printed),
+    ]
+
+
+def _variants_lines() -> list[str]:
+    """What a reading is: the departures from the faithful derivation and the averaging rules."""
+    return [
         "## Readings of the w-bar column (x1e-2; no parameter, none tuned to the printed numbers)",
         "",
         "A reading = a derivation of I_S, I_M and J_S, J_M (eq. 2, 5; the faithful one or departures",
@@ -170,15 +155,45 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         "|---|---|",
         *[f"| {name} | {note} |" for name, note in AVERAGES.items()],
         "",
+    ]
+
+
+def _reading_line(r: dict) -> str:
+    return f"{r['name']} (rms {r['rms']:.1%}, max {r['max']:.1%}: " + ", ".join(f"{v:.2f}" for v in r["values"]) + ")"
+
+
+def _verdict_lines(readings: list[dict], printed: list[float]) -> list[str]:
+    """The closest readings by each measure, and how they compare with chance."""
+    finite = [r for r in readings if np.all(np.isfinite(r["values"]))]
+    growth = printed[-1] / printed[0]
+    best = min(finite, key=lambda r: r["rms"])
+    best_single = min(
+        (r for r in finite if r["departures"] <= 1 and r["name"] != "faithful / area"), key=lambda r: r["rms"]
+    )
+    best_area = min(
+        (r for r in finite if r["name"].endswith("/ area") and r["name"] != "faithful / area"), key=lambda r: r["rms"]
+    )
+    by_max = min(finite, key=lambda r: r["max"])
+    faithful = next(r for r in readings if r["name"] == "faithful / area")["values"]
+    fraction, median = chance_level(np.array([r["values"] for r in readings]), printed)
+    shaped = [r for r in finite if np.isfinite(r["shape"])]
+    # Rules that scale every row alike (area, square, area / joint volume) tie in shape: prefer fewer departures.
+    by_shape = min(shaped, key=lambda r: (round(r["shape"], 9), r["departures"]))
+    by_shape_single = min(
+        (r for r in shaped if len(r.get("model", "").split(" + ")) == 1 and r.get("model") != "faithful"),
+        key=lambda r: (round(r["shape"], 9), r["departures"]),
+    )
+    shape_fraction, shape_median = chance_level(np.array([r["values"] for r in readings]), printed, statistic="shape")
+    return [
         "### Verdict",
         "",
         f"{len(readings)} readings, {len(finite)} finite (the others put I_S = 0 somewhere on the strip, where w* has a pole).",
         f"Growth from the first row to the last: x{growth:.3f} printed, x{faithful[-1] / faithful[0]:.3f} faithful.",
         "",
-        f"- Closest by rms: {fmt(best)}, {best['departures']} departures.",
-        f"- Closest by maximum error: {fmt(by_max)}.",
-        f"- Closest with at most one departure: {fmt(best_single)}.",
-        f"- Closest keeping eq. 12's area average: {fmt(best_area)}.",
+        f"- Closest by rms: {_reading_line(best)}, {best['departures']} departures.",
+        f"- Closest by maximum error: {_reading_line(by_max)}.",
+        f"- Closest with at most one departure: {_reading_line(best_single)}.",
+        f"- Closest keeping eq. 12's area average: {_reading_line(best_area)}.",
         (
             "- Closest in shape (each column divided by its first row, so blind to any constant factor of the"
             f" averaging or the normalization): {by_shape['name']} (shape error {by_shape['shape']:.1%});"
@@ -197,6 +212,12 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         ),
         "- The faithful definition stays the default everywhere.",
         "",
+    ]
+
+
+def _rms_grid_lines(readings: list[dict]) -> list[str]:
+    """The rms error of every reading, model variants by averaging rules."""
+    lines = [
         "### rms relative error of every reading (rows: model variant; columns: averaging rule; - = diverges)",
         "",
         "| model variant | " + " | ".join(AVERAGES) + " |",
@@ -212,7 +233,14 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
             + " | ".join("-" if not np.isfinite(cells[k]["rms"]) else f"{cells[k]['rms']:.1%}" for k in AVERAGES)
             + " |"
         )
-    lines += [
+    return lines
+
+
+def _every_reading_lines(readings: list[dict], ratios: list[float], printed: list[float]) -> list[str]:
+    """Every reading's column beside the printed one, closest first (diverging ones last)."""
+    growth = printed[-1] / printed[0]
+    header = " | ".join(f"b0/B0={r:g}" for r in ratios)
+    lines = [
         "",
         "### Every reading, closest first",
         "",
@@ -224,7 +252,8 @@ def _readings_lines(base: PlanarRobot, ratios: list[float], printed: list[float]
         "|---|---|" + "---|" * len(ratios) + "---|---|---|---|",
         "| **paper (printed)** | | " + " | ".join(f"{p:.2f}" for p in printed) + f" | 0 | 0 | {growth:.3f} | 0 |",
     ]
-    for r in rank + [r for r in readings if r not in finite]:
+    finite = [r for r in readings if np.all(np.isfinite(r["values"]))]
+    for r in sorted(finite, key=lambda r: r["rms"]) + [r for r in readings if r not in finite]:
         if np.all(np.isfinite(r["values"])):
             cells = " | ".join(f"{v:.2f}" for v in r["values"])
             ratio = f"{r['values'][-1] / r['values'][0]:.3f}" if r["values"][0] else "-"
