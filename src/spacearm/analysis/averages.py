@@ -35,15 +35,9 @@ error estimate and the sample count carry no gradient. The tolerance and the sam
 budget are traced: a new value does not compile a new program.
 
 Several metrics at once (`joint_averages`): one chain pass per posture gives J*, C
-and H* (`posture_quantities`), every requested metric is read off them, and one
-estimator runs over the vector of metrics until every one meets its tolerance.
-On a robot with several tips (a tree: J* is (k, 6, n)) w*, 1/kappa and w_d are per tip
-and named with the tip's index, ``manipulability[1]`` (`tip_metric`): each reads its
-tip's rows of the same J*, so every tip comes from the same pass; ||C_w||_F is of the
-whole system (the bus rate per joint rate over every arm's joints) and takes no tip. A
-fixed rule (``min_samples`` and ``max_samples`` give the same count, as in design
-problems) is a single pass over its points and plain means, differentiated by
-ordinary AD: no loop and no custom VJP.
+and H* (`posture_quantities`), and one estimator runs over the vector of metrics. On a
+robot with several tips (a tree) w*, 1/kappa and w_d are per tip, ``manipulability[1]``
+(`tip_metric`); ||C_w||_F is of the whole system and takes no tip.
 
 Accuracy: tests/test_averages.py checks the estimate and its error estimate against
 converged references (Table 1, the 3-DOF arm, the UR5). The integrands have kinks

@@ -699,19 +699,13 @@ def _singular_radius(
     """Sampling, projection and descent in ONE loop whose body holds the only evaluation (`_refine`).
 
     ``candidates`` rows at a time: iterations 0..S-1 evaluate s on the Sobol samples;
-    S..S+P-1 project the ``keep`` samples nearest the set onto it (``projection_steps``
-    Newton steps); S+P..S+P+D-1 are the descent steps on the ``candidates`` closest
-    to the centroid (a tangent step and ``newton_steps`` Newton steps each); without
-    ``polish``, one more evaluates the chosen posture, whose |tip| is the returned value.
-    So the program holds one forward-mode pass over the chain (the costly part to
-    compile), not one per use. The step counts, the seed and the sizes ``samples`` and
-    ``keep`` are traced: the arrays hold ``sample_room`` and ``keep_room`` rows (static,
-    powers of two from `singular_radius`), the loop visits only the real ones, and the
-    rows past a size are copies of the first and never chosen; so every size in a bucket
-    runs the same program and gives what an exact-size program gives. The search runs on
-    the design with its gradient stopped; the returned radius is differentiable through
-    `_closest_value` (envelope theorem), whose passes over the chain a program holds only
-    where it differentiates the radius.
+    S..S+P-1 project the ``keep`` samples nearest the set onto it; S+P..S+P+D-1 descend
+    on the ``candidates`` closest to the centroid; without ``polish``, one more evaluates
+    the chosen posture. So the program holds one forward-mode pass over the chain. Step
+    counts, seed, ``samples`` and ``keep`` are traced: the arrays hold ``sample_room`` and
+    ``keep_room`` rows (static powers of two), and rows past a size copy the first and are
+    never chosen. The search runs with the design's gradient stopped; the radius is
+    differentiable through `_closest_value` (envelope theorem).
     """
     design = robot
     robot = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)

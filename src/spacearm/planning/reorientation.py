@@ -1,7 +1,7 @@
 """Reorienting the base by cyclic joint maneuvers (Umetani & Yoshida 1990, section 3.2).
 
-Umetani & Yoshida 1990, section 3.2, Fig. 5: point C "can be reached after reorienting
-the base by a suitable cyclic maneuver". This module plans that maneuver.
+Fig. 5 of the paper: point C "can be reached after reorienting the base by a suitable
+cyclic maneuver". This module plans that maneuver.
 
 Reorientation (`plan_reorientation`). Along a closed joint-space loop the
 joints come back but the base turns by the line integral of eq. (5),
@@ -23,6 +23,8 @@ matter. The planner
    joint travel, soft penalties on joint limits and on the excursion from q0; all
    candidates in one vmapped, jitted call;
 3. finishes each candidate with Newton steps on a scale factor of the loop about q0,
+   so that the integrated rotation is delta_phi0, and keeps the valid candidate (inside
+   the joint limits and the excursion bound) with the least joint travel.
 """
 
 from __future__ import annotations
