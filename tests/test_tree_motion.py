@@ -34,6 +34,8 @@ from spacearm.models.tree import tree_from_chains
 from spacearm.models.tree.primitives import tip_pose
 from spacearm.models.tree.shell import tip_shell
 
+from .conftest import count_compiles
+
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 DUAL = os.path.join(ROOT, "configs", "dual-ur5-servicer.yaml")
 TREES = ("dual-ur5-servicer", "baxter-system", "tiago-dual-system", "three-arm-servicer")
@@ -161,19 +163,21 @@ def test_focus_locks_the_held_joints_in_the_inertias(dual, right_alone):
 
 
 def test_focus_names_arms_tips_and_joints(dual):
-    by_arm = dual.focus(moving=("right",)).moving
-    assert by_arm == (False,) * 6 + (True,) * 6
-    assert dual.focus(moving="right/tool0").moving == by_arm  # a tip: the joints on its path
-    assert (
-        dual.focus(moving=[f"right/{n}" for n in ("shoulder_pan_joint",)]).moving
-        == (False,) * 6 + (True,) + (False,) * 5
+    by_arm = dual.focus(moving=("right",)).moving_mask
+    np.testing.assert_array_equal(by_arm, [False] * 6 + [True] * 6)
+    np.testing.assert_array_equal(dual.focus(moving="right/tool0").moving_mask, by_arm)  # a tip: its path
+    np.testing.assert_array_equal(
+        dual.focus(moving=[f"right/{n}" for n in ("shoulder_pan_joint",)]).moving_mask,
+        [False] * 6 + [True] + [False] * 5,
     )
-    assert dual.focus(moving=[True] * 6 + [False] * 6).moving == (True,) * 6 + (False,) * 6
-    assert dual.focus(moving=("left", "right")).moving is None  # all: no mask
-    # the focus is static (part of the tree structure), the leaves are shared
+    np.testing.assert_array_equal(dual.focus(moving=[True] * 6 + [False] * 6).moving_mask, [True] * 6 + [False] * 6)
+    assert dual.focus(moving=("left", "right")).moving_mask.all()
+    # which tip and which joints are data: one structure for every tip and held set, leaves shared
     focused = dual.focus(tip=1, moving=("right",))
-    assert jax.tree_util.tree_structure(focused) != jax.tree_util.tree_structure(dual)
-    assert jax.tree_util.tree_structure(focused.focus()) == jax.tree_util.tree_structure(dual)
+    structure = jax.tree_util.tree_structure
+    assert structure(focused) != structure(dual)
+    assert structure(focused) == structure(dual.focus(tip=0)) == structure(dual.focus(tip=0, moving="left"))
+    assert structure(focused.focus()) == structure(dual)
     assert focused.link_mass is dual.link_mass and focused.active_tip_name == "right/tool0"
     with pytest.raises(sa.ConfigError, match=r"tip: unknown tip 'rigth/tool0' \(did you mean 'right/tool0'\?\)"):
         dual.focus(tip="rigth/tool0")
@@ -276,6 +280,28 @@ def test_straight_path_of_one_tip_with_the_other_arm_held(dual, straight_paths):
         assert _turn(R_end) > 1e-4  # the arm's reaction turns the bus
     np.testing.assert_array_equal(np.asarray(held.end_joints)[:6], Q0[:6])  # held: exactly
     assert np.max(np.abs(np.asarray(both.end_joints)[:6] - Q0[:6])) > 1e-4  # free: the left arm helps
+
+
+@pytest.mark.slow  # runs the straight-path programs of the fixture for two more focuses
+def test_another_focus_compiles_no_program(dual, straight_paths):
+    """The chosen tip and the held joints are data: after one focus has compiled its programs,
+    another tip or other held joints run them again (the left tip with the right arm held)."""
+    sa.manipulability(dual.focus(tip="right/tool0"), Q0)
+    sa.generalized_jacobian(dual.focus(tip="right/tool0"), Q0)
+    with count_compiles() as compiles:
+        left_alone = dual.focus(tip="left/tool0", moving=("left",))
+        path = sa.straight_tip_path(left_alone, Q0, -D, max_length=0.05)
+        w = sa.manipulability(left_alone, Q0)
+        J = sa.generalized_jacobian(dual.focus(tip="left/tool0"), Q0)
+    assert not compiles, dict(compiles)
+    assert int(path.reason) == sa.motion.REASON_MAX_LENGTH
+    np.testing.assert_array_equal(np.asarray(path.end_joints)[6:], Q0[6:])  # the right arm held exactly
+    start = np.asarray(sa.tip_position(dual, Q0))[0]
+    np.testing.assert_allclose(np.asarray(path.end_tip) - start, -0.05 * D, atol=1e-9)
+    J_all = np.asarray(sa.generalized_jacobian(dual, Q0))
+    np.testing.assert_array_equal(np.asarray(J), J_all[0])
+    Jv = J_all[0][:3, :6]  # held joints have zero columns: w* over the left arm's own
+    np.testing.assert_allclose(w, np.sqrt(np.linalg.det(Jv @ Jv.T)), rtol=1e-12)
 
 
 @pytest.mark.slow  # compiles the reaction-free integrator for the 12-joint tree

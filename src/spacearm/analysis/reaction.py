@@ -58,24 +58,34 @@ __all__ = [
 ]
 
 
-def _bus_rate_map(robot, q: jax.Array) -> jax.Array:
-    """``(..., 3, n_moving)`` C_w over the moving joints."""
-    return family_of(robot).attitude_rate_map(robot, q)[..., _moving(robot)]
+def _moving_count(robot) -> int:
+    """The number of joints that move (host: the shapes of the null space depend on it)."""
+    mask = family_of(robot).moving_joints(robot)
+    if isinstance(mask, jax.core.Tracer):
+        raise TypeError(
+            "the reaction null space of a focused tree has as many columns as the focus moves joints: "
+            "pass the focused design to it concretely (outside jit), not traced"
+        )
+    return int(np.count_nonzero(np.asarray(mask)))
 
 
-def _moving(robot) -> np.ndarray:
-    """Indices of the joints that move (static)."""
-    return np.flatnonzero(family_of(robot).moving_joints(robot))
+def _moving(robot, m: int) -> jax.Array:
+    """Indices of the ``m`` joints that move (traced with the design's focus)."""
+    return jnp.flatnonzero(jnp.asarray(family_of(robot).moving_joints(robot)), size=m)
 
 
-def _embed(robot, rates: jax.Array) -> jax.Array:
-    """``(..., n_moving)`` -> ``(..., n)`` with zeros at the held joints."""
+def _bus_rate_map(robot, q: jax.Array, m: int) -> jax.Array:
+    """``(..., 3, m)`` C_w over the moving joints."""
+    return family_of(robot).attitude_rate_map(robot, q)[..., _moving(robot, m)]
+
+
+def _embed(robot, rates: jax.Array, m: int) -> jax.Array:
+    """``(..., m)`` -> ``(..., n)`` with zeros at the held joints."""
     n = family_of(robot).joint_count(robot)
     out = jnp.zeros(rates.shape[:-1] + (n,), rates.dtype)
-    return out.at[..., _moving(robot)].set(rates)
+    return out.at[..., _moving(robot, m)].set(rates)
 
 
-@jax.jit
 def reaction_null_space(robot, q: jax.Array) -> jax.Array:
     """``(..., n, m - 3)`` orthonormal basis of ker C_w(q) (joint rates that do not turn the bus).
 
@@ -85,12 +95,16 @@ def reaction_null_space(robot, q: jax.Array) -> jax.Array:
     Args:
         q: ``(..., n)`` joints, m > 3.
     """
-    m = _moving(robot).size
+    m = _moving_count(robot)
     if m <= 3:
         raise ConfigError(f"the reaction null space needs more than 3 moving joints, the robot has {m}")
-    C = _bus_rate_map(robot, q)
-    _, _, vt = jnp.linalg.svd(C, full_matrices=True)
-    return jnp.swapaxes(_embed(robot, vt[..., 3:, :]), -1, -2)
+    return _reaction_null_space(robot, q, m)
+
+
+@functools.partial(jax.jit, static_argnums=2)
+def _reaction_null_space(robot, q: jax.Array, m: int) -> jax.Array:
+    _, _, vt = jnp.linalg.svd(_bus_rate_map(robot, q, m), full_matrices=True)
+    return jnp.swapaxes(_embed(robot, vt[..., 3:, :], m), -1, -2)
 
 
 @jax.jit
@@ -126,7 +140,6 @@ class DisturbanceMap:
     most_disturbing: jax.Array
 
 
-@jax.jit
 def disturbance_map(robot, q: jax.Array) -> DisturbanceMap:
     """Extremes of ||C_w(q) u|| over unit joint rates u (Dubowsky & Torres 1991), ``q (..., n)``.
 
@@ -134,16 +147,19 @@ def disturbance_map(robot, q: jax.Array) -> DisturbanceMap:
     the disturbance map; the least-disturbing direction is the right singular vector of
     the smallest singular value of C_w.
     """
-    m = _moving(robot).size
-    C = _bus_rate_map(robot, q)
-    _, s, vt = jnp.linalg.svd(C, full_matrices=True)
+    return _disturbance_map(robot, q, _moving_count(robot))
+
+
+@functools.partial(jax.jit, static_argnums=2)
+def _disturbance_map(robot, q: jax.Array, m: int) -> DisturbanceMap:
+    _, s, vt = jnp.linalg.svd(_bus_rate_map(robot, q, m), full_matrices=True)
     smallest = s[..., -1] if m <= 3 else jnp.zeros_like(s[..., -1])
     return DisturbanceMap(
         largest=s[..., 0],
         smallest=smallest,
         singular_values=s,
-        least_disturbing=_embed(robot, vt[..., -1, :]),
-        most_disturbing=_embed(robot, vt[..., 0, :]),
+        least_disturbing=_embed(robot, vt[..., -1, :], m),
+        most_disturbing=_embed(robot, vt[..., 0, :], m),
     )
 
 
@@ -194,7 +210,10 @@ class ReactionFreePath:
 def _reaction_free_flat(robot, q0, R0, direction, length, steps):
     """A padded batch of reaction-free paths (the padding rows are copies of a real one)."""
     family = family_of(robot)
-    moving = _moving(robot)
+    # [J*_v; C_w] has zero columns at the held joints: over the m moving ones its smallest
+    # singular value is the min(m, 6)-th of the whole matrix's.
+    moving = jnp.sum(jnp.asarray(family.moving_joints(robot)) > 0)
+    smallest = jnp.minimum(moving, min(6, family.joint_count(robot))) - 1
 
     def one(q0, R0, d, length):
         d_bus = R0.T @ (d / jnp.linalg.norm(d))
@@ -204,7 +223,7 @@ def _reaction_free_flat(robot, q0, R0, direction, length, steps):
             # singular value of [J*_v; C_w] over the moving joints) as the stage's aux.
             J, C = family.straight_maps(robot, q)
             rates, residual, bus = _rates_from_maps(J, C, d_bus)
-            sv = jnp.linalg.svd(jnp.concatenate([J, C])[:, moving], compute_uv=False)[-1]
+            sv = jnp.linalg.svd(jnp.concatenate([J, C]), compute_uv=False)[smallest]
             return rates, jnp.stack([residual, bus, sv])
 
         h = length / steps
@@ -253,7 +272,7 @@ def reaction_free_tip_path(
         `ReactionFreePath` with the broadcast batch shape.
     """
     n = family_of(robot).joint_count(robot)
-    m = _moving(robot).size
+    m = _moving_count(robot)
     if m < 4:
         raise ConfigError(
             f"reaction-free tip motion needs at least 4 moving joints (a reaction null space), the robot has {m}"

@@ -298,7 +298,7 @@ def _tree_record(robot, arrays: dict) -> list[str]:
         return []
     arrays.update(tip_index=np.asarray(robot.active_tip), moving=robot.moving_mask)
     lines = [f"tip            {robot.active_tip_name}"]
-    if robot.moving is not None:
+    if not robot.moving_mask.all():
         lines.append(f"held joints    {int(np.sum(~robot.moving_mask))} of {robot.n_joints} (kept at --from)")
     return lines
 

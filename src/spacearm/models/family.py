@@ -99,15 +99,16 @@ class RobotFamily:
         """``(m, n)`` Jacobian of the same arm with its base held fixed."""
         raise NotImplementedError
 
-    def moving_joints(self, robot) -> np.ndarray:
-        """``(n,)`` static booleans: the joints a planner may move (all, unless the robot
-        holds some: a focused tree). Held joints have zero columns in every joint-rate map."""
-        return np.ones(self.joint_count(robot), dtype=bool)
+    def moving_joints(self, robot):
+        """``(n,)`` 1 for the joints a planner may move and 0 for held ones (all move, unless the
+        robot holds some: a focused tree, whose mask is data and traced with the design). Held
+        joints have zero columns in every joint-rate map."""
+        return np.ones(self.joint_count(robot))
 
     def tip_joints(self, robot) -> np.ndarray:
-        """``(n,)`` static booleans: the moving joints on the tip's own path from the base (all
+        """``(n,)`` host booleans: the moving joints on the tip's own path from the base (all
         moving joints of a serial arm; a focused tree's other arms move its tip only through the bus)."""
-        return self.moving_joints(robot)
+        return np.asarray(self.moving_joints(robot)) > 0
 
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 

@@ -115,7 +115,8 @@ def _prepare(robot, q_start, joint_waypoints, base_rotation):
         gap = np.max(np.abs(np.asarray(joint_waypoints[..., 0, :]) - np.asarray(q_start)), initial=0.0)
         if not gap <= 1e-9:
             raise ConfigError(f"joint_waypoints: the first row must equal q_start (largest gap {gap:.3g})")
-        held = ~family_of(robot).moving_joints(robot)
+        moving = family_of(robot).moving_joints(robot)
+        held = np.zeros(np.shape(moving), bool) if is_traced(moving) else np.asarray(moving) == 0
         if np.any(held):  # a focused tree: its held joints have no columns in C_w
             moved = np.max(np.abs(np.asarray(joint_waypoints)[..., held] - np.asarray(q_start)[..., None, held]))
             if not moved <= 1e-12:

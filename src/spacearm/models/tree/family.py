@@ -54,20 +54,25 @@ __all__ = ["TREE", "TreeFamily"]
 
 def _columns(robot: TreeRobot, matrix):
     """Zero the columns (last axis) of the held joints of a focused tree."""
-    if robot.moving is None:
+    if robot.focus_moving is None:
         return matrix
-    return matrix * jnp.asarray(robot.moving_mask, matrix.dtype)
+    return matrix * jnp.asarray(robot.focus_moving, matrix.dtype)
+
+
+def _tip_index(robot: TreeRobot):
+    """The focused tip's index, traced with the design (a leaf, not part of the compile key)."""
+    return jnp.argmax(jnp.asarray(robot.focus_tip))
 
 
 def _one_tip(robot: TreeRobot, per_tip, core: int):
     """The active tip's slice of a per-tip result ``(..., k, *core)`` (all tips without a focus on one)."""
-    if robot.active_tip is None:
+    if robot.focus_tip is None:
         return per_tip
-    return per_tip[(Ellipsis, robot.active_tip) + (slice(None),) * core]
+    return jnp.take(per_tip, _tip_index(robot), axis=-1 - core)
 
 
 def _focused(robot: TreeRobot) -> bool:
-    return robot.active_tip is not None or robot.moving is not None
+    return robot.focused
 
 
 def _tip(robot, posture):
@@ -102,9 +107,9 @@ def _manipulability(robot, posture):
 def _locked(robot: TreeRobot, inertia):
     """H* (or H_m) of the held joints locked: the moving block, identity on the held joints
     (their rates are zero, so the moving joints see exactly that block)."""
-    if robot.moving is None:
+    if robot.focus_moving is None:
         return inertia
-    mask = jnp.asarray(robot.moving_mask, inertia.dtype)
+    mask = jnp.asarray(robot.focus_moving, inertia.dtype)
     both = mask[:, None] * mask[None, :]
     return inertia * both + jnp.diag(1.0 - mask)
 
@@ -128,13 +133,19 @@ def _fixed_base_manipulability(robot, joints):
     return gram_root_determinant(_fixed_base_jacobian(robot, joints)[..., :3, :])
 
 
-def _require_tip(robot: TreeRobot, what: str) -> int:
-    if robot.active_tip is None:
+def _require_tip(robot: TreeRobot, what: str) -> None:
+    if robot.focus_tip is None:
         raise TypeError(
             f"{what}: a tree robot with {robot.n_tips} tips; choose one with robot.focus(tip=...) "
             f"(the tips are {', '.join(robot.tip_names)})"
         )
-    return robot.active_tip
+
+
+def _tip_rows(robot: TreeRobot, maps, rows: int):
+    """The active tip's first ``rows`` rows of stacked per-tip maps ``(..., 6 k + extra, n)``."""
+    k = robot.n_tips
+    per_tip = maps[..., : 6 * k, :].reshape(maps.shape[:-2] + (k, 6, maps.shape[-1]))
+    return _one_tip(robot, per_tip, 2)[..., :rows, :]
 
 
 class TreeFamily(RobotFamily):
@@ -177,14 +188,18 @@ class TreeFamily(RobotFamily):
 
     def tip_count(self, robot: TreeRobot) -> int | None:
         """k, or ``None`` for a tree focused on one tip (a single-tip robot)."""
-        return robot.n_tips if robot.active_tip is None else None
+        return robot.n_tips if robot.focus_tip is None else None
 
-    def moving_joints(self, robot: TreeRobot) -> np.ndarray:
-        return robot.moving_mask
+    def moving_joints(self, robot: TreeRobot):
+        """``(n,)`` 1 for the moving joints, 0 for the held ones (traced with a traced design)."""
+        if robot.focus_moving is None:
+            return np.ones(robot.n_joints)
+        return robot.focus_moving
 
     def tip_joints(self, robot: TreeRobot) -> np.ndarray:
-        """The moving joints on the active tip's path from the bus (all moving ones without a tip focus)."""
-        if robot.active_tip is None:
+        """Host booleans: the moving joints on the active tip's path from the bus (all moving ones
+        without a tip focus); concrete designs only."""
+        if robot.focus_tip is None:
             return robot.moving_mask
         return robot.support[robot.active_tip] & robot.moving_mask
 
@@ -194,25 +209,26 @@ class TreeFamily(RobotFamily):
 
     def straight_maps(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         """J*_v of the active tip and C_w (held joints' columns zero), one pass over the tree."""
-        t = _require_tip(robot, "straight tip paths")
+        _require_tip(robot, "straight tip paths")
         maps = _columns(robot, straight_path_maps(robot, joints))
-        return maps[..., 6 * t : 6 * t + 3, :], maps[..., -3:, :]
+        return _tip_rows(robot, maps, 3), maps[..., -3:, :]
 
     def pose_maps(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         """J* ``(6, n)`` of the active tip and C_w ``(3, n)`` (held joints' columns zero), one pass."""
-        t = _require_tip(robot, "pose targets")
+        _require_tip(robot, "pose targets")
         maps = _columns(robot, straight_path_maps(robot, joints))
-        return maps[..., 6 * t : 6 * t + 6, :], maps[..., -3:, :]
+        return _tip_rows(robot, maps, 6), maps[..., -3:, :]
 
     def tip_frame(self, robot: TreeRobot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         """The active tip's origin about the system centroid ``(3,)`` and axes ``(3, 3)``, bus axes."""
-        t = _require_tip(robot, "pose targets")
+        _require_tip(robot, "pose targets")
         origins, axes = tip_frames(robot, joints)  # one pass over the tree
-        return origins[t], axes[t]
+        return _one_tip(robot, origins, 1), _one_tip(robot, axes, 2)
 
     def tip_shell(self, robot: TreeRobot) -> tuple[float, float]:
         """The tree's virtual-manipulator shell of the active tip (`spacearm.models.tree.shell`)."""
-        return tip_shell(robot, _require_tip(robot, "the tip shell"))
+        _require_tip(robot, "the tip shell")
+        return tip_shell(robot, robot.active_tip)
 
     def loop_holonomy(
         self, robot: TreeRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS, order=DEFAULT_ORDER
@@ -227,10 +243,9 @@ class TreeFamily(RobotFamily):
     def jacobians(self, robot: TreeRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
         J_S, J_M = jacobians(robot, posture)
         J_M = _columns(robot, J_M)
-        if robot.active_tip is None:
+        if robot.focus_tip is None:
             return J_S, J_M
-        rows = slice(6 * robot.active_tip, 6 * robot.active_tip + 6)
-        return J_S[rows], J_M[rows]
+        return _tip_rows(robot, J_S, 6), _tip_rows(robot, J_M, 6)
 
     def momentum_map(self, robot: TreeRobot, posture: jax.Array) -> tuple[jax.Array, jax.Array]:
         I_S, I_M = momentum_map(robot, posture)

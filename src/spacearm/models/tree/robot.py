@@ -89,20 +89,20 @@ class TreeLabels:
 
 
 class _Structure:
-    """The tree structure's auxiliary data: the topology and the focus compare, the labels do not."""
+    """The tree structure's auxiliary data: the topology and the kind of focus compare, the labels
+    do not. Which tip and which joints a focus chooses are leaves (data), never part of the key."""
 
-    __slots__ = ("active_tip", "joint_kinds", "labels", "moving", "parents", "tip_bodies")
+    __slots__ = ("focus", "joint_kinds", "labels", "parents", "tip_bodies")
 
-    def __init__(self, joint_kinds, parents, tip_bodies, labels, active_tip=None, moving=None):
+    def __init__(self, joint_kinds, parents, tip_bodies, labels, focus=None):
         self.joint_kinds = joint_kinds
         self.parents = parents
         self.tip_bodies = tip_bodies
         self.labels = labels
-        self.active_tip = active_tip
-        self.moving = moving
+        self.focus = focus
 
     def _key(self):
-        return (self.joint_kinds, self.parents, self.tip_bodies, self.active_tip, self.moving)
+        return (self.joint_kinds, self.parents, self.tip_bodies, self.focus)
 
     def __eq__(self, other):
         return isinstance(other, _Structure) and self._key() == other._key()
@@ -111,9 +111,7 @@ class _Structure:
         return hash(("TreeRobot", *self._key()))
 
     def __repr__(self):
-        focus = (
-            "" if self.active_tip is None and self.moving is None else f", tip={self.active_tip}, moving={self.moving}"
-        )
+        focus = "" if self.focus is None else f", focus={self.focus}"
         return f"TreeRobot(kinds={self.joint_kinds}, parents={self.parents}, tips={self.tip_bodies}{focus})"
 
 
@@ -145,10 +143,11 @@ class TreeRobot:
             ``-1 - r`` root r.
         tip_bodies: static, ``k`` body index (``>= 0``) carrying each tip.
         labels: names (not compared; renaming does not recompile).
-        active_tip: static, the focused tip (`focus`) or ``None``: with one, the tree
-            acts as a single-tip robot (tip ``(..., 3)``, J* ``(..., 6, n)``).
-        moving: static, ``n`` booleans of the joints that move (`focus`) or ``None``
-            (all): every joint-rate map has zero columns for the held joints.
+        focus_tip: ``(..., k)`` one-hot weights of the focused tip (`focus`), or ``None``: with
+            one, the tree acts as a single-tip robot (tip ``(..., 3)``, J* ``(..., 6, n)``).
+        focus_moving: ``(..., n)`` 1 for the joints that move and 0 for the held ones
+            (`focus`), or ``None`` without a focus: every joint-rate map has zero columns
+            for the held joints.
     """
 
     base_mass: Any
@@ -173,15 +172,13 @@ class TreeRobot:
     parents: tuple[int, ...] = ()
     tip_bodies: tuple[int, ...] = ()
     labels: TreeLabels = TreeLabels()
-    active_tip: int | None = None
-    moving: tuple[bool, ...] | None = None
+    focus_tip: Any = None
+    focus_moving: Any = None
 
     def __post_init__(self):
         object.__setattr__(self, "joint_kinds", tuple(self.joint_kinds))
-        if self.active_tip is not None:
-            object.__setattr__(self, "active_tip", int(self.active_tip))
-        if self.moving is not None:
-            object.__setattr__(self, "moving", tuple(bool(m) for m in self.moving))
+        if self.focus_tip is not None and self.focus_moving is None:
+            object.__setattr__(self, "focus_moving", np.ones(np.shape(self.focus_tip)[:-1] + (len(self.joint_kinds),)))
         object.__setattr__(self, "parents", tuple(int(p) for p in self.parents))
         object.__setattr__(self, "tip_bodies", tuple(int(b) for b in self.tip_bodies))
         _check_topology(self)
@@ -227,19 +224,32 @@ class TreeRobot:
         return tuple(np.shape(self.base_mass))
 
     @property
+    def focused(self) -> bool:
+        """Whether the design is a focus of the tree (`focus`): a tip, held joints, or both (static)."""
+        return self.focus_moving is not None
+
+    @property
     def moving_mask(self) -> np.ndarray:
-        """``(n,)`` static booleans: the joints that move (all unless `focus` held some)."""
-        if self.moving is None:
+        """``(n,)`` host booleans: the joints that move (all unless `focus` held some); concrete designs only."""
+        if self.focus_moving is None:
             return np.ones(self.n_joints, dtype=bool)
-        return np.asarray(self.moving, dtype=bool)
+        return np.reshape(_host(self.focus_moving, "moving_mask"), (-1, self.n_joints))[0] > 0
+
+    @property
+    def active_tip(self) -> int | None:
+        """The focused tip's index on the host, or ``None`` without a focus on one tip; concrete designs only."""
+        if self.focus_tip is None:
+            return None
+        return int(np.argmax(np.reshape(_host(self.focus_tip, "active_tip"), (-1, self.n_tips))[0]))
 
     @property
     def active_tip_name(self) -> str | None:
         """The focused tip's name, or ``None`` without a focus on one tip."""
-        if self.active_tip is None:
+        index = self.active_tip
+        if index is None:
             return None
         names = self.labels.tip_names
-        return names[self.active_tip] if self.active_tip < len(names) else f"tips[{self.active_tip}]"
+        return names[index] if index < len(names) else f"tips[{index}]"
 
     def focus(self, tip=None, moving=None) -> TreeRobot:
         """The same design acting on one tip with some joints held: the single-tip view of the tree.
@@ -252,8 +262,10 @@ class TreeRobot:
         (a locked joint has zero rate): the rates the planners compute for held joints
         are exactly zero, and the reorientation loops leave them where they are.
 
-        The leaves are shared (no copy, no validation); the focus is static (part of the
-        compile key, as the topology).
+        The design's leaves are shared (no copy, no validation). The chosen tip and the
+        held joints are leaves too (`focus_tip`, `focus_moving`), so another tip or another
+        set of held joints runs the programs already compiled; only whether a tip is
+        chosen is part of the structure.
 
         Args:
             tip: a tip name (``"left/tool0"``) or index; ``None`` keeps every tip (a
@@ -266,16 +278,20 @@ class TreeRobot:
             ConfigError: an unknown tip, arm or joint (with a did-you-mean hint), or no
                 moving joint.
         """
-        index = None if tip is None else _tip_index(self, tip)
-        mask = None if moving is None else _moving_mask(self, moving)
-        if mask is not None and not any(mask):
+        mask = np.ones(self.n_joints, dtype=bool) if moving is None else np.asarray(_moving_mask(self, moving))
+        if not mask.any():
             raise ConfigError("moving: no joint moves; name at least one arm, tip or joint")
-        if mask is not None and all(mask):
-            mask = None
         children, structure = _flatten(self)
-        structure = _Structure(structure.joint_kinds, structure.parents, structure.tip_bodies, structure.labels)
-        structure.active_tip, structure.moving = index, mask
-        return _unflatten(structure, [value for _, value in children])
+        leaves = [value for _, value in children][: len(_LEAF_FIELDS)]
+        if tip is None and moving is None:
+            return _unflatten(_Structure(*_topology(structure)), leaves)
+        batch = self.batch_shape
+        if tip is not None:
+            weights = np.zeros(self.n_tips)
+            weights[_tip_index(self, tip)] = 1.0
+            leaves.append(np.broadcast_to(weights, batch + weights.shape))
+        leaves.append(np.broadcast_to(mask.astype(float), batch + mask.shape))
+        return _unflatten(_Structure(*_topology(structure), focus="tip" if tip is not None else "joints"), leaves)
 
     def replace(self, **changes) -> TreeRobot:
         """A copy with some fields changed (validated again when concrete)."""
@@ -344,25 +360,40 @@ def _moving_mask(robot: TreeRobot, moving) -> tuple[bool, ...]:
     return tuple(bool(m) for m in mask)
 
 
+def _focus_fields(focus: str | None) -> tuple[str, ...]:
+    """The focus leaves a structure carries after the design's own."""
+    return {None: (), "joints": ("focus_moving",), "tip": ("focus_tip", "focus_moving")}[focus]
+
+
+def _topology(structure: _Structure) -> tuple:
+    return structure.joint_kinds, structure.parents, structure.tip_bodies, structure.labels
+
+
+def _host(value, what: str) -> np.ndarray:
+    if isinstance(value, jax.core.Tracer):
+        raise TypeError(f"TreeRobot.{what}: the focus is traced here; read it from a concrete design")
+    return np.asarray(value)
+
+
 def _flatten(robot: TreeRobot):
-    children = [(jax.tree_util.GetAttrKey(k), getattr(robot, k)) for k in _LEAF_FIELDS]
-    structure = _Structure(robot.joint_kinds, robot.parents, robot.tip_bodies, robot.labels)
-    structure.active_tip, structure.moving = robot.active_tip, robot.moving
-    return children, structure
+    focus = None if robot.focus_moving is None else ("joints" if robot.focus_tip is None else "tip")
+    fields = _LEAF_FIELDS + _focus_fields(focus)
+    children = [(jax.tree_util.GetAttrKey(k), getattr(robot, k)) for k in fields]
+    return children, _Structure(robot.joint_kinds, robot.parents, robot.tip_bodies, robot.labels, focus)
 
 
 def _unflatten(structure: _Structure, children) -> TreeRobot:
     # Bypass __init__: gradients, optimizer updates and batching placeholders have the
     # robot's shape too and must not be validated as physical designs.
     robot = object.__new__(TreeRobot)
-    for key, value in zip(_LEAF_FIELDS, children, strict=True):
+    object.__setattr__(robot, "focus_tip", None)
+    object.__setattr__(robot, "focus_moving", None)
+    for key, value in zip(_LEAF_FIELDS + _focus_fields(structure.focus), children, strict=True):
         object.__setattr__(robot, key, value)
     object.__setattr__(robot, "joint_kinds", structure.joint_kinds)
     object.__setattr__(robot, "parents", structure.parents)
     object.__setattr__(robot, "tip_bodies", structure.tip_bodies)
     object.__setattr__(robot, "labels", structure.labels)
-    object.__setattr__(robot, "active_tip", structure.active_tip)
-    object.__setattr__(robot, "moving", structure.moving)
     return robot
 
 
