@@ -50,9 +50,18 @@ def plot_results(
             _parallel_coordinates(problem, results[main], out_dir),
             _convergence(problem, results, summary, out_dir),
         ]
-    written = []
+    return [
+        _two_objective_front(problem, results, summary, out_dir, main),
+        _front_designs(problem, results, out_dir, main),
+        _convergence(problem, results, summary, out_dir),
+    ]
+
+
+def _two_objective_front(
+    problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path, main: str
+) -> Path:
+    """Two objectives: every method's front (and a thinned cloud of the grid's designs)."""
     names = problem.objectives
-    # 1. Objective space.
     fig, ax = plt.subplots(figsize=(7.5, 5.5))
     if "grid" in results:
         grid = results["grid"]
@@ -65,6 +74,7 @@ def plot_results(
             label=f"grid designs ({grid.evaluations}, every {step}th shown)",
             rasterized=True,
         )
+    marker = {main: dict(fmt=".", ms=3), "grid": dict(fmt="-", lw=1.0), "nsga2": dict(fmt="x", ms=4)}
     for method in ("grid", "nsga2", main):
         if method in results:
             result = results[method]
@@ -72,12 +82,8 @@ def plot_results(
             hv = result.checkpoints[-1]["hypervolume"]
             style = dict(_STYLE[method])
             label = f"{style.pop('label')} front: {front.shape[0]} pts, HV {hv:.6f}"
-            if method == main:
-                ax.plot(front[:, 0], front[:, 1], ".", ms=3, label=label, **style)
-            elif method == "grid":
-                ax.plot(front[:, 0], front[:, 1], "-", lw=1.0, label=label, **style)
-            else:
-                ax.plot(front[:, 0], front[:, 1], "x", ms=4, label=label, **style)
+            line = dict(marker[method])
+            ax.plot(front[:, 0], front[:, 1], line.pop("fmt"), **line, label=label, **style)
     ax.set_xlabel(_LABELS.get(names[0], names[0]))
     ax.set_ylabel(_LABELS.get(names[1], names[1]))
     reference = tuple(round(r, 6) for r in summary["reference_point"])
@@ -85,71 +91,88 @@ def plot_results(
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
-    written.append(save_figure(fig, out_dir / "front.png", dpi=130))
+    path = save_figure(fig, out_dir / "front.png", dpi=130)
     plt.close(fig)
+    return path
 
-    # 2. Variable space.
-    gradient = results[main]
-    index = gradient.front()
-    designs, objectives = gradient.designs[index], gradient.objectives[index]
-    d = len(problem.variables)
-    if d == 2:
-        fig, ax = plt.subplots(figsize=(7.0, 5.5))
-        if "grid" in results:
-            gf = results["grid"].front()
-            ax.plot(
-                results["grid"].designs[gf, 0],
-                results["grid"].designs[gf, 1],
-                "s",
-                ms=3,
-                mfc="none",
-                color="0.6",
-                label="grid front designs",
-            )
-        points = ax.scatter(
-            designs[:, 0], designs[:, 1], c=objectives[:, 1], s=8, cmap="viridis", label=f"{main} front designs"
-        )
-        fig.colorbar(points, ax=ax, label=_LABELS.get(names[1], names[1]))
-        for v, set_limits in zip(problem.variables, (ax.set_xlim, ax.set_ylim), strict=False):
-            pad = 0.02 * (v.upper - v.lower)  # designs on a bound stay visible
-            set_limits(v.lower - pad, v.upper + pad)
-        ax.set_xlabel(_UNITS.get(problem.variables[0].name, problem.variables[0].name))
-        ax.set_ylabel(_UNITS.get(problem.variables[1].name, problem.variables[1].name))
-        ax.legend(fontsize=8, loc="upper right")
-        ax.grid(alpha=0.3)
-        ax.set_title("Pareto-optimal designs in variable space (the whole box shown)")
+
+def _front_designs(problem, results: Mapping[str, SearchResult], out_dir: Path, main: str) -> Path:
+    """Two objectives: the main search's front designs in variable space."""
+    if len(problem.variables) == 2:
+        fig = _designs_in_the_box(problem, results, main)
     else:
-        cols = 3
-        rows = int(math.ceil(d / cols))
-        fig, axes = plt.subplots(rows, cols, figsize=(4.0 * cols, 3.0 * rows), squeeze=False)
-        for j, variable in enumerate(problem.variables):
-            ax = axes[j // cols][j % cols]
-            if "nsga2" in results:
-                nf = results["nsga2"].front()
-                ax.plot(
-                    results["nsga2"].objectives[nf, 1],
-                    results["nsga2"].designs[nf, j],
-                    "x",
-                    ms=3,
-                    color=_STYLE["nsga2"]["color"],
-                    label="NSGA-II front",
-                )
-            ax.plot(objectives[:, 1], designs[:, j], ".", ms=3, color=_STYLE[main]["color"], label=f"{main} front")
-            ax.set_ylim(variable.lower, variable.upper)
-            ax.set_xlabel(_LABELS.get(names[1], names[1]), fontsize=8)
-            ax.set_ylabel(_UNITS.get(variable.name, variable.name))
-            ax.grid(alpha=0.3)
-            if j == 0:
-                ax.legend(fontsize=7)
-        for j in range(d, rows * cols):
-            axes[j // cols][j % cols].axis("off")
-        fig.suptitle("Pareto-optimal designs: each variable (full bound range) along the front")
+        fig = _designs_by_variable(problem, results, main)
     fig.tight_layout()
-    written.append(save_figure(fig, out_dir / "designs.png", dpi=130))
+    path = save_figure(fig, out_dir / "designs.png", dpi=130)
     plt.close(fig)
+    return path
 
-    written.append(_convergence(problem, results, summary, out_dir))
-    return written
+
+def _designs_in_the_box(problem, results: Mapping[str, SearchResult], main: str):
+    """Two variables: the front designs in the whole box, colored by the second objective."""
+    names = problem.objectives
+    result = results[main]
+    index = result.front()
+    designs, objectives = result.designs[index], result.objectives[index]
+    fig, ax = plt.subplots(figsize=(7.0, 5.5))
+    if "grid" in results:
+        gf = results["grid"].front()
+        ax.plot(
+            results["grid"].designs[gf, 0],
+            results["grid"].designs[gf, 1],
+            "s",
+            ms=3,
+            mfc="none",
+            color="0.6",
+            label="grid front designs",
+        )
+    points = ax.scatter(
+        designs[:, 0], designs[:, 1], c=objectives[:, 1], s=8, cmap="viridis", label=f"{main} front designs"
+    )
+    fig.colorbar(points, ax=ax, label=_LABELS.get(names[1], names[1]))
+    for v, set_limits in zip(problem.variables, (ax.set_xlim, ax.set_ylim), strict=False):
+        pad = 0.02 * (v.upper - v.lower)  # designs on a bound stay visible
+        set_limits(v.lower - pad, v.upper + pad)
+    ax.set_xlabel(_UNITS.get(problem.variables[0].name, problem.variables[0].name))
+    ax.set_ylabel(_UNITS.get(problem.variables[1].name, problem.variables[1].name))
+    ax.legend(fontsize=8, loc="upper right")
+    ax.grid(alpha=0.3)
+    ax.set_title("Pareto-optimal designs in variable space (the whole box shown)")
+    return fig
+
+
+def _designs_by_variable(problem, results: Mapping[str, SearchResult], main: str):
+    """More variables: each variable (its whole bound range) along the front, one panel each."""
+    names = problem.objectives
+    result = results[main]
+    index = result.front()
+    designs, objectives = result.designs[index], result.objectives[index]
+    d, cols = len(problem.variables), 3
+    rows = int(math.ceil(d / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4.0 * cols, 3.0 * rows), squeeze=False)
+    for j, variable in enumerate(problem.variables):
+        ax = axes[j // cols][j % cols]
+        if "nsga2" in results:
+            nf = results["nsga2"].front()
+            ax.plot(
+                results["nsga2"].objectives[nf, 1],
+                results["nsga2"].designs[nf, j],
+                "x",
+                ms=3,
+                color=_STYLE["nsga2"]["color"],
+                label="NSGA-II front",
+            )
+        ax.plot(objectives[:, 1], designs[:, j], ".", ms=3, color=_STYLE[main]["color"], label=f"{main} front")
+        ax.set_ylim(variable.lower, variable.upper)
+        ax.set_xlabel(_LABELS.get(names[1], names[1]), fontsize=8)
+        ax.set_ylabel(_UNITS.get(variable.name, variable.name))
+        ax.grid(alpha=0.3)
+        if j == 0:
+            ax.legend(fontsize=7)
+    for j in range(d, rows * cols):
+        axes[j // cols][j % cols].axis("off")
+    fig.suptitle("Pareto-optimal designs: each variable (full bound range) along the front")
+    return fig
 
 
 def _pairwise_front(problem, results: Mapping[str, SearchResult], summary: Mapping, out_dir: Path, main: str) -> Path:
