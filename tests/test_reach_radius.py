@@ -9,11 +9,11 @@ import pytest
 
 from spacearm import design
 from spacearm._core.errors import ConfigError
-from spacearm.analysis import singularities
 from spacearm.analysis.spatial_workspaces import singular_radius
 from spacearm.design.hybrid import HybridSettings, hybrid_search
 from spacearm.design.objectives import RADIUS_OPTIONS
 from spacearm.design.spatial_problem import load_design_problem
+from spacearm.models.planar import singularities
 
 from .test_design import CHEAP_WBAR, reference_config
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import singularities, spatial_workspaces as sw, workspaces
+from spacearm.analysis import spatial_workspaces as sw, workspaces
+from spacearm.models.planar import singularities
 
 from .conftest import count_compiles, random_robot
 

@@ -225,7 +225,7 @@ def test_posture_quantities_in_one_pass(dual):
     """J*, C and H* from one pass over the tree equal their own kernels."""
     robot, _ = dual
     q = np.random.default_rng(9).uniform(-2, 2, size=(2, 3, 12))
-    got = jax.jit(lambda r, x: TREE.fast_paths["posture_quantities"](r, x, POSTURE_QUANTITIES))(robot, q)
+    got = jax.jit(lambda r, x: TREE.fast_paths.posture_quantities(r, x, POSTURE_QUANTITIES))(robot, q)
     assert got["jacobian"].shape == (2, 3, 2, 6, 12) and got["arm_inertia"].shape == (2, 3, 12, 12)
     np.testing.assert_allclose(got["jacobian"], sa.generalized_jacobian(robot, q), atol=1e-13)
     np.testing.assert_allclose(got["base_rate"], sa.base_rate_matrix(robot, q), atol=1e-13)

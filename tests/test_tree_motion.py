@@ -149,7 +149,7 @@ def test_focus_locks_the_held_joints_in_the_inertias(dual, right_alone):
     held, quantities, J, C = jax.jit(
         lambda r, q: (
             family.arm_inertia(r, q),
-            family.fast_paths["posture_quantities"](r, q, ("jacobian", "base_rate")),
+            family.fast_paths.posture_quantities(r, q, ("jacobian", "base_rate")),
             sa.generalized_jacobian(r, q),
             sa.base_rate_matrix(r, q),
         )

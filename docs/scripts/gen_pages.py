@@ -151,7 +151,7 @@ API_MODULES: list[tuple[str, str, str]] = [
         "the five workspaces in closed form, S_M and S_G, section 3.2 relations",
     ),
     (
-        "spacearm.analysis.singularities",
+        "spacearm.models.planar.singularities",
         "Analysis",
         "dynamic singularities (det J* = 0) and the path-independent radius",
     ),

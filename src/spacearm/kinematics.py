@@ -152,7 +152,7 @@ def tip_position(robot, posture: jax.Array, base_rotation: jax.Array | None = No
         ``(..., 2)`` planar, ``(..., 3)`` spatial or ``(..., k, 3)`` for k tips, m.
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("tip_position")
+    fast = family.fast_paths.tip_position
     p = fast(robot, posture) if fast is not None else generic_tip_position(robot, posture)
     return _rotate_vector(family, robot, p, base_rotation)
 
@@ -197,7 +197,7 @@ def generalized_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | N
         for k tips, over all joints (a tip's J* is not zero in other arms' columns).
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("generalized_jacobian")
+    fast = family.fast_paths.generalized_jacobian
     J = fast(robot, posture) if fast is not None else generic_generalized_jacobian(robot, posture)
     return _rotate_twist_rows(family, robot, J, base_rotation)
 
@@ -216,7 +216,7 @@ def manipulability(robot, posture: jax.Array) -> jax.Array:
         ``(...)``, or ``(..., k)`` per tip for k tips.
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("manipulability")
+    fast = family.fast_paths.manipulability
     return fast(robot, posture) if fast is not None else generic_manipulability(robot, posture)
 
 
@@ -244,7 +244,7 @@ def base_rate_matrix(robot, posture: jax.Array) -> jax.Array:
         family's base twist coordinates per joint rate, bus axes.
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("base_rate_matrix")
+    fast = family.fast_paths.base_rate_matrix
     if fast is not None:
         return fast(robot, posture)
     return map_leading(lambda p: _base_matrix_one(family, robot, p), posture, core_ndims=(1,))
@@ -259,7 +259,7 @@ def base_rate(robot, posture: jax.Array, joint_rates: jax.Array) -> jax.Array:
         ``(..., 6)`` base twist (family coordinates, bus axes).
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("base_rate")
+    fast = family.fast_paths.base_rate
     if fast is not None:
         return fast(robot, posture, joint_rates)
     return jnp.einsum("...ij,...j->...i", base_rate_matrix(robot, posture), joint_rates)
@@ -273,7 +273,7 @@ def fixed_base_jacobian(robot, joints: jax.Array) -> jax.Array:
         joints: ``(..., n)`` joint positions (no base attitude).
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("fixed_base_jacobian")
+    fast = family.fast_paths.fixed_base_jacobian
     if fast is not None:
         return fast(robot, joints)
     return map_leading(lambda q: family.fixed_base_jacobian(robot, q), joints, core_ndims=(1,))
@@ -283,7 +283,7 @@ def fixed_base_jacobian(robot, joints: jax.Array) -> jax.Array:
 def fixed_base_manipulability(robot, joints: jax.Array) -> jax.Array:
     """Yoshikawa's w = sqrt(det(J_v J_v^T)) of the fixed-base arm (for n = 2 planar, l1 l2 |sin phi2|)."""
     family = family_of(robot)
-    fast = family.fast_paths.get("fixed_base_manipulability")
+    fast = family.fast_paths.fixed_base_manipulability
     if fast is not None:
         return fast(robot, joints)
     return gram_root_determinant(fixed_base_jacobian(robot, joints)[..., : family.translational_rows, :])
@@ -329,7 +329,7 @@ def relative_jacobian(robot, posture: jax.Array, base_rotation: jax.Array | None
 @jax.jit
 def _relative_jacobian(robot, posture, base_rotation, i, j):
     family = family_of(robot)
-    fast = family.fast_paths.get("fixed_base_jacobian_and_tips")
+    fast = family.fast_paths.fixed_base_jacobian_and_tips
     if fast is not None:
         # The bus twist drops out: the fixed-base twists and the tips (about the bus frame:
         # only their differences enter) from one pass without momenta, turned by R.

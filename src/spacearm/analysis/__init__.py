@@ -1,5 +1,9 @@
 """Workspaces, singular sets, areas, averaged metrics and maps (sections 3-5 of the paper)."""
 
+from ..models.planar.singularities import (
+    SingularSet as SingularSet,
+    dynamic_singularities as dynamic_singularities,
+)
 from .averages import average_manipulability as average_manipulability
 from .manipulability_average import (
     check_average_options as check_average_options,
@@ -21,10 +25,6 @@ from .reaction import (
     reaction_free_rates as reaction_free_rates,
     reaction_free_tip_path as reaction_free_tip_path,
     reaction_null_space as reaction_null_space,
-)
-from .singularities import (
-    SingularSet as SingularSet,
-    dynamic_singularities as dynamic_singularities,
 )
 from .spatial_workspaces import (
     maximum_reachable_radius as maximum_reachable_radius,

@@ -131,7 +131,7 @@ def posture_quantities(robot, posture: jax.Array, needs: tuple[str, ...]) -> dic
         needs: the names wanted (static).
     """
     family = family_of(robot)
-    fast = family.fast_paths.get("posture_quantities")
+    fast = family.fast_paths.posture_quantities
     if fast is not None:
         return fast(robot, posture, tuple(needs))
     out = {}

@@ -61,11 +61,6 @@ from .joint_box import (
     sobol_direction_numbers,
     sobol_points,
 )
-from .singularities import path_independent_radius as planar_path_independent_radius
-from .workspaces import (
-    maximum_reachable_inner_radius as planar_maximum_reachable_inner_radius,
-    maximum_reachable_radius as planar_maximum_reachable_radius,
-)
 
 __all__ = [
     "GuaranteedWorkspace",
@@ -254,27 +249,23 @@ def reachable_radii(robot, *, starts: int = 128, steps: int = 400, seed: int = 0
     return _reachable(robot, np.int32(starts), steps, seed, rate, start_room=bucket_size(starts))
 
 
-# Families with closed forms for Area 3's radii (free joints): (outer, inner).
-_REACH_CLOSED_FORMS = {"planar": (planar_maximum_reachable_radius, planar_maximum_reachable_inner_radius)}
-
-
 def maximum_reachable_radius(robot, **options) -> jax.Array:
     """Area 3's outer radius about the system centroid, m (the public ``sa.maximum_reachable_radius``).
 
-    Planar robots: the closed form K0 + K1 + .. + Kn (sec. 3.1 (3-a)).
-    Spatial robots: the largest |tip| over the joint box, by `reachable_radii`.
+    The family's closed form where it has one (planar: K0 + K1 + .. + Kn, sec. 3.1 (3-a));
+    otherwise the largest |tip| over the joint box, by `reachable_radii`.
     """
-    closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
+    closed = family_of(robot).fast_paths.reachable_radii
     if closed is not None:
-        return closed[0](robot)
+        return closed(robot)[0]
     return reachable_radii(robot, **options).outer
 
 
 def maximum_reachable_inner_radius(robot, **options) -> jax.Array:
-    """Area 3's hole (smallest |tip| over the joint box), m; planar: the closed form."""
-    closed = _REACH_CLOSED_FORMS.get(family_of(robot).name)
+    """Area 3's hole (smallest |tip| over the joint box), m; the family's closed form where it has one."""
+    closed = family_of(robot).fast_paths.reachable_radii
     if closed is not None:
-        return closed[1](robot)
+        return closed(robot)[1]
     return reachable_radii(robot, **options).inner
 
 
@@ -329,7 +320,7 @@ def _translational(robot, joints, jacobian):
 def _jacobian_and_tip(robot, joints, jacobian):
     """``(..., t, n)`` J_v and ``(..., d)`` tip about the centroid; one chain pass where the family has one for both."""
     family = family_of(robot)
-    both = family.fast_paths.get("tip_and_generalized_jacobian") if jacobian == "generalized" else None
+    both = family.fast_paths.tip_and_generalized_jacobian if jacobian == "generalized" else None
     if both is not None:
         J, tip = both(robot, joints)
         return J[..., : family.translational_rows, :], tip
@@ -881,25 +872,19 @@ def singular_radius(
     )
 
 
-# Families with a dedicated scan of the dynamic singular set for two joints (the planar
-# root tracing of det J*, `spacearm.analysis.singularities`).
-_PATH_INDEPENDENT_SCANS = {"planar": planar_path_independent_radius}
-
-
 def path_independent_radius(robot, **options) -> jax.Array:
     """The path-independent workspace radius (Papadopoulos & Dubowsky), m, for any family.
 
     The closest approach to the system centroid of a dynamic-singular tip position.
-    Planar two-link arms: the root tracing of det J* (options ``n_phi1``, ``n_phi2``,
-    ... of `spacearm.analysis.singularities.dynamic_singularities`; batches of designs
-    accepted). Other robots: `singular_radius` with ``jacobian="generalized"`` (one
+    Where the family has a closed form (planar two-link arms: the root tracing of det J*,
+    options ``n_phi1``, ``n_phi2``, ... of
+    `spacearm.models.planar.singularities.dynamic_singularities`; batches of designs
+    accepted), that; otherwise `singular_radius` with ``jacobian="generalized"`` (one
     design; its options), the radius alone.
     """
-    family = family_of(robot)
-    scan = _PATH_INDEPENDENT_SCANS.get(family.name)
-    if scan is not None and family.joint_count(robot) == 2:
-        return scan(robot, **options)
-    return singular_radius(robot, "generalized", **options)[0]
+    closed = family_of(robot).fast_paths.path_independent_radius
+    radius = None if closed is None else closed(robot, **options)
+    return singular_radius(robot, "generalized", **options)[0] if radius is None else radius
 
 
 def guaranteed_workspace(robot, **options) -> GuaranteedWorkspace:

@@ -53,7 +53,7 @@ import jax
 import jax.numpy as jnp
 
 from ..models.family import require_family
-from ..models.planar.closed_forms import tip_coefficients, tip_position
+from ..models.planar.closed_forms import reachable_radii, tip_coefficients, tip_position
 from ..models.planar.robot import PlanarRobot
 from .joint_box import joint_box
 
@@ -125,13 +125,12 @@ def attitude_constraint_inner_radius(robot: PlanarRobot) -> jax.Array:
 
 def maximum_reachable_radius(robot: PlanarRobot) -> jax.Array:
     """``(...)`` Area 3 radius K0 + K1 + .. + Kn about the system centroid, m (sec. 3.1 (3-a))."""
-    return jnp.sum(tip_coefficients(robot), axis=-1)
+    return reachable_radii(robot)[0]
 
 
 def maximum_reachable_inner_radius(robot: PlanarRobot) -> jax.Array:
     """``(...)`` Area 3 hole: max(0, 2 max_k K_k - (K0+..+Kn)), m (non-zero when K0 > K1+..+Kn)."""
-    K = tip_coefficients(robot)
-    return jnp.maximum(0.0, 2.0 * jnp.max(K, axis=-1) - jnp.sum(K, axis=-1))
+    return reachable_radii(robot)[1]
 
 
 def guaranteed_radius(robot: PlanarRobot) -> jax.Array:

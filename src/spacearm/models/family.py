@@ -16,14 +16,15 @@ family gives, for ONE posture (no batch axes):
 
 Everything else (J* = J_M - J_S I_S^-1 I_M, w*, ellipses and ellipsoids, base rates,
 straight-path fields, averages) is written once over these in
-`spacearm.kinematics` and above. A family may register closed forms in
-``fast_paths`` (kernel name -> function with the public kernel's signature); the
+`spacearm.kinematics` and above. A family may give closed forms in
+its `FastPaths` record (``fast_paths``, one typed field per kernel); the
 generic layer picks them by type at trace time, so a closed form is an optimization,
 never a second definition (the tests check each one against the generic path).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -33,7 +34,47 @@ import numpy as np
 
 from .._core.groups import Group
 
-__all__ = ["RobotFamily", "family_of", "require_family"]
+__all__ = ["FastPaths", "RobotFamily", "family_of", "require_family"]
+
+
+@dataclasses.dataclass(frozen=True)
+class FastPaths:
+    """A family's closed forms and one-pass kernels: each equals what the generic layer computes
+    from the primitives (the tests compare them), and ``None`` means the generic path runs.
+
+    The public kernels (same signature as the kernel of the same name in `spacearm.kinematics`):
+        tip_position, generalized_jacobian, manipulability, base_rate, base_rate_matrix,
+        fixed_base_jacobian, fixed_base_manipulability.
+
+    One pass for several results:
+        posture_quantities: ``(robot, posture, needs) -> dict`` what the joint-box averages need.
+        tip_and_generalized_jacobian, tip_and_fixed_base_jacobian: ``(robot, joints) -> (J, tip)``.
+        fixed_base_jacobian_and_tips: ``(robot, joints) -> (J (k, 6, n), tips (k, 3))``, bus frame.
+        straight_maps_and_ends: ``(robot, joints) -> (maps, fixed J_v, tip)`` a straight path's
+            field and end checks.
+        straight_path_field: ``(robot, direction, sign0) -> field`` the whole straight-path field.
+
+    Workspace radii in closed form (free joints):
+        reachable_radii: ``robot -> (outer, inner)`` Area 3's radii about the system centroid.
+        path_independent_radius: ``(robot, **options) -> radius`` the largest disk about the
+            system centroid that no dynamic-singular tip reaches.
+    """
+
+    tip_position: Callable[..., Any] | None = None
+    generalized_jacobian: Callable[..., Any] | None = None
+    manipulability: Callable[..., Any] | None = None
+    base_rate: Callable[..., Any] | None = None
+    base_rate_matrix: Callable[..., Any] | None = None
+    fixed_base_jacobian: Callable[..., Any] | None = None
+    fixed_base_manipulability: Callable[..., Any] | None = None
+    posture_quantities: Callable[..., Any] | None = None
+    tip_and_generalized_jacobian: Callable[..., Any] | None = None
+    tip_and_fixed_base_jacobian: Callable[..., Any] | None = None
+    fixed_base_jacobian_and_tips: Callable[..., Any] | None = None
+    straight_maps_and_ends: Callable[..., Any] | None = None
+    straight_path_field: Callable[..., Any] | None = None
+    reachable_radii: Callable[..., Any] | None = None
+    path_independent_radius: Callable[..., Any] | None = None
 
 
 class RobotFamily:
@@ -47,7 +88,7 @@ class RobotFamily:
             planar base angle phi0, 0 for spatial arms whose attitude is a rotation matrix).
         rotates_with_base: whether kernels take ``base_rotation`` (spatial: the
             primitives work in bus axes; the generic layer rotates the results).
-        fast_paths: closed forms by public kernel name.
+        fast_paths: the family's closed forms (`FastPaths`).
         attitude: the base-attitude group.
         straight_field_loops: whether the straight-path field holds a loop (a scan
             over the chain): the integrator then rolls its Runge-Kutta stages into a
@@ -65,7 +106,7 @@ class RobotFamily:
     translational_rows: ClassVar[int] = 0
     posture_offset: ClassVar[int] = 0
     rotates_with_base: ClassVar[bool] = False
-    fast_paths: Mapping[str, Callable[..., Any]] = {}
+    fast_paths: ClassVar[FastPaths] = FastPaths()
     attitude: ClassVar[Group]
     straight_field_loops: ClassVar[bool] = True
     straight_defaults: ClassVar[Mapping[str, Any]] = {}

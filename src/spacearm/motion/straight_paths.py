@@ -166,7 +166,7 @@ def _attitude_beside_posture(robot, results, robot_batched):
     def one(robot, y):
         joints, coords = family.split_state(robot, y[:-1])
         R = family.attitude.from_coords(coords)
-        both = family.fast_paths.get("tip_and_fixed_base_jacobian")  # one chain pass for the two
+        both = family.fast_paths.tip_and_fixed_base_jacobian  # one chain pass for the two
         fixed, tip = both(robot, joints) if both else (fixed_base_jacobian(robot, joints), tip_position(robot, joints))
         return joints, R, R @ tip, gram_root_determinant(fixed[: family.translational_rows])
 
@@ -206,7 +206,7 @@ def generic_straight_field(robot, direction: jax.Array, sign0, *, ends: bool = F
     def field(y):
         joints, coords = family.split_state(robot, y[:-1])
         if ends:
-            maps, fixed_v, tip = family.fast_paths["straight_maps_and_ends"](robot, joints)
+            maps, fixed_v, tip = family.fast_paths.straight_maps_and_ends(robot, joints)
             J, A = maps[:rows], maps[rows:]
         else:
             J, A = family.straight_maps(robot, joints)
@@ -220,7 +220,7 @@ def generic_straight_field(robot, direction: jax.Array, sign0, *, ends: bool = F
 
 def _straight_field(robot, direction: jax.Array, sign0):
     """The family's closed-form field where it has one (chosen by type), else the generic one."""
-    fast = family_of(robot).fast_paths.get("straight_path_field")
+    fast = family_of(robot).fast_paths.straight_path_field
     return (fast or generic_straight_field)(robot, direction, sign0)
 
 
@@ -228,7 +228,7 @@ def _ends_size(robot) -> int:
     """The aux vector of the field with ``ends`` (3 n: the fixed-base J_v, 3: the tip), or 0 where the
     family has no one-pass kernel for it (its ends then take a pass of their own)."""
     family = family_of(robot)
-    if "straight_maps_and_ends" not in family.fast_paths or not family.straight_field_loops:
+    if family.fast_paths.straight_maps_and_ends is None or not family.straight_field_loops:
         return 0
     return 3 * family.joint_count(robot) + 3
 

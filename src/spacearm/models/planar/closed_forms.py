@@ -118,6 +118,14 @@ def tip_coefficients(robot: PlanarRobot) -> jax.Array:
 
 
 @jax.jit
+def reachable_radii(robot: PlanarRobot) -> tuple[jax.Array, jax.Array]:
+    """``(outer (...), inner (...))`` Area 3 about the system centroid, m (sec. 3.1 (3-a)):
+    K0 + K1 + .. + Kn, and the hole max(0, 2 max_k K_k - (K0+..+Kn)) (non-zero when K0 > K1+..+Kn)."""
+    K = tip_coefficients(robot)
+    outer = jnp.sum(K, axis=-1)
+    return outer, jnp.maximum(0.0, 2.0 * jnp.max(K, axis=-1) - outer)
+
+
 def centroid_coefficients(robot: PlanarRobot) -> jax.Array:
     """``(..., n+1, n+1)`` R_ik: centroid of body i = sum_k R_ik u(theta_k), m.
 

@@ -8,7 +8,7 @@ positions from the system centroid, eq. 3).
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import jax
@@ -19,7 +19,7 @@ import spacearm.models.planar.fields as planar_fields  # the module, not the pac
 
 from ..._core.groups import SO2
 from ..._core.magnus import composite_gauss, line_integral
-from ..family import RobotFamily
+from ..family import FastPaths, RobotFamily
 from .closed_forms import (
     arm_jacobian,
     base_jacobian,
@@ -29,11 +29,13 @@ from .closed_forms import (
     generalized_jacobian,
     manipulability,
     momentum_inertias,
+    reachable_radii,
     straight_path_field,
     tip_coefficients,
     tip_position,
 )
 from .robot import PlanarRobot
+from .singularities import two_link_path_independent_radius
 
 __all__ = ["PLANAR", "PlanarFamily"]
 
@@ -46,15 +48,17 @@ class PlanarFamily(RobotFamily):
     translational_rows = 2
     posture_offset = 1
     rotates_with_base = False
-    fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
-        "tip_position": tip_position,
-        "generalized_jacobian": generalized_jacobian,
-        "manipulability": manipulability,
-        "base_rate": base_rate,
-        "fixed_base_jacobian": fixed_base_jacobian,
-        "fixed_base_manipulability": fixed_base_manipulability,
-        "straight_path_field": straight_path_field,
-    }
+    fast_paths = FastPaths(
+        tip_position=tip_position,
+        generalized_jacobian=generalized_jacobian,
+        manipulability=manipulability,
+        base_rate=base_rate,
+        fixed_base_jacobian=fixed_base_jacobian,
+        fixed_base_manipulability=fixed_base_manipulability,
+        straight_path_field=straight_path_field,
+        reachable_radii=reachable_radii,
+        path_independent_radius=two_link_path_independent_radius,
+    )
     fields = planar_fields
 
     attitude = SO2

@@ -16,7 +16,7 @@ Jacobian and manipulability.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import jax
@@ -27,7 +27,7 @@ import spacearm.models.spatial.fields as spatial_fields  # the module, not the p
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
-from ..family import RobotFamily
+from ..family import FastPaths, RobotFamily
 from .primitives import (
     arm_inertia,
     base_twist_map,
@@ -75,19 +75,19 @@ class SpatialFamily(RobotFamily):
     translational_rows = 3
     posture_offset = 0
     rotates_with_base = True
-    fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
-        "tip_position": tip,
-        "generalized_jacobian": generalized_jacobian,
-        "manipulability": _manipulability,
-        "base_rate": _base_rate,
-        "base_rate_matrix": base_twist_map,
-        "fixed_base_jacobian": fixed_base_jacobian,
-        "fixed_base_manipulability": _fixed_base_manipulability,
-        "posture_quantities": posture_quantities,
-        "tip_and_generalized_jacobian": tip_and_generalized_jacobian,
-        "tip_and_fixed_base_jacobian": tip_and_fixed_base_jacobian,
-        "straight_maps_and_ends": straight_maps_and_ends,
-    }
+    fast_paths = FastPaths(
+        tip_position=tip,
+        generalized_jacobian=generalized_jacobian,
+        manipulability=_manipulability,
+        base_rate=_base_rate,
+        base_rate_matrix=base_twist_map,
+        fixed_base_jacobian=fixed_base_jacobian,
+        fixed_base_manipulability=_fixed_base_manipulability,
+        posture_quantities=posture_quantities,
+        tip_and_generalized_jacobian=tip_and_generalized_jacobian,
+        tip_and_fixed_base_jacobian=tip_and_fixed_base_jacobian,
+        straight_maps_and_ends=straight_maps_and_ends,
+    )
     fields = spatial_fields
 
     attitude = SO3

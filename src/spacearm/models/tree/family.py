@@ -18,7 +18,7 @@ reach, reorientation and reaction-free planners serve it unchanged.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import jax
@@ -30,7 +30,7 @@ import spacearm.models.tree.fields as tree_fields  # the module, not the package
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
-from ..family import RobotFamily
+from ..family import FastPaths, RobotFamily
 from .primitives import (
     arm_inertia,
     base_twist_map,
@@ -160,17 +160,17 @@ class TreeFamily(RobotFamily):
     translational_rows = 3
     posture_offset = 0
     rotates_with_base = True
-    fast_paths: ClassVar[Mapping[str, Callable[..., Any]]] = {
-        "tip_position": _tip,
-        "generalized_jacobian": _generalized_jacobian,
-        "manipulability": _manipulability,
-        "base_rate": _base_rate,
-        "base_rate_matrix": _base_rate_matrix,
-        "fixed_base_jacobian": _fixed_base_jacobian,
-        "fixed_base_manipulability": _fixed_base_manipulability,
-        "posture_quantities": _posture_quantities,
-        "fixed_base_jacobian_and_tips": _fixed_base_jacobian_and_tips,
-    }
+    fast_paths = FastPaths(
+        tip_position=_tip,
+        generalized_jacobian=_generalized_jacobian,
+        manipulability=_manipulability,
+        base_rate=_base_rate,
+        base_rate_matrix=_base_rate_matrix,
+        fixed_base_jacobian=_fixed_base_jacobian,
+        fixed_base_manipulability=_fixed_base_manipulability,
+        posture_quantities=_posture_quantities,
+        fixed_base_jacobian_and_tips=_fixed_base_jacobian_and_tips,
+    )
     fields = tree_fields
     attitude = SO3
     straight_field_loops = True

@@ -16,13 +16,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._core.errors import ConfigError
-from ..kinematics import generalized_jacobian, square_determinant, tip_position
-from ..models.family import require_family
-from ..models.planar.closed_forms import robot_frame_tip_position
-from ..models.planar.robot import PlanarRobot
+from ..._core.errors import ConfigError
+from ..._core.linalg import square_determinant
+from ..family import require_family
+from .closed_forms import generalized_jacobian, robot_frame_tip_position, tip_position
+from .robot import PlanarRobot
 
-__all__ = ["SingularSet", "dynamic_singularities", "path_independent_radius"]
+__all__ = ["SingularSet", "dynamic_singularities", "path_independent_radius", "two_link_path_independent_radius"]
 
 
 @jax.tree_util.register_dataclass
@@ -136,3 +136,8 @@ def path_independent_radius(robot: PlanarRobot, **grid) -> jax.Array:
     Compare `guaranteed_radius` (eq. 8), which considers phi_2 = 0 only.
     """
     return jnp.nanmin(dynamic_singularities(robot, **grid).radius, axis=(-2, -1))
+
+
+def two_link_path_independent_radius(robot: PlanarRobot, **grid) -> jax.Array | None:
+    """`path_independent_radius` where the root tracing holds (two links), ``None`` otherwise."""
+    return path_independent_radius(robot, **grid) if robot.n_links == 2 else None
