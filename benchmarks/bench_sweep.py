@@ -5,7 +5,7 @@ Run: python benchmarks/bench_sweep.py [--designs 10000] [--loop-designs 200] [--
 The sweep stacks all designs into one batched pytree and evaluates them in compiled,
 vmapped chunks (spacearm.studies.run_sweep, files written to a temporary folder). The
 baseline is the loop a user would write: for each design, call the single-design
-functions (average_manipulability and normalized_areas, both jitted entry points) and
+functions (normalized_wbar and normalized_areas, both jitted entry points) and
 read the numbers, timed on a subset and reported per design. Compile time is reported
 apart. The loop's cost per design is split into its parts (building the design with
 PlanarRobot.replace, which validates; the two calls; a bare jitted call on the same
@@ -29,7 +29,8 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa
-from spacearm.analysis import average_manipulability, normalized_areas
+from spacearm.analysis import normalized_areas
+from spacearm.paper import normalized_wbar
 from spacearm.studies import build_designs, load_sweep, run_sweep
 
 RULES = {
@@ -83,13 +84,13 @@ def measure(name: str, options: dict, args, reference: dict | None) -> dict:
 
     def calls(robot):
         s_m, s_g = normalized_areas(robot)
-        return float(average_manipulability(robot, **options)), float(s_m), float(s_g)
+        return float(normalized_wbar(robot, **options)), float(s_m), float(s_g)
 
     t0 = time.perf_counter()
     calls(singles[0])
     loop_compile = time.perf_counter() - t0
     t_calls = per_call(calls, singles)
-    t_wbar = per_call(lambda r: float(average_manipulability(r, **options)), singles)
+    t_wbar = per_call(lambda r: float(normalized_wbar(r, **options)), singles)
     t_areas = per_call(lambda r: [float(v) for v in normalized_areas(r)], singles)
     bare = jax.jit(lambda r: r.base_mass + r.link_mass[0])
     t_bare = per_call(lambda r: float(bare(r)), singles)

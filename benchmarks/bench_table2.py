@@ -7,7 +7,7 @@ Run: python benchmarks/bench_table2.py [--designs 10000] [--skip-cli]
    run twice through ``spacearm.cli.main`` in this process, the second time timed
    (compiled functions cached in memory).
 2. w-bar (eq. 12, adaptive quadrature, default options) for N designs in one batched
-   call (``average_manipulability(batch)``, ``jax.lax.map`` over chunks of designs),
+   call (``normalized_wbar(batch)``, ``jax.lax.map`` over chunks of designs),
    compile time apart from run time, against two baselines measured in the same run:
    a Python loop over single designs (jitted once; timed on a subset) and the plain
    product rule at the resolution that reaches the same ~1e-6 accuracy as the
@@ -29,7 +29,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa
-from spacearm.analysis.manipulability_average import average_manipulability
+from spacearm.analysis.manipulability_average import normalized_wbar
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -96,7 +96,7 @@ def main():
     count = args.designs
     batch = design_batch(count)
     print(f"2. w-bar for {count} designs in one batch")
-    batched = jax.jit(lambda r: average_manipulability(r, designs_per_chunk=args.designs_per_chunk))
+    batched = jax.jit(lambda r: normalized_wbar(r, designs_per_chunk=args.designs_per_chunk))
     small = jax.tree_util.tree_map(lambda x: x[:1], batch)
     _, first = timed(batched, small)
     _, _compile_only = timed(batched, batch)  # new shape: trace + compile + run
@@ -105,7 +105,7 @@ def main():
         f"   adaptive (default): first call (compile, 1 design) {first:.2f} s; run {run:.2f} s = {1e3 * run / count:.3f} ms/design"
     )
 
-    single = jax.jit(average_manipulability)
+    single = jax.jit(normalized_wbar)
     designs = [jax.tree_util.tree_map(lambda x, i=i: x[i], batch) for i in range(args.loop_designs)]
     jax.block_until_ready(single(designs[0]))
     start = time.perf_counter()
@@ -117,13 +117,13 @@ def main():
     )
 
     product = jax.jit(
-        lambda r: average_manipulability(
+        lambda r: normalized_wbar(
             r, rule="product", phi1_panels=32, phi2_panels=16, order=8, designs_per_chunk=args.designs_per_chunk
         )
     )
     timed(product, small)
     product_values, product_run = timed(product, batch)
-    reference = jax.jit(lambda r: average_manipulability(r, order=16, designs_per_chunk=args.designs_per_chunk))(
+    reference = jax.jit(lambda r: normalized_wbar(r, order=16, designs_per_chunk=args.designs_per_chunk))(
         jax.tree_util.tree_map(lambda x: x[:200], batch)
     )
     err_adaptive = np.max(np.abs(np.asarray(values[:200]) / np.asarray(reference) - 1))

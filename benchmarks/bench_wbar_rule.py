@@ -1,10 +1,10 @@
-"""Cost and accuracy of the default (adaptive) w-bar rule of spacearm.analysis.average_manipulability.
+"""Cost and accuracy of the default (adaptive) w-bar rule of spacearm.paper.normalized_wbar.
 
 Run: python benchmarks/bench_wbar_rule.py [--designs 1000] [--random 400] [--baseline OLD_METRICS.py]
 
 Timing: ``--designs`` Table 1 designs (base.attach and the arm mass varied, as in the
-sweep benchmark) evaluated by ``jit(vmap(average_manipulability))`` (how the sweep
-engine calls it) and by ``average_manipulability(batch, designs_per_chunk=64)``, per
+sweep benchmark) evaluated by ``jit(vmap(normalized_wbar))`` (how the sweep
+engine calls it) and by ``normalized_wbar(batch, designs_per_chunk=64)``, per
 design; one design by a jitted single call; compile times apart. ``rule="product"``
 with the same node counts is timed as the floor (fixed nodes, no root finding).
 
@@ -33,7 +33,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa
-from spacearm import analysis as metrics
+from spacearm import paper as metrics
 from spacearm.studies import build_designs, load_sweep
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -49,6 +49,8 @@ def load_baseline(path: str):
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
     spec.loader.exec_module(module)
+    if not hasattr(module, "normalized_wbar"):  # a baseline from before the rename
+        module.normalized_wbar = module.average_manipulability
     return module
 
 
@@ -102,7 +104,7 @@ def timed(fn, *args, repeats: int):
 class Candidate:
     def __init__(self, name, module, **options):
         self.name = name
-        fn = module.average_manipulability
+        fn = module.normalized_wbar
         self.vmapped = jax.jit(jax.vmap(lambda r: fn(r, **options)))
         self.chunked = jax.jit(lambda r: fn(r, designs_per_chunk=64, **options))
         self.single = jax.jit(lambda r: fn(r, **options))
@@ -168,7 +170,7 @@ def main():
     table1 = sa.umetani1990()
     table2 = sa.stack_robots([table1.replace(base_attach=np.float64(1.4 * r)) for r in (0.0, 0.5, 1.0, 1.5, 2.0)])
     print("accuracy on the Table 2 designs (b0/B0 = 0, 0.5, 1, 1.5, 2)")
-    values = {name: np.asarray(jax.jit(module.average_manipulability)(table2)) for name, module in modules}
+    values = {name: np.asarray(jax.jit(module.normalized_wbar)(table2)) for name, module in modules}
     for name, value in values.items():
         rel = np.max(np.abs(value / np.asarray(TABLE2_EXPECTED) - 1))
         print(
@@ -183,12 +185,12 @@ def main():
         f"accuracy on {args.random} random designs (a quarter with light bases) vs the converged reference {CONVERGED}"
     )
     references = {
-        name: np.asarray(jax.jit(jax.vmap(lambda r, m=module: m.average_manipulability(r, **CONVERGED)))(robots))
+        name: np.asarray(jax.jit(jax.vmap(lambda r, m=module: m.normalized_wbar(r, **CONVERGED)))(robots))
         for name, module in modules
     }
     for ref_name, reference in references.items():
         for name, module in modules:
-            value = np.asarray(jax.jit(jax.vmap(module.average_manipulability))(robots))
+            value = np.asarray(jax.jit(jax.vmap(module.normalized_wbar))(robots))
             rel = np.abs(value / reference - 1)
             worst = int(np.argmax(rel))
             print(

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import averages, manipulability_average
+from spacearm.analysis import averages
 from spacearm.analysis.joint_box import digital_shifts, joint_box, sobol_direction_numbers
 
 from .conftest import random_robot
@@ -14,7 +14,7 @@ from .conftest import random_robot
 
 def _planar_joint_wbar(robot):
     """The planar joint-uniform w-bar by its Gauss-Legendre rule (exact to ~1e-13), times L^2: mean w*, m^2."""
-    return float(sa.average_manipulability(robot, measure="joint")) * float(robot.reach) ** 2
+    return float(sa.paper.normalized_wbar(robot, measure="joint")) * float(robot.reach) ** 2
 
 
 def test_sobol_directions_match_scipy():
@@ -102,9 +102,15 @@ def test_error_estimate_tracks_the_error_as_samples_grow():
         assert actual <= 4.0 * estimated
 
 
-def test_planar_dispatch_is_unchanged():
+def test_average_manipulability_is_one_quantity_for_every_robot():
+    """Planar robots too: the joint-box mean of w* (m^2), not the paper's normalized area w-bar;
+    against the closed-form quadrature of the joint-uniform mean, to the QMC error."""
     robot = sa.umetani1990()
-    assert float(averages.average_manipulability(robot)) == float(manipulability_average.average_manipulability(robot))
+    estimate = averages.joint_average_manipulability(robot, rtol=1e-5)
+    assert float(sa.average_manipulability(robot, rtol=1e-5)) == float(estimate.value)
+    assert abs(float(estimate.value) - _planar_joint_wbar(robot)) <= 4.0 * float(estimate.error)
+    area = float(sa.paper.normalized_wbar(robot))  # eq. 12: another quantity, dimensionless
+    assert abs(area * float(robot.reach) ** 2 - float(estimate.value)) > 0.1 * float(estimate.value)
 
 
 def test_base_disturbance_and_conditioning_against_a_grid():

@@ -266,7 +266,7 @@ def independent_curve(b0):
     (with uniform-rod inertias m l^2 / 12 = 33.33 kg m^2 as the problem declares)."""
     table1 = sa.umetani1990().replace(link_inertia=np.full(2, 100.0 * 4.0 / 12.0))
     robots = sa.stack_robots([table1.replace(base_attach=np.float64(b)) for b in b0])
-    wbar = jax.jit(lambda r: analysis.average_manipulability(r, **CHEAP_WBAR))(robots)
+    wbar = jax.jit(lambda r: sa.paper.normalized_wbar(r, **CHEAP_WBAR))(robots)
     K = np.asarray(sa.tip_coefficients(robots))
     s_g = np.maximum(K[:, 1] + K[:, 2] - K[:, 0], 0.0) ** 2 / 16.0
     return np.stack([np.asarray(wbar), s_g], axis=1)

@@ -11,7 +11,6 @@ import pytest
 import spacearm as sa
 from spacearm import ConfigError
 from spacearm.analysis import (
-    average_manipulability,
     fixed_base_average_manipulability,
     grid_average,
     inverse_kinematics,
@@ -20,6 +19,7 @@ from spacearm.analysis import (
     workspace_map,
 )
 from spacearm.kinematics import manipulability
+from spacearm.paper import normalized_wbar
 
 from .conftest import random_robot
 
@@ -62,28 +62,26 @@ def test_wbar_agrees_with_brute_force_midpoint_rule(table1):
     for ratio in (0.0, 1.0, 2.0):
         robot = _with_b0(table1, ratio)
         # The midpoint rule is second order at the kinks: 720 x 360 points leave ~1e-6.
-        assert float(average_manipulability(robot)) == pytest.approx(_brute_force_wbar(robot), rel=2e-5)
+        assert float(normalized_wbar(robot)) == pytest.approx(_brute_force_wbar(robot), rel=2e-5)
 
 
 def test_wbar_reproduces_faithful_values(table1):
     # Regression on the faithful reading (eq. 12): converged to ~1e-14 (see the convergence test).
     expected = (0.0876862727874975, 0.0907243239426461, 0.0970120167785581, 0.1014599860992248, 0.1023088639013738)
     batch = sa.stack_robots([_with_b0(table1, r) for r in RATIOS])
-    values = np.asarray(jax.jit(average_manipulability)(batch))
+    values = np.asarray(jax.jit(normalized_wbar)(batch))
     np.testing.assert_allclose(values, expected, rtol=1e-12)
 
 
 def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1):
     robot = _with_b0(table1, 2.0)
-    reference = float(average_manipulability(robot, order=16))
-    errors = [abs(float(average_manipulability(robot, order=q)) - reference) for q in (4, 8)]
+    reference = float(normalized_wbar(robot, order=16))
+    errors = [abs(float(normalized_wbar(robot, order=q)) - reference) for q in (4, 8)]
     # Gauss-Legendre split at det J* = 0: 7e-6 (2 points), 4e-10 (4), 1e-13 (6), 1e-15 (8) in
     # the study of the README; here the two ends of that range.
     assert 1e-11 < errors[0] < 1e-8 and errors[1] < 1e-13, errors
     plain = [
-        abs(
-            float(average_manipulability(robot, phi1_panels=p, phi2_panels=p // 2, order=8, rule="product")) - reference
-        )
+        abs(float(normalized_wbar(robot, phi1_panels=p, phi2_panels=p // 2, order=8, rule="product")) - reference)
         for p in (8, 16, 32)
     ]
     orders = [math.log2(plain[i] / plain[i + 1]) for i in range(2)]
@@ -108,8 +106,8 @@ def test_written_out_determinant_matches_generic_kernel():
 
 def test_elbow_sheets_agree_by_mirror_symmetry(table1):
     robot = _with_b0(table1, 1.0)
-    down = float(average_manipulability(robot))
-    assert float(average_manipulability(robot, elbow="up")) == pytest.approx(down, rel=1e-12)
+    down = float(normalized_wbar(robot))
+    assert float(normalized_wbar(robot, elbow="up")) == pytest.approx(down, rel=1e-12)
 
 
 def test_ground_robot_limit_matches_closed_form(table1):
@@ -119,21 +117,21 @@ def test_ground_robot_limit_matches_closed_form(table1):
     heavy = table1.replace(base_mass=np.float64(1e15), base_inertia=np.float64(1e17))
     closed = float(fixed_base_average_manipulability(heavy))
     assert closed == pytest.approx(4.0 / 16.0 * math.pi / 4.0, rel=1e-15)
-    assert float(average_manipulability(heavy)) == pytest.approx(closed, rel=1e-9)
+    assert float(normalized_wbar(heavy)) == pytest.approx(closed, rel=1e-9)
     joint = float(fixed_base_average_manipulability(heavy, measure="joint"))
     assert joint == pytest.approx(4.0 / 16.0 * 2.0 / math.pi, rel=1e-15)
-    assert float(average_manipulability(heavy, measure="joint")) == pytest.approx(joint, rel=1e-9)
+    assert float(normalized_wbar(heavy, measure="joint")) == pytest.approx(joint, rel=1e-9)
 
 
 def test_ground_robot_closed_form_for_unequal_links():
     robot = random_robot(np.random.default_rng(3), 2).replace(base_mass=np.float64(1e15), base_inertia=np.float64(1e17))
     l1, l2 = np.asarray(robot.link_length)
     expected = l1 * l2 / (l1 + l2) ** 2 * math.pi / 4
-    assert float(average_manipulability(robot)) == pytest.approx(expected, rel=1e-9)
+    assert float(normalized_wbar(robot)) == pytest.approx(expected, rel=1e-9)
 
 
 def test_gradient_wrt_design_matches_finite_differences(table1):
-    grad_fn = jax.grad(average_manipulability)
+    grad_fn = jax.grad(normalized_wbar)
     for b0 in (1.4, 2.8):
         robot = table1.replace(base_attach=np.float64(b0))
         grads = grad_fn(robot)
@@ -141,12 +139,12 @@ def test_gradient_wrt_design_matches_finite_differences(table1):
             assert np.all(np.isfinite(np.asarray(leaf)))
         h = 1e-4
         # Fourth-order central difference in b0; the quadrature error (~1e-15) is far below h^4.
-        f = [float(average_manipulability(table1.replace(base_attach=np.float64(b0 + k * h)))) for k in (-2, -1, 1, 2)]
+        f = [float(normalized_wbar(table1.replace(base_attach=np.float64(b0 + k * h)))) for k in (-2, -1, 1, 2)]
         fd = (f[0] - 8 * f[1] + 8 * f[2] - f[3]) / (12 * h)
         assert float(grads.base_attach) == pytest.approx(fd, rel=1e-7)
         h = 1e-3
         bumped = [robot.replace(link_inertia=robot.link_inertia + np.array([s * h, 0.0])) for s in (1, -1)]
-        fd = (float(average_manipulability(bumped[0])) - float(average_manipulability(bumped[1]))) / (2 * h)
+        fd = (float(normalized_wbar(bumped[0])) - float(normalized_wbar(bumped[1]))) / (2 * h)
         assert float(grads.link_inertia[0]) == pytest.approx(fd, rel=1e-6)
     # w-bar is even in b0 (mirror symmetry), so its slope vanishes at b0 = 0.
     assert abs(float(grad_fn(table1.replace(base_attach=np.float64(0.0))).base_attach)) < 1e-12
@@ -155,8 +153,8 @@ def test_gradient_wrt_design_matches_finite_differences(table1):
 def test_vmap_over_designs_equals_loop(table1):
     rng = np.random.default_rng(0)
     robots = [random_robot(rng, 2) for _ in range(2)]
-    vmapped = jax.vmap(lambda r: average_manipulability(r))(sa.stack_robots(robots))
-    singles = np.array([float(average_manipulability(r)) for r in robots])
+    vmapped = jax.vmap(lambda r: normalized_wbar(r))(sa.stack_robots(robots))
+    singles = np.array([float(normalized_wbar(r)) for r in robots])
     np.testing.assert_allclose(np.asarray(vmapped), singles, rtol=1e-13)
 
 
@@ -164,12 +162,12 @@ def test_random_designs_against_brute_force():
     rng = np.random.default_rng(7)
     for _ in range(2):
         robot = random_robot(rng, 2)
-        assert float(average_manipulability(robot)) == pytest.approx(_brute_force_wbar(robot), rel=5e-5)
+        assert float(normalized_wbar(robot)) == pytest.approx(_brute_force_wbar(robot), rel=5e-5)
 
 
 def test_joint_measure_for_three_links_matches_dense_grid():
     robot = random_robot(np.random.default_rng(11), 3)
-    coarse = float(average_manipulability(robot, measure="joint", n_points_joint=24))
+    coarse = float(normalized_wbar(robot, measure="joint", n_points_joint=24))
     # Same numbers from the unchunked public kernel.
     axis = np.linspace(-math.pi, math.pi, 24, endpoint=False)
     grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1)
@@ -181,14 +179,14 @@ def test_joint_measure_for_three_links_matches_dense_grid():
 
 def test_bad_options_raise_config_error(table1):
     with pytest.raises(ConfigError, match="measure"):
-        average_manipulability(table1, measure="volume")
+        normalized_wbar(table1, measure="volume")
     with pytest.raises(ConfigError, match="elbow"):
-        average_manipulability(table1, elbow="sideways")
+        normalized_wbar(table1, elbow="sideways")
     with pytest.raises(ConfigError, match="phi1_panels"):
-        average_manipulability(table1, phi1_panels=3)
+        normalized_wbar(table1, phi1_panels=3)
     three = random_robot(np.random.default_rng(1), 3)
     with pytest.raises(ConfigError, match="n = 3"):
-        average_manipulability(three)
+        normalized_wbar(three)
 
 
 def test_manipulability_map_chunks_equal_direct(table1):
@@ -293,5 +291,5 @@ def test_elbow_sheets_and_measures_agree_with_a_converged_reference():
     robot = random_robot(np.random.default_rng(12), 2).replace(base_attach=np.float64(3.0))
     fine = {"phi1_panels": 16, "phi2_panels": 8, "order": 16, "newton_steps": 8}
     for options in ({"elbow": "both"}, {"measure": "joint"}, {"measure": "joint", "elbow": "up"}):
-        value = float(average_manipulability(robot, **options))
-        assert value == pytest.approx(float(average_manipulability(robot, **options, **fine)), rel=1e-11), options
+        value = float(normalized_wbar(robot, **options))
+        assert value == pytest.approx(float(normalized_wbar(robot, **options, **fine)), rel=1e-11), options

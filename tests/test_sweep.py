@@ -103,16 +103,16 @@ def test_table_matches_single_design_functions(tmp_path):
 
 
 def test_wbar_options_reach_the_quadrature(tmp_path):
-    """A sweep's wbar options (here the fixed-node product rule) are those of average_manipulability."""
+    """A sweep's wbar options (here the fixed-node product rule) are those of spacearm.paper.normalized_wbar."""
     options = {"rule": "product", "phi1_panels": 8, "phi2_panels": 4, "order": 4}
     spec = load_sweep(sweep_config(metrics=[{"name": "wbar", **options}]))
     table = run_sweep(spec, tmp_path / "out", progress=False).table
     for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
-        coarse = float(sa.average_manipulability(robot, **options))
+        coarse = float(sa.paper.normalized_wbar(robot, **options))
         np.testing.assert_allclose(table["wbar"][i], coarse, rtol=1e-13)
         if ratio > 0:  # at b0 = 0 the kinks lie on the strip's edges and both rules are exact
-            exact = float(sa.average_manipulability(robot))
+            exact = float(sa.paper.normalized_wbar(robot))
             assert 1e-7 < abs(coarse - exact) / exact < 1e-2  # second order at the kinks
 
 

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import average_manipulability
 from spacearm.models.planar import closed_forms as kin
+from spacearm.paper import normalized_wbar
 from spacearm.studies import table2_readings as tv
 
 from .conftest import count_compiles, random_robot
@@ -68,8 +68,8 @@ def test_faithful_derivation_is_the_kinematics_module(n):
 def test_faithful_grid_averages_match_the_adaptive_quadrature(table1):
     robots = sa.stack_robots([with_b0(table1, r) for r in RATIOS])
     stats = tv.grid_averages([tv.FAITHFUL], robots)
-    np.testing.assert_allclose(stats["area"][0], average_manipulability(robots), rtol=1e-5)
-    np.testing.assert_allclose(stats["joint"][0], average_manipulability(robots, measure="joint"), rtol=1e-5)
+    np.testing.assert_allclose(stats["area"][0], normalized_wbar(robots), rtol=1e-5)
+    np.testing.assert_allclose(stats["joint"][0], normalized_wbar(robots, measure="joint"), rtol=1e-5)
 
 
 def test_faithful_closed_form_at_b0_zero(table1):
@@ -300,7 +300,7 @@ def test_readings_report_every_variant_by_every_rule(table1):
     assert len(readings) == len(tv.model_variants()) * len(tv.AVERAGES) + 3
     faithful = next(r for r in readings if r["name"] == "faithful / area")
     batch = sa.stack_robots([with_b0(table1, r) for r in RATIOS])
-    np.testing.assert_allclose(faithful["values"], 100 * np.asarray(average_manipulability(batch)), rtol=1e-5)
+    np.testing.assert_allclose(faithful["values"], 100 * np.asarray(normalized_wbar(batch)), rtol=1e-5)
     assert faithful["departures"] == 0
 
 

@@ -11,7 +11,8 @@ the paper stay here under their familiar names; each says "planar arms only" and
 TypeError for another family. Other family-specific names live in their subpackages:
 `spacearm.models.planar` and `spacearm.models.spatial` (for example
 `spacearm.models.spatial.mass_matrix`), and the planar workspaces of section 3 in
-`spacearm.analysis`. The kernels of the lower layers are imported at once; the higher
+`spacearm.analysis`; the paper's own quantities (the normalized w-bar of eq. 12, the
+areas of Table 2) in `spacearm.paper`. The kernels of the lower layers are imported at once; the higher
 layers (analysis, motion, planning, design, io) on first use, so ``import spacearm``
 stays light.
 """
@@ -146,6 +147,8 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
 
 
 def __getattr__(name):
+    if name == "paper":  # the paper's planar closed forms, a subpackage
+        return importlib.import_module("spacearm.paper")
     if name in _LAZY:
         value = getattr(importlib.import_module(f"spacearm.{_LAZY[name]}"), name)
         globals()[name] = value

@@ -3,8 +3,8 @@
 Each average is the mean of a per-posture metric under the uniform measure on the joint
 box (`joint_box`: limits where given, one turn for a continuous joint):
 
-- `average_manipulability`: translational w* = sqrt det(J*_v J*_v^T), m^3
-  (eq. 10 in 3-D; planar robots keep the paper's eq. 12, normalized by L^2);
+- `average_manipulability`: translational w* = sqrt det(J*_v J*_v^T), m^2 planar,
+  m^3 spatial (eq. 10; the paper's normalized eq. 12 is `spacearm.paper.normalized_wbar`);
 - `global_conditioning_index`: 1 / kappa(J*_v) = sigma_min / sigma_max, in [0, 1]
   (Gosselin & Angeles 1991, over the joint box instead of the workspace);
 - `average_base_disturbance`: ||C_w||_F, the Frobenius norm of the angular rows of
@@ -65,7 +65,6 @@ from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
 from ..models.spatial.metrics import dynamic_manipulability
 from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
-from .manipulability_average import average_manipulability as planar_average_manipulability
 
 __all__ = [
     "METRICS",
@@ -543,27 +542,19 @@ def joint_average(
 
 
 def joint_average_manipulability(robot, **options) -> JointAverage:
-    """Mean translational w* over the joint box (either family; m^2 planar, m^3 spatial), not normalized."""
+    """Mean translational w* over the joint box (m^2 planar, m^3 spatial), not normalized, with its error."""
     return joint_average(robot, "manipulability", **options)
 
 
-# Families whose average manipulability has a closed form (the planar eq. 12 w-bar).
-_CLOSED_FORM_AVERAGES = {"planar": planar_average_manipulability}
-
-
 def average_manipulability(robot, **options):
-    """The average manipulability of a design, by family (the public ``sa.average_manipulability``).
+    """The mean translational w* over the joint box, not normalized: m^2 planar, m^3 spatial, ``(...)``.
 
-    - Planar robots: the paper's w-bar (eq. 12, normalized by L^2;
-      `spacearm.analysis.manipulability_average.average_manipulability`, same
-      options, same closed-form quadrature), a ``(...)`` array.
-    - Spatial robots: the mean translational w* over the joint box, m^3, a ``(...)``
-      array to relative standard error ``rtol`` (default 1e-4); options of
-      `joint_average`, which also returns the error estimate and the sample count.
+    The same quantity for every robot (eq. 10 averaged under the uniform measure of the
+    joint box), to relative standard error ``rtol`` (default 1e-4); the options are those
+    of `joint_average`, which also returns the error estimate and the sample count. The
+    paper's normalized w-bar of eq. 12 (an average over the workspace area, divided by
+    L^2) is `spacearm.paper.normalized_wbar`.
     """
-    family = family_of(robot).name
-    if family in _CLOSED_FORM_AVERAGES:
-        return _CLOSED_FORM_AVERAGES[family](robot, **options)
     return joint_average(robot, "manipulability", **options).value
 
 

@@ -63,12 +63,12 @@ from ..models.planar.closed_forms import (
 from ..models.planar.robot import PlanarRobot
 from .manipulability_maps import grid_average
 
-__all__ = ["average_manipulability", "check_average_options", "fixed_base_average_manipulability"]
+__all__ = ["check_average_options", "fixed_base_average_manipulability", "normalized_wbar"]
 
 _MEASURES = ("area", "joint")
 _ELBOWS = ("down", "up", "both")
 _RULES = ("adaptive", "product")
-# Smallest allowed value of each integer option of average_manipulability.
+# Smallest allowed value of each integer option of normalized_wbar.
 _INTEGER_OPTIONS = {
     "phi1_panels": 2,
     "phi2_panels": 1,
@@ -355,7 +355,7 @@ def _wbar_two_link(
 
 
 def check_average_options(*, where: str = "", **options) -> None:
-    """Raise `ConfigError` naming the first bad option of `average_manipulability`.
+    """Raise `ConfigError` naming the first bad option of `normalized_wbar`.
 
     Shared with the sweep files' ``wbar`` metric, so ``spacearm validate`` catches what a
     run would reject. ``where`` prefixes the field names (``"metrics[0]."``).
@@ -375,7 +375,7 @@ def check_average_options(*, where: str = "", **options) -> None:
         )
 
 
-def average_manipulability(
+def normalized_wbar(
     robot: PlanarRobot,
     *,
     measure: str = "area",

@@ -13,7 +13,7 @@ trade-off computable.
   traced, so every objective is differentiable with respect to every variable.
   `load_problem` reads either family.
 * Objectives (all maximized): planar ``wbar`` (eq. 12, from
-  `spacearm.analysis.average_manipulability`), ``S_G`` (eq. 8 normalized by
+  `spacearm.paper.normalized_wbar`), ``S_G`` (eq. 8 normalized by
   pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space); joint-box
   averages ``w_avg``, ``gci``, ``low_disturbance``, ``w_d_avg`` (`AVERAGE_OBJECTIVES`),
   all from one fixed QMC rule and one chain pass per posture; ``low_total_mass``; and

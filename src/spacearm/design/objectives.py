@@ -26,8 +26,8 @@ import jax
 import jax.numpy as jnp
 
 from .._core.errors import ConfigError
-from ..analysis import average_manipulability
 from ..analysis.averages import split_metric, tip_metric
+from ..analysis.manipulability_average import normalized_wbar
 from ..analysis.spatial_workspaces import singular_radius
 from ..models.family import family_of
 from ..models.planar import PlanarRobot
@@ -206,13 +206,13 @@ def objective(
 
     Args:
         name: one of `OBJECTIVES` or `DESIGN_OBJECTIVES`.
-        wbar_options: keyword arguments of `spacearm.analysis.average_manipulability`.
+        wbar_options: keyword arguments of `spacearm.paper.normalized_wbar`.
         clamp_guaranteed: see `guaranteed_area`.
         radius_options: keyword arguments of `reach_radius` (objective ``reach_radius``).
     """
     if name == "wbar":
         options = dict(wbar_options or {})
-        return lambda robot: average_manipulability(robot, **options)
+        return lambda robot: normalized_wbar(robot, **options)
     if name == "S_G":
         return lambda robot: guaranteed_area(robot, clamp=clamp_guaranteed)
     if name == "S_M":

@@ -56,7 +56,7 @@ from .._core.schema import MAX_OBJECTIVES, check_keys, check_memory, check_name,
 from ..analysis import check_average_options
 from ..analysis.averages import joint_averages
 from ..analysis.joint_box import check_joint_box
-from ..analysis.manipulability_average import average_manipulability as planar_average_manipulability
+from ..analysis.manipulability_average import normalized_wbar
 from ..models import load_robot
 from ..models.family import family_of
 from ..models.planar import PlanarRobot, fields as planar_fields
@@ -84,8 +84,8 @@ __all__ = [
     "variable_names_for",
 ]
 
-# The options of analysis.average_manipulability a problem's ``wbar:`` section may set.
-WBAR_OPTIONS = tuple(name for name in inspect.signature(planar_average_manipulability).parameters if name != "robot")
+# The options of spacearm.paper.normalized_wbar a problem's ``wbar:`` section may set.
+WBAR_OPTIONS = tuple(name for name in inspect.signature(normalized_wbar).parameters if name != "robot")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -568,11 +568,11 @@ def _reference_point(source: str, config: Mapping[str, Any], objectives: tuple[s
 
 
 def _parse_wbar(source: str, config: Mapping[str, Any], objectives: tuple[str, ...], n: int) -> Mapping:
-    """The ``wbar:`` options of `spacearm.analysis.average_manipulability` (the area
+    """The ``wbar:`` options of `spacearm.paper.normalized_wbar` (the area
     average, eq. 12, is defined for 2 links only)."""
     wbar = config.get("wbar", {}) or {}
     if not isinstance(wbar, Mapping):
-        raise ConfigError(f"{source}: wbar: must be a mapping of options for analysis.average_manipulability")
+        raise ConfigError(f"{source}: wbar: must be a mapping of options for spacearm.paper.normalized_wbar")
     check_keys(f"{source}: wbar: ", wbar, WBAR_OPTIONS)
     check_average_options(where=f"{source}: wbar.", **wbar)
     if "wbar" in objectives and n != 2 and wbar.get("measure", "area") == "area":

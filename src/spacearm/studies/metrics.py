@@ -17,7 +17,6 @@ from .._core.errors import ConfigError
 from .._core.schema import check_keys, did_you_mean, integer, is_number
 from ..analysis import (
     attachment_condition,
-    average_manipulability,
     check_average_options,
     normalized_areas,
     normalized_workspace_areas,
@@ -25,6 +24,7 @@ from ..analysis import (
 )
 from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
 from ..analysis.joint_box import check_joint_box
+from ..analysis.manipulability_average import normalized_wbar
 from ..analysis.spatial_workspaces import reachable_radii, singular_radius
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.planar import PlanarRobot
@@ -73,7 +73,7 @@ def _no_options(where: str, options: dict) -> None:
         raise ConfigError(f"{where}: this metric takes no options, got {', '.join(options)}")
 
 
-# The options of analysis.average_manipulability a sweep file may set (the rest are
+# The options of spacearm.paper.normalized_wbar a sweep file may set (the rest are
 # about batching, which the sweep does itself).
 WBAR_OPTIONS = ("measure", "elbow", "rule", "phi1_panels", "phi2_panels", "order", "newton_steps", "n_points_joint")
 
@@ -101,7 +101,7 @@ def _check_straight_robot(where: str, options: dict, robot: PlanarRobot) -> None
 
 
 def _wbar(robot, options):
-    return {"wbar": average_manipulability(robot, **options)}
+    return {"wbar": normalized_wbar(robot, **options)}
 
 
 def _areas(robot, options):

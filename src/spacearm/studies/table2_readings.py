@@ -378,7 +378,7 @@ def grid_averages(derivations: list[Derivation], robots: PlanarRobot) -> dict[st
         ``{rule: (len(derivations), designs)}``, dimensionless; NaN where I_S vanishes
         somewhere on the strip (w* has a pole, the average diverges). Computed on a 512 x 256
         midpoint grid of the elbow-down strip (under 1e-5 relative to the adaptive rule
-        of `spacearm.analysis.average_manipulability` for the faithful model).
+        of `spacearm.paper.normalized_wbar` for the faithful model).
     """
     if robots.n_links != 2 or len(robots.batch_shape) != 1:
         raise ValueError("grid_averages takes a one-axis batch of n = 2 designs")
