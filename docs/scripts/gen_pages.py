@@ -184,6 +184,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ),
     ("spacearm.planning.spatial_reach", "Planning", "reaching a point in 3-D: turn the bus, then a straight path"),
     ("spacearm.planning.pose_reach", "Planning", "reaching a pose: the tip-shell check, then one straight pose path"),
+    ("spacearm.paper", "Paper", "the paper's planar quantities: normalized w-bar (eq. 12), workspaces, Table 2 areas"),
     ("spacearm.design", "Design", "gradient Pareto search over design numbers"),
     ("spacearm.design.problem", "Design", "design problems: variables, objectives, settings, the problem file"),
     (
