@@ -151,6 +151,11 @@ class RobotFamily:
         moving joints of a serial arm; a focused tree's other arms move its tip only through the bus)."""
         return np.asarray(self.moving_joints(robot)) > 0
 
+    def normal_form(self, robot) -> dict | None:
+        """The robot as the mapping of a robot file written from its numbers alone, where the
+        family writes one (planar); ``None``: the file's own mapping stands for it."""
+        return None
+
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 
     def tip_shell(self, robot) -> tuple[float, float]:

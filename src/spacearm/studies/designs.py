@@ -19,7 +19,6 @@ from .._core.errors import ConfigError
 from ..models.family import family_of
 from ..models.planar import PlanarRobot, fields as planar_fields
 from ..models.spatial import SpatialRobot, fields as spatial_fields
-from ..models.tree import fields as tree_fields
 
 __all__ = [
     "DERIVED_FIELDS",
@@ -44,7 +43,7 @@ class Axis:
     field: str
     values: np.ndarray
     relative: bool = False
-    family: str = "planar"  # the base robot's family: field names mean different things in each
+    unit: str = ""  # of the values: the field's SI unit, "factor", "1" (a ratio) or "relative"
 
 
 class SweepSpec(Protocol):
@@ -60,7 +59,6 @@ class SweepSpec(Protocol):
 
 
 SPATIAL_FIELD_HELP = spatial_fields.FIELD_HELP
-_FIELDS_BY_FAMILY = {"planar": planar_fields, "spatial": spatial_fields, "tree": tree_fields}
 FIELD_HELP = planar_fields.FIELD_HELP
 SIMPLE_FIELDS = {
     "base.mass": ("base_mass", "kg"),
@@ -139,10 +137,14 @@ def design_columns(robot: PlanarRobot | SpatialRobot, axes: Sequence[Axis]) -> d
 
 
 def axis_unit(axis: Axis) -> str:
-    """The unit of an axis's values: "relative" for a relative axis, else the field's SI unit
-    ("1" for a ratio, "factor" for a factor field)."""
-    if axis.relative:
+    """The unit of an axis's values (`field_axis_unit` of its field, set when the sweep was read)."""
+    return axis.unit
+
+
+def field_axis_unit(robot, field: str, relative: bool) -> str:
+    """The unit of an axis over ``field`` on ``robot``'s family: "relative" for a relative axis,
+    else the field's SI unit ("1" for a ratio, "factor" for a factor field)."""
+    if relative:
         return "relative"
-    fields = _FIELDS_BY_FAMILY.get(axis.family, planar_fields)
-    unit = fields.field_unit(axis.field)
-    return "factor" if axis.field in fields.FACTOR_FIELDS else unit
+    fields = family_of(robot).fields
+    return "factor" if field in fields.FACTOR_FIELDS else fields.field_unit(field)

@@ -41,9 +41,9 @@ from .._core.schema import (
 )
 from ..models import load_robot, robot_from_file_mapping
 from ..models.family import family_of
-from ..models.planar import PlanarRobot, robot_to_mapping
+from ..models.planar import PlanarRobot
 from ..models.spatial import SpatialRobot
-from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field
+from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field, field_axis_unit
 from .metrics import METRICS, MetricSpec, metric_specs, resolve_tips
 from .table2 import REPORT_CHECKS, REPORTS
 
@@ -278,7 +278,6 @@ def _design_size(robot) -> int:
 
 def _parse_axes(where: str, axes_entry: Any, robot) -> list[Axis]:
     """The ``axes:`` mapping: each axis's design field, values and whether they are relative."""
-    family = family_of(robot).name
     size = _design_size(robot)
     if not isinstance(axes_entry, Mapping) or not axes_entry:
         raise ConfigError(f"{where}: axes: must be a non-empty mapping of axis name -> {{field, values | range}}")
@@ -296,7 +295,8 @@ def _parse_axes(where: str, axes_entry: Any, robot) -> list[Axis]:
         relative = spec.get("relative", False)
         if not isinstance(relative, bool):
             raise ConfigError(f"{at}.relative: must be true or false, got {relative!r}")
-        axes.append(Axis(axis_name, field, _axis_values(at, spec, size), relative, family))
+        unit = field_axis_unit(robot, field, relative)
+        axes.append(Axis(axis_name, field, _axis_values(at, spec, size), relative, unit))
     return axes
 
 
@@ -351,12 +351,8 @@ def _resolved_robot(robot, path: Path, mapping) -> dict:
     """The robot's mapping for the resolved config: a family's own normal form where it
     writes one (planar: `robot_to_mapping`), else the file's mapping (``mapping()``) with
     its URDF path made to work from the current folder."""
-    if family_of(robot).name in _NORMAL_FORMS:
-        return _NORMAL_FORMS[family_of(robot).name](robot)
-    return _spatial_mapping(path, mapping())
-
-
-_NORMAL_FORMS = {"planar": robot_to_mapping}
+    form = family_of(robot).normal_form(robot)
+    return _spatial_mapping(path, mapping()) if form is None else form
 
 
 def _spatial_mapping(path: Path, config: Mapping) -> dict:

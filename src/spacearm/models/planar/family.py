@@ -35,6 +35,7 @@ from .closed_forms import (
     tip_position,
 )
 from .robot import PlanarRobot
+from .schema import robot_to_mapping
 from .singularities import two_link_path_independent_radius
 
 __all__ = ["PLANAR", "PlanarFamily"]
@@ -70,6 +71,10 @@ class PlanarFamily(RobotFamily):
         "sing_rate": -float("inf"),
         "max_steps": 4096,
     }
+
+    def normal_form(self, robot: PlanarRobot) -> dict:
+        """The ``robot:`` mapping of the design's numbers (`spacearm.models.planar.schema.robot_to_mapping`)."""
+        return robot_to_mapping(robot)
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links
