@@ -29,8 +29,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa
-from spacearm.analysis import normalized_areas
-from spacearm.paper import normalized_wbar
+from spacearm.paper import normalized_areas, normalized_wbar
 from spacearm.studies import build_designs, load_sweep, run_sweep
 
 RULES = {

@@ -29,7 +29,7 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 import spacearm as sa
-from spacearm.analysis.manipulability_average import normalized_wbar
+from spacearm.paper import normalized_wbar
 
 ROOT = Path(__file__).resolve().parents[1]
 

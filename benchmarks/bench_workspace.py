@@ -21,8 +21,8 @@ jax.config.update("jax_enable_x64", True)
 from bench_motion import scipy_straight
 
 import spacearm as sa
-from spacearm import analysis as ws
-from spacearm.analysis import straight_workspace as spw
+from spacearm import paper
+from spacearm.paper import straight_workspace as spw
 
 
 def scipy_straight_path(coeffs, phi_start, direction, max_arc=60.0, rtol=1e-10, atol=1e-12):
@@ -38,7 +38,7 @@ def main() -> None:
     args = parser.parse_args()
 
     robot = sa.umetani1990()
-    phis = ws.random_joint_postures(robot, args.postures, seed=0)
+    phis = paper.random_joint_postures(robot, args.postures, seed=0)
     n_paths = args.postures * args.directions
     print(f"{args.postures} postures x {args.directions} directions = {n_paths} straight tip paths, {jax.devices()[0]}")
 
@@ -61,7 +61,7 @@ def main() -> None:
     rng = np.random.default_rng(1)
     pick = rng.choice(n_paths, size=args.scipy, replace=False)
     p_idx, d_idx = np.unravel_index(pick, (args.postures, args.directions))
-    directions = np.asarray(ws.evenly_spaced_directions(args.directions))
+    directions = np.asarray(paper.evenly_spaced_directions(args.directions))
     c = sa.design_coefficients(robot)
     coeffs = (np.asarray(c.tip), np.asarray(c.inertia_coupling), np.asarray(c.inertia))
     t0 = time.perf_counter()
@@ -80,7 +80,7 @@ def main() -> None:
     )
 
     print("\nArea 3 (union) and Area 5 (intersection) of the Straight-Path Workspaces in this batch:")
-    study = ws.summarize_straight_paths(robot, phis, ends)
+    study = paper.summarize_straight_paths(robot, phis, ends)
     for key, value in study.items():
         print(f"  {key:48s} {value}")
 

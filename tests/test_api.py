@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm import analysis
 from spacearm.models import spatial
 
 # Planar closed forms kept at the top level: (name, arguments after the robot).
@@ -82,7 +81,7 @@ def test_spatial_only_kernels_refuse_a_planar_arm_by_name(name, table1):
 def test_planar_workspaces_outside_the_top_level_refuse_a_spatial_arm(ur5):
     for name in ("guaranteed_radius", "attitude_constraint", "fixed_vehicle_radius", "dynamic_singularities"):
         with pytest.raises(TypeError, match=rf"^{name}: planar arms only"):
-            getattr(analysis, name)(ur5)
+            getattr(sa.paper, name)(ur5)
 
 
 def test_the_guard_changes_no_planar_number(table1):

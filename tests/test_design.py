@@ -21,7 +21,7 @@ import pytest
 import yaml
 
 import spacearm as sa
-from spacearm import analysis, design
+from spacearm import design
 from spacearm.cli import main as cli_main
 
 from .conftest import count_compiles
@@ -145,7 +145,7 @@ def test_guaranteed_area_table2_and_the_honest_clamp():
     assert abs(float(slope(jnp.float64(4.4 - 1e-7)))) < 1e-7
     assert float(slope(jnp.float64(4.4 + 1e-7))) == 0.0
     # Agrees with the table-2 helper's closed form where the disc exists.
-    np.testing.assert_allclose(analysis.normalized_areas(table1)[1], design.guaranteed_area(table1), rtol=1e-14)
+    np.testing.assert_allclose(sa.paper.normalized_areas(table1)[1], design.guaranteed_area(table1), rtol=1e-14)
 
 
 def test_objective_gradients_match_finite_differences():

@@ -10,16 +10,16 @@ import pytest
 
 import spacearm as sa
 from spacearm import ConfigError
-from spacearm.analysis import (
+from spacearm.kinematics import manipulability
+from spacearm.paper import (
     fixed_base_average_manipulability,
     grid_average,
     inverse_kinematics,
     manipulability_map,
     normalized_areas,
+    normalized_wbar,
     workspace_map,
 )
-from spacearm.kinematics import manipulability
-from spacearm.paper import normalized_wbar
 
 from .conftest import random_robot
 
@@ -90,9 +90,9 @@ def test_quadrature_converges_spectrally_and_product_rule_at_second_order(table1
 
 
 def test_written_out_determinant_matches_generic_kernel():
-    from spacearm.analysis.manipulability_average import _signed_determinant
     from spacearm.kinematics import generalized_jacobian
     from spacearm.models.planar.closed_forms import design_coefficients
+    from spacearm.paper.manipulability_average import _signed_determinant
 
     rng = np.random.default_rng(5)
     for robot in (sa.umetani1990(), random_robot(rng, 2)):
@@ -214,14 +214,14 @@ def test_workspace_map_inverse_kinematics_round_trip(table1):
 def test_panel_forms_of_the_determinant_match_the_written_out_one():
     # The adaptive rule's det J* = N / H: trigonometric forms in phi2, rotated to panel
     # centers, and N as a quartic in t = tan((phi2 - c) / 2), against _signed_determinant.
-    from spacearm.analysis.manipulability_average import (
+    from spacearm.models.planar.closed_forms import design_coefficients
+    from spacearm.paper.manipulability_average import (
         _TO_QUARTIC,
         _fourier_forms,
         _panel_rotations,
         _polynomial,
         _signed_determinant,
     )
-    from spacearm.models.planar.closed_forms import design_coefficients
 
     rng = np.random.default_rng(8)
     centers = np.array([0.3, 2.0, -2.9])
@@ -247,8 +247,8 @@ def test_panel_forms_of_the_determinant_match_the_written_out_one():
 def test_closed_form_edge_crossings_are_the_sign_changes_on_the_strip_edges():
     # phi1 splits of the adaptive rule: besides phi1 = 0, pi, det J* changes sign on
     # phi2 = 0 (pi) exactly at +-arccos of _edge_crossings; compare with a dense scan.
-    from spacearm.analysis.manipulability_average import _edge_crossings, _signed_determinant
     from spacearm.models.planar.closed_forms import design_coefficients
+    from spacearm.paper.manipulability_average import _edge_crossings, _signed_determinant
 
     rng = np.random.default_rng(9)
     robots = [random_robot(rng, 2).replace(base_attach=np.float64(rng.uniform(0.2, 4.0))) for _ in range(12)]
@@ -273,7 +273,7 @@ def test_closed_form_edge_crossings_are_the_sign_changes_on_the_strip_edges():
 
 
 def test_polynomial_roots_and_taylor_cos_sin():
-    from spacearm.analysis.manipulability_average import _cos_sin, _polynomial_roots
+    from spacearm.paper.manipulability_average import _cos_sin, _polynomial_roots
 
     # (t - 0.1)(t + 2)(t^2 + 1): one root in [-0.5, 0.5]; none in [0.2, 0.5] (midpoint returned).
     quartic = np.polynomial.polynomial.polyfromroots([0.1, -2.0, 1j, -1j]).real

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import spatial_workspaces as sw, workspaces
+from spacearm.analysis import spatial_workspaces as sw
 from spacearm.models.planar import singularities
+from spacearm.paper import workspaces
 
 from .conftest import count_compiles, random_robot
 

@@ -117,13 +117,13 @@ def test_wbar_options_reach_the_quadrature(tmp_path):
 
 
 def test_workspace_areas_metric(tmp_path):
-    from spacearm import analysis as ws
+    from spacearm import paper
 
     spec = load_sweep(sweep_config(metrics=["workspace_areas", "S_M", "S_G"]))
     table = run_sweep(spec, tmp_path / "out", progress=False).table
     for i, ratio in enumerate([0.0, 0.5, 1.0, 1.5, 2.0]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
-        areas = ws.normalized_workspace_areas(robot)
+        areas = paper.normalized_workspace_areas(robot)
         for column, key in [
             ("S_fixed_vehicle", "fixed_vehicle"),
             ("S_attitude_constraint", "attitude_constraint"),
@@ -132,14 +132,14 @@ def test_workspace_areas_metric(tmp_path):
         ]:
             np.testing.assert_allclose(table[column][i], float(areas[key]), rtol=1e-14)
         np.testing.assert_allclose(table["S_guaranteed"][i], table["S_G"][i], rtol=1e-14)
-        assert table["eq9_holds"][i] == float(ws.attachment_condition(robot))
+        assert table["eq9_holds"][i] == float(paper.attachment_condition(robot))
     # Table 1: eq. 9 fails with the arm on the base centroid and holds at b0 = 2 B0.
     assert table["eq9_holds"][0] == 0.0 and table["eq9_holds"][-1] == 1.0
 
 
 def test_straight_path_area_metric(tmp_path):
     """The sweep column is the area enclosed by the straight-path ends (trapezoid formula here)."""
-    from spacearm import analysis as ws
+    from spacearm import paper
 
     phi_deg = [0.0, -60.0, 120.0]
     spec = load_sweep(
@@ -151,7 +151,7 @@ def test_straight_path_area_metric(tmp_path):
     table = run_sweep(spec, tmp_path / "out", progress=False).table
     for i, ratio in enumerate([0.5, 1.5]):
         robot = sa.umetani1990().replace(base_attach=np.float64(1.4 * ratio))
-        ends = np.asarray(ws.straight_path_workspace(robot, np.radians(phi_deg), 24))
+        ends = np.asarray(paper.straight_path_workspace(robot, np.radians(phi_deg), 24))
         x, y = ends[:, 0], ends[:, 1]
         area = 0.5 * abs(np.sum((x + np.roll(x, -1)) * (np.roll(y, -1) - y)))
         np.testing.assert_allclose(table["S_straight"][i], area / (np.pi * 4.0**2), rtol=1e-10)

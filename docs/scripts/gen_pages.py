@@ -146,7 +146,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.motion.batching", "Motion", "designs and paths flattened to one batch axis"),
     ("spacearm.analysis", "Analysis", "workspaces, singular sets, areas, averaged metrics, maps"),
     (
-        "spacearm.analysis.workspaces",
+        "spacearm.paper.workspaces",
         "Analysis",
         "the five workspaces in closed form, S_M and S_G, section 3.2 relations",
     ),
@@ -155,7 +155,7 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Analysis",
         "dynamic singularities (det J* = 0) and the path-independent radius",
     ),
-    ("spacearm.analysis.straight_workspace", "Analysis", "the Straight-Path workspace (Area 4) by integration"),
+    ("spacearm.paper.straight_workspace", "Analysis", "the Straight-Path workspace (Area 4) by integration"),
     ("spacearm.analysis.reaction", "Analysis", "reaction null space, base disturbance maps, reaction-free tip motion"),
     ("spacearm.analysis.joint_box", "Analysis", "the joint box with its uniform measure; randomized Sobol points"),
     (
@@ -168,9 +168,9 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Analysis",
         "spatial reach radii, dynamic singular sets, the path-independent radius, the 3-D straight-path workspace",
     ),
-    ("spacearm.analysis.manipulability_average", "Analysis", "w-bar (eq. 12): the adaptive quadrature"),
+    ("spacearm.paper.manipulability_average", "Analysis", "w-bar (eq. 12): the adaptive quadrature"),
     (
-        "spacearm.analysis.manipulability_maps",
+        "spacearm.paper.manipulability_maps",
         "Analysis",
         "posture grids, manipulability maps over joints and the tip plane",
     ),

@@ -8,13 +8,12 @@ compiled programs on disk across processes (the command line does both).
 The names below (``__all__``) are the public API: the loaders and the functions that
 serve every robot family (they dispatch by `family_of`). A few planar closed forms of
 the paper stay here under their familiar names; each says "planar arms only" and raises
-TypeError for another family. Other family-specific names live in their subpackages:
-`spacearm.models.planar` and `spacearm.models.spatial` (for example
-`spacearm.models.spatial.mass_matrix`), and the planar workspaces of section 3 in
-`spacearm.analysis`; the paper's own quantities (the normalized w-bar of eq. 12, the
-areas of Table 2) in `spacearm.paper`. The kernels of the lower layers are imported at once; the higher
-layers (analysis, motion, planning, design, io) on first use, so ``import spacearm``
-stays light.
+TypeError for another family. The paper's own quantities (the normalized w-bar of
+eq. 12, the workspaces of section 3, the areas of Table 2, the maps) are in
+`spacearm.paper`; family-specific kernels in `spacearm.models.planar` and
+`spacearm.models.spatial` (for example `spacearm.models.spatial.mass_matrix`). The
+kernels of the lower layers are imported at once; the higher layers (analysis, motion,
+planning, design, io, paper) on first use, so ``import spacearm`` stays light.
 """
 
 import importlib
@@ -57,11 +56,11 @@ from .models.tree import TreeRobot as TreeRobot
 # module under spacearm.
 _LAZY = {
     "average_manipulability": "analysis",
-    "normalized_areas": "analysis",
-    "straight_path_workspace": "analysis",
+    "normalized_areas": "paper",
+    "straight_path_workspace": "paper",
     "maximum_reachable_radius": "analysis",
     "path_independent_radius": "analysis",
-    "maximum_reachable_radii": "analysis",
+    "maximum_reachable_radii": "paper",
     "integrate_joint_path": "motion",
     "joint_path_history": "motion",
     "straight_tip_path": "motion",
@@ -120,11 +119,8 @@ __all__ = [
 if TYPE_CHECKING:  # the same names, visible to type checkers and the API reference
     from .analysis import (
         average_manipulability as average_manipulability,
-        maximum_reachable_radii as maximum_reachable_radii,
         maximum_reachable_radius as maximum_reachable_radius,
-        normalized_areas as normalized_areas,
         path_independent_radius as path_independent_radius,
-        straight_path_workspace as straight_path_workspace,
     )
     from .design import hypervolume_2d as hypervolume_2d, load_problem as load_problem, pareto_search as pareto_search
     from .io import open_results as open_results
@@ -137,6 +133,11 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
         straight_pose_path as straight_pose_path,
         straight_tip_path as straight_tip_path,
         straight_tip_path_history as straight_tip_path_history,
+    )
+    from .paper import (
+        maximum_reachable_radii as maximum_reachable_radii,
+        normalized_areas as normalized_areas,
+        straight_path_workspace as straight_path_workspace,
     )
     from .planning import (
         loop_settings as loop_settings,

@@ -1,22 +1,10 @@
-"""Workspaces, singular sets, areas, averaged metrics and maps (sections 3-5 of the paper)."""
+"""Workspaces, singular sets, averaged metrics and bus disturbance, for every robot.
 
-from ..models.planar.singularities import (
-    SingularSet as SingularSet,
-    dynamic_singularities as dynamic_singularities,
-)
+The paper's planar closed forms (the workspaces of section 3, the normalized w-bar of
+eq. 12, the maps) are in `spacearm.paper`.
+"""
+
 from .averages import average_manipulability as average_manipulability
-from .manipulability_average import (
-    check_average_options as check_average_options,
-    fixed_base_average_manipulability as fixed_base_average_manipulability,
-)
-from .manipulability_maps import (
-    check_single_design as check_single_design,
-    grid_average as grid_average,
-    inverse_kinematics as inverse_kinematics,
-    joint_grid as joint_grid,
-    manipulability_map as manipulability_map,
-    workspace_map as workspace_map,
-)
 from .reaction import (
     DisturbanceMap as DisturbanceMap,
     ReactionFreePath as ReactionFreePath,
@@ -27,79 +15,21 @@ from .reaction import (
     reaction_null_space as reaction_null_space,
 )
 from .spatial_workspaces import (
+    maximum_reachable_inner_radius as maximum_reachable_inner_radius,
     maximum_reachable_radius as maximum_reachable_radius,
     path_independent_radius as path_independent_radius,
-)
-from .straight_workspace import (
-    clearance_radius as clearance_radius,
-    evenly_spaced_directions as evenly_spaced_directions,
-    inside_straight_path_workspace as inside_straight_path_workspace,
-    random_joint_postures as random_joint_postures,
-    straight_path_ends as straight_path_ends,
-    straight_path_intersection_radius as straight_path_intersection_radius,
-    straight_path_study as straight_path_study,
-    straight_path_union_radius as straight_path_union_radius,
-    straight_path_workspace as straight_path_workspace,
-    summarize_straight_paths as summarize_straight_paths,
-)
-from .workspaces import (
-    attachment_condition as attachment_condition,
-    attitude_constraint as attitude_constraint,
-    attitude_constraint_inner_radius as attitude_constraint_inner_radius,
-    fixed_vehicle_center as fixed_vehicle_center,
-    fixed_vehicle_inner_radius as fixed_vehicle_inner_radius,
-    fixed_vehicle_radius as fixed_vehicle_radius,
-    guaranteed_radius as guaranteed_radius,
-    kinematic_singularity_radius as kinematic_singularity_radius,
-    maximum_reachable_inner_radius as maximum_reachable_inner_radius,
-    maximum_reachable_radii as maximum_reachable_radii,
-    normalized_areas as normalized_areas,
-    normalized_workspace_areas as normalized_workspace_areas,
-    workspace_relations as workspace_relations,
 )
 
 __all__ = [
     "DisturbanceMap",
     "ReactionFreePath",
-    "SingularSet",
-    "attachment_condition",
-    "attitude_constraint",
-    "attitude_constraint_inner_radius",
     "average_manipulability",
-    "check_average_options",
-    "check_single_design",
-    "clearance_radius",
     "disturbance",
     "disturbance_map",
-    "dynamic_singularities",
-    "evenly_spaced_directions",
-    "fixed_base_average_manipulability",
-    "fixed_vehicle_center",
-    "fixed_vehicle_inner_radius",
-    "fixed_vehicle_radius",
-    "grid_average",
-    "guaranteed_radius",
-    "inside_straight_path_workspace",
-    "inverse_kinematics",
-    "joint_grid",
-    "kinematic_singularity_radius",
-    "manipulability_map",
     "maximum_reachable_inner_radius",
-    "maximum_reachable_radii",
     "maximum_reachable_radius",
-    "normalized_areas",
-    "normalized_workspace_areas",
     "path_independent_radius",
-    "random_joint_postures",
     "reaction_free_rates",
     "reaction_free_tip_path",
     "reaction_null_space",
-    "straight_path_ends",
-    "straight_path_intersection_radius",
-    "straight_path_study",
-    "straight_path_union_radius",
-    "straight_path_workspace",
-    "summarize_straight_paths",
-    "workspace_map",
-    "workspace_relations",
 ]

@@ -27,11 +27,11 @@ import jax.numpy as jnp
 
 from .._core.errors import ConfigError
 from ..analysis.averages import split_metric, tip_metric
-from ..analysis.manipulability_average import normalized_wbar
 from ..analysis.spatial_workspaces import singular_radius
 from ..models.family import family_of
 from ..models.planar import PlanarRobot
 from ..models.planar.closed_forms import tip_coefficients
+from ..paper.manipulability_average import normalized_wbar
 
 __all__ = [
     "AVERAGE_OBJECTIVES",

@@ -53,13 +53,13 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.schema import MAX_OBJECTIVES, check_keys, check_memory, check_name, choice, integer, number, read_yaml
-from ..analysis import check_average_options
 from ..analysis.averages import joint_averages
 from ..analysis.joint_box import check_joint_box
-from ..analysis.manipulability_average import normalized_wbar
 from ..models import load_robot
 from ..models.family import family_of
 from ..models.planar import PlanarRobot, fields as planar_fields
+from ..paper import check_average_options
+from ..paper.manipulability_average import normalized_wbar
 from .objectives import (
     AVERAGE_OBJECTIVES,
     RADIUS_OBJECTIVES,

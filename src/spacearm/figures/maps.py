@@ -13,7 +13,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Ellipse
 
-from ..analysis import inverse_kinematics, workspace_map
 from ..io import save_figure
 from ..models.planar import umetani1990
 from ..models.planar.closed_forms import (
@@ -21,6 +20,7 @@ from ..models.planar.closed_forms import (
     manipulability_ellipse,
     robot_frame_tip_position,
 )
+from ..paper import inverse_kinematics, workspace_map
 from ..studies.table2_readings import Derivation, derivation_coefficients
 from . import figure
 

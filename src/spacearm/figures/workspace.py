@@ -7,7 +7,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .. import analysis as ws
+from .. import analysis, paper
 from ..io import save_figure
 from ..kinematics import generalized_jacobian, tip_position
 from ..models.planar import umetani1990
@@ -45,7 +45,7 @@ def fig3(out_dir: Path) -> list[Path]:
     phi = _fig3_posture()
     postures, tips = straight_tip_path_history(robot, phi, np.array([1.0, 0.0]), n_samples=121)
     postures, tips = np.asarray(postures), np.asarray(tips)
-    ends = ws.straight_path_ends(robot, phi, 360)
+    ends = paper.straight_path_ends(robot, phi, 360)
     boundary = np.asarray(ends.end_tip)
     start = np.asarray(tip_position(robot, phi))
 
@@ -69,9 +69,15 @@ def fig3(out_dir: Path) -> list[Path]:
         boundary[folded, 0], boundary[folded, 1], ".", color="tab:red", ms=3, label="ends at the folded-arm singularity"
     )
     _circle(
-        ax, (0, 0), float(ws.maximum_reachable_radius(robot)), color="k", ls="--", lw=1, label="Area 3, $K_0+K_1+K_2$"
+        ax,
+        (0, 0),
+        float(analysis.maximum_reachable_radius(robot)),
+        color="k",
+        ls="--",
+        lw=1,
+        label="Area 3, $K_0+K_1+K_2$",
     )
-    _circle(ax, (0, 0), float(ws.guaranteed_radius(robot)), color="tab:green", ls="--", lw=1, label="eq. (8) radius")
+    _circle(ax, (0, 0), float(paper.guaranteed_radius(robot)), color="tab:green", ls="--", lw=1, label="eq. (8) radius")
     draw_planar_robot(ax, robot, phi, color="0.3")
     ax.plot(*start, "ko", ms=5, label="start tip")
     ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
@@ -88,10 +94,10 @@ def fig3(out_dir: Path) -> list[Path]:
 def _fig4_panel(ax, robot, title):
 
     K = np.asarray(tip_coefficients(robot))
-    c1, r1 = np.asarray(ws.fixed_vehicle_center(robot)), float(ws.fixed_vehicle_radius(robot))
-    c2, r2 = (np.asarray(x) for x in ws.attitude_constraint(robot))
-    r3, r5 = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
-    hole2 = float(ws.attitude_constraint_inner_radius(robot))
+    c1, r1 = np.asarray(paper.fixed_vehicle_center(robot)), float(paper.fixed_vehicle_radius(robot))
+    c2, r2 = (np.asarray(x) for x in paper.attitude_constraint(robot))
+    r3, r5 = float(analysis.maximum_reachable_radius(robot)), float(paper.guaranteed_radius(robot))
+    hole2 = float(paper.attitude_constraint_inner_radius(robot))
     _circle(ax, c1, r1, color="tab:orange", lw=2, label=f"Area 1 Fixed-Vehicle, L = {r1:.2f} m about joint 1")
     _circle(ax, c2, r2, color="tab:blue", lw=2, label=f"Area 2 Attitude-Constraint, {r2:.2f} m about ($K_0$, 0)")
     if hole2 > 1e-9:
@@ -100,7 +106,7 @@ def _fig4_panel(ax, robot, title):
     _circle(ax, (0, 0), r5, color="tab:green", lw=2, label=f"Area 5 Guaranteed (eq. 8), {r5:.2f} m")
     draw_planar_robot(ax, robot, np.zeros(robot.n_links + 1), color="0.4")
     ax.plot(0, 0, "k*", ms=8, ls="none", label="system centroid")
-    ok = bool(ws.attachment_condition(robot))
+    ok = bool(paper.attachment_condition(robot))
     bound = float(robot.total_mass / robot.base_mass * (robot.reach - K[1:].sum()))
     ax.set_title(
         f"{title}\nb0 = {float(robot.base_attach):.2f} m; eq. (9) needs b0 >= {bound:.2f} m: {'holds' if ok else 'fails'}"
@@ -138,11 +144,11 @@ def fig5(out_dir: Path) -> list[Path]:
     plt = _setup()
     robot = umetani1990()
     phi = _fig3_posture()
-    ends = np.asarray(ws.straight_path_workspace(robot, phi, 360))
+    ends = np.asarray(paper.straight_path_workspace(robot, phi, 360))
     start = np.asarray(tip_position(robot, phi))
-    r3, r5 = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
-    r_piw = float(ws.path_independent_radius(robot))
-    study = ws.straight_path_study(robot, n_postures=200, n_directions=90, seed=1)
+    r3, r5 = float(analysis.maximum_reachable_radius(robot)), float(paper.guaranteed_radius(robot))
+    r_piw = float(analysis.path_independent_radius(robot))
+    study = paper.straight_path_study(robot, n_postures=200, n_directions=90, seed=1)
 
     # A: inside the singularity-free disk; B: in Area 4; C: in Area 3, outside Area 4, but
     # inside Area 4 turned about the centroid by some base reorientation delta.
@@ -152,7 +158,7 @@ def fig5(out_dir: Path) -> list[Path]:
 
     def inside_with_margin(points):
         """(P,) -1 outside by 0.25 m, +1 inside by 0.25 m, 0 near the boundary."""
-        near = np.asarray(ws.inside_straight_path_workspace(start, ends, points[:, None, :] + ring))
+        near = np.asarray(paper.inside_straight_path_workspace(start, ends, points[:, None, :] + ring))
         return np.where(near.all(-1), 1, np.where(~near.any(-1), -1, 0))
 
     grid = np.stack(np.meshgrid(np.linspace(-4.5, 4.5, 61), np.linspace(-4.5, 4.5, 61)), -1).reshape(-1, 2)
@@ -236,7 +242,7 @@ def singularities(out_dir: Path) -> list[Path]:
     """Where det J* vanishes (Table 1) against phi2 = 0 and eq. (8)."""
     plt = _setup()
     robot = umetani1990()
-    s = ws.dynamic_singularities(robot)
+    s = paper.dynamic_singularities(robot)
     phi1, phi2 = np.degrees(np.asarray(s.phi1)), np.degrees(np.asarray(s.phi2))
     folded = np.asarray(s.folded)
     radius = np.asarray(s.radius)
@@ -287,7 +293,7 @@ def singularities(out_dir: Path) -> list[Path]:
     ax = axes[1, 0]
     ax.plot(phi1[found & ~folded], radius[found & ~folded], "k.", ms=1.5, label="stretched branch")
     ax.plot(phi1[found & folded], radius[found & folded], ".", color="tab:purple", ms=1.5, label="folded branch")
-    r3, r5 = float(ws.maximum_reachable_radius(robot)), float(ws.guaranteed_radius(robot))
+    r3, r5 = float(analysis.maximum_reachable_radius(robot)), float(paper.guaranteed_radius(robot))
     r_piw = float(np.nanmin(radius))
     ax.axhline(r5, color="tab:green", ls="--", label=f"eq. (8): {r5:.3f} m")
     ax.axhline(r_piw, color="tab:red", ls="--", label=f"smallest singular radius: {r_piw:.3f} m")

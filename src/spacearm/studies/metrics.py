@@ -15,20 +15,20 @@ import jax.numpy as jnp
 
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, did_you_mean, integer, is_number
-from ..analysis import (
+from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
+from ..analysis.joint_box import check_joint_box
+from ..analysis.spatial_workspaces import reachable_radii, singular_radius
+from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
+from ..models.planar import PlanarRobot
+from ..models.planar.closed_forms import tip_coefficients
+from ..paper import (
     attachment_condition,
     check_average_options,
     normalized_areas,
     normalized_workspace_areas,
     straight_path_workspace,
 )
-from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
-from ..analysis.joint_box import check_joint_box
-from ..analysis.manipulability_average import normalized_wbar
-from ..analysis.spatial_workspaces import reachable_radii, singular_radius
-from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
-from ..models.planar import PlanarRobot
-from ..models.planar.closed_forms import tip_coefficients
+from ..paper.manipulability_average import normalized_wbar
 
 __all__ = [
     "METRICS",

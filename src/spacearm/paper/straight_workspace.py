@@ -12,12 +12,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..analysis.joint_box import joint_box
 from ..kinematics import manipulability, tip_position
 from ..models.family import require_family
 from ..models.planar.robot import PlanarRobot
 from ..models.planar.singularities import path_independent_radius
 from ..motion import straight_tip_path
-from .joint_box import joint_box
 from .workspaces import guaranteed_radius, kinematic_singularity_radius, maximum_reachable_radius
 
 __all__ = [

@@ -21,7 +21,7 @@ workspace             paper (n = 2)                               here, n links
 Where the closed forms stop holding:
 
 - Area 4 (Straight-Path) has none; it is integrated numerically
-  (`spacearm.analysis.straight_path_workspace.straight_path_workspace`).
+  (`spacearm.paper.straight_workspace.straight_path_workspace`).
 - Eq. (8) takes the straight-path boundary to be the kinematic singularity phi_2 = 0.
   The Generalized Jacobian J* does not lose rank there when b0 > 0; it loses rank on
   curves that pass through the collinear postures (phi_1, phi_2) in {0, pi} x {0, pi}
@@ -52,10 +52,10 @@ import itertools
 import jax
 import jax.numpy as jnp
 
+from ..analysis.joint_box import joint_box
 from ..models.family import require_family
 from ..models.planar.closed_forms import reachable_radii, tip_coefficients, tip_position
 from ..models.planar.robot import PlanarRobot
-from .joint_box import joint_box
 
 __all__ = [
     "attachment_condition",
