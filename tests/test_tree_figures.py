@@ -155,7 +155,7 @@ def test_view_kinematics_match_the_kernels(name, request, tmp_path):
     np.testing.assert_allclose([p["tips"] for p in poses], tips, rtol=0, atol=1e-9)
     for i in range(2):  # eager drawing: two postures
         drawing = spatial.robot_drawing(robot, q[i], R[i])
-        np.testing.assert_allclose(poses[i]["joints"], drawing.body_origins, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(poses[i]["bodies"], drawing.body_origins, rtol=0, atol=1e-9)
         np.testing.assert_allclose(poses[i]["segments"], drawing.segments, rtol=0, atol=1e-9)
         assert poses[i]["owner"] == drawing.segment_arm.tolist()
         np.testing.assert_allclose(poses[i]["corners"], drawing.bus_corners, rtol=0, atol=1e-9)
@@ -168,7 +168,7 @@ def test_view_command_draws_the_dual_ur5(tmp_path, capsys):
     page = tmp_path / "dual-ur5-servicer.html"
     assert "MB, self-contained" in capsys.readouterr().out
     data = json.loads(re.search(r"window\.SPACEARM = (\{.*?\});</script>", page.read_text()).group(1))
-    assert data["model"]["family"] == "tree" and data["model"]["arm_names"] == ["left", "right"]
+    assert data["model"]["tip_names"] == ["left", "right"]
     assert data["title"] == "dual-ur5-servicer: 12 joints, 2 arms on a 400 kg bus"
     # the extent holds every tip: the arms stretched straight out of the faces
     robot = sa.load_robot(os.path.join(CONFIGS, "dual-ur5-servicer.yaml"))

@@ -107,7 +107,7 @@ def test_page_kinematics_match_the_library(robots, tmp_path, name):
         + """
     const d = JSON.parse(require("fs").readFileSync(0, "utf8"));
     const M = window.SPACEARM.model;
-    console.log(JSON.stringify(d.q.map((q, i) => spacearmPose(M, q, d.R[i]).joints)));"""
+    console.log(JSON.stringify(d.q.map((q, i) => { const p = spacearmPose(M, q, d.R[i]); return p.joints.concat(p.tips); })));"""
     )
     joints = np.array(_node(program, json.dumps(dict(q=q.tolist(), R=R.tolist()))))
     if planar:
@@ -132,7 +132,7 @@ def test_replay_frames_reproduce_the_recorded_tip(robots, pages):
         _page_scripts(pages["replay"])
         + """
     const D = window.SPACEARM, F = D.frames;
-    console.log(JSON.stringify(F.q.map((q, k) => spacearmPose(D.model, q, F.R[k]).joints.slice(-1)[0])));"""
+    console.log(JSON.stringify(F.q.map((q, k) => spacearmPose(D.model, q, F.R[k]).tips[0])));"""
     )
     drawn = np.array(_node(program))
     _q, R, tip = _ur5_loop(robots["ur5-smallsat.yaml"])
@@ -292,7 +292,7 @@ def test_reach_html_replays_the_planar_plan(tmp_path, capsys):
         _page_scripts(out / "reach.html")
         + """
     const D = window.SPACEARM, F = D.frames;
-    console.log(JSON.stringify(F.q.map((q) => spacearmPose(D.model, q).joints.slice(-1)[0])));"""
+    console.log(JSON.stringify(F.q.map((q) => spacearmPose(D.model, q).tips[0])));"""
     )
     drawn = np.array(_node(program))
     with np.load(out / "reach.npz") as history:
@@ -341,7 +341,7 @@ def test_front_robots_are_the_picked_designs(front_pages):
         + """
     const D = window.SPACEARM, T = D.traces[0];
     console.log(JSON.stringify(T.x.map((x, j) => [x, spacearmPose(D.robots[T.customdata[j]].model,
-        D.robots[T.customdata[j]].posture, null).joints.slice(-1)[0]])));"""
+        D.robots[T.customdata[j]].posture, null).tips[0]])));"""
     )
     drawn = _node(program)
     problem, designs, objectives = front_pages["problem"], front_pages["designs"], front_pages["objectives"]
@@ -439,7 +439,7 @@ def test_shells_page_holds_each_designs_robot(shells_page):
         _page_scripts(shells_page["page"])
         + """
     const D = window.SPACEARM;
-    console.log(JSON.stringify(D.designs.map((d) => [spacearmPose(d.model, d.posture, null).joints.slice(-1)[0],
+    console.log(JSON.stringify(D.designs.map((d) => [spacearmPose(d.model, d.posture, null).tips[0],
         d.shells.map((s) => s.radius)])));"""
     )
     drawn = _node(program)

@@ -56,31 +56,23 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..figures.views import write_arm_view
+    from ..figures.views.model import posture_prismatic, view_model
     from ..figures.views.page import plotly_bundle
     from ..models import load_robot
-    from ..models.planar import PlanarRobot
-    from ..models.spatial import SpatialRobot
-    from ..models.tree import TreeRobot
 
     plotly_bundle()  # the extra is checked before any work (MissingViewExtra: exit 2)
     robot = load_robot(args.robot)
-    if not isinstance(robot, (PlanarRobot, SpatialRobot, TreeRobot)):
-        raise ConfigError(
-            f"{args.robot}: spacearm view draws planar, spatial and tree robots, not a {type(robot).__name__}"
-        )
-    planar = isinstance(robot, PlanarRobot)
-    count = robot.n_links + 1 if planar else robot.n_joints
+    model = view_model(robot)
     posture = None
     if args.posture is not None:
-        posture = comma_numbers(args.posture, count, "--posture")
+        posture = comma_numbers(args.posture, model["posture"]["size"], "--posture")
         if not args.radians:
-            prismatic = np.zeros(count, bool) if planar else np.array([k == "prismatic" for k in robot.joint_kinds])
-            posture = np.where(prismatic, posture, np.radians(posture))
+            posture = np.where(posture_prismatic(model), posture, np.radians(posture))
     attitude = None
     if args.attitude is not None:
-        if planar:
+        if model["posture"]["base_turn"] is not None:
             raise ConfigError(
-                "--attitude-rpy: applies to spatial robots; a planar posture starts with its base attitude"
+                "--attitude-rpy: this robot's posture holds its bus attitude; give it as the first --posture value"
             )
         attitude = comma_numbers(args.attitude, 3, "--attitude-rpy")
         if not args.radians:

@@ -12,7 +12,7 @@ Registered figures (``spacearm figures``), all for the UR5 on its 500 kg smallsa
   configs/three-arm-servicer.yaml), each arm in its own colour, the mount frames and the tips.
 
 One drawing helper serves one arm and many: `robot_drawing` gives the points of a
-spatial or tree robot in one posture (from the kernels' own passes), `draw_robot` draws them.
+robot in one posture (from its view model, the tree walk the HTML views run), `draw_robot` draws them.
 """
 
 from __future__ import annotations
@@ -21,21 +21,17 @@ import dataclasses
 import os
 from pathlib import Path
 
-import jax
 import jax.numpy as jnp
 import matplotlib.pyplot as plt
 import numpy as np
 
 from ..io import save_figure
 from ..models import load_robot
-from ..models.spatial import SpatialRobot, primitives
-from ..models.spatial.urdf import rpy_matrix
-from ..models.tree import TreeRobot, primitives as tree_primitives
+from ..models.view_model import view_model, view_pose
 from ..motion.attitude import log, spatial_joint_path_history
 from ..motion.spatial_paths import spatial_straight_tip_path
 from ..planning.spatial_reach import PHASE_LOOP, PHASE_STRAIGHT
 from . import figure
-from .views.model import arm_names, bus_box, joint_owners
 
 CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 CONFIG = CONFIGS / "ur5-smallsat.yaml"
@@ -49,15 +45,10 @@ def _robot():
 
 
 def arm_points(robot, q, rotation) -> tuple[np.ndarray, np.ndarray]:
-    """Joint origins then tip ``(n + 1, 3)``, and the bus centroid ``(3,)``, inertial axes
-    about the system centroid, m, for one posture ``q (n,)`` and bus attitude ``rotation``."""
-    state = primitives._chain_pass(robot, jnp.asarray(q, float))  # one posture: (n,) batch-last
-    centroid = np.array([float(x) for x in state.centroid])
-    origins = np.stack([np.asarray(c, float) for c in state.origins], axis=-1)  # (n, 3): joint origins
-    chain = np.vstack([origins, [[float(x) for x in state.tip]]])
-    bus = np.asarray(robot.base_com, float)
-    R = np.asarray(rotation, float)
-    return (chain - centroid) @ R.T, R @ (bus - centroid)
+    """Joint origins then tip ``(n + 1, 3)`` of a one-tip robot, and the bus centroid ``(3,)``,
+    inertial axes about the system centroid, m, for one posture ``q`` and bus attitude ``rotation``."""
+    pose = view_pose(view_model(robot), q, rotation)
+    return np.vstack([pose["joints"], pose["tips"][:1]]), pose["bus"]
 
 
 # The bus is drawn as its equivalent uniform box: same mass and principal moments.
@@ -71,7 +62,7 @@ class RobotDrawing:
     Attributes:
         bus: ``(3,)`` bus centroid.
         bus_corners: ``(8, 3)`` corners of the bus's equivalent uniform box (same mass and
-            principal moments; `spacearm.figures.views.model.bus_box`).
+            principal moments; `spacearm.models.view_model.box_corners`).
         mounts: ``(r, 3)`` root (arm mount) origins.  mount_axes: ``(r, 3, 3)`` their axes as columns.
         body_origins: ``(n, 3)`` body frame origins (joint origins, slid along prismatic axes;
             for a single spatial arm, the joint origins).
@@ -93,73 +84,23 @@ class RobotDrawing:
     arm_names: tuple[str, ...]
 
 
-@jax.jit
-def _tree_points(robot, q):
-    """Body frames, tip origins and the centroid's offset of a tree in one program (not op by op)."""
-    axes, origins = tree_primitives.body_frames(robot, q)
-    return axes, origins, tree_primitives.tip_pose(robot, q)[1], tree_primitives.tip(robot, q)[0]
-
-
-@jax.jit
-def _chain_points(robot, q):
-    """A single arm's centroid, joint origins ``(3, n)`` and tip in one program."""
-    state = primitives._chain_pass(robot, q)  # one posture: (n,) batch-last
-    return jnp.stack(state.centroid), jnp.stack(state.origins), jnp.stack(state.tip)
-
-
 def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
-    """The points drawn of ``robot`` at joints ``q (n,)`` and bus attitude ``rotation`` (3, 3)
-    (identity by default), from the kernels' forward passes; see `RobotDrawing`."""
-    R = np.eye(3) if rotation is None else np.asarray(rotation, float)
-    q = np.asarray(q, float)
-    if isinstance(robot, TreeRobot):
-        axes, origins, tips, offset = (np.asarray(x, float) for x in _tree_points(robot, q))
-        centroid = tips[0] - offset
-        mounts = np.asarray(robot.mount_xyz, float)
-        mount_axes = np.stack([rpy_matrix(np.asarray(rpy, float)) for rpy in robot.mount_rpy])
-        segments, arm = [], []
-        owner = joint_owners(robot)
-        for j, parent in enumerate(robot.parents):
-            if parent < 0:
-                start, start_axes = mounts[-1 - parent], mount_axes[-1 - parent]
-                offset = start_axes @ np.asarray(robot.joint_translation[j], float)
-            else:
-                start = origins[parent]
-                offset = axes[parent] @ np.asarray(robot.joint_translation[j], float)
-            joint = start + offset
-            segments.append((start, joint))
-            arm.append(owner[j])
-            if robot.joint_kinds[j] == "prismatic":
-                segments.append((joint, origins[j]))
-                arm.append(owner[j])
-        for t, body in enumerate(robot.tip_bodies):
-            segments.append((origins[body], tips[t]))
-            arm.append(t)
-        names = tuple(arm_names(robot))
-    elif isinstance(robot, SpatialRobot):
-        centroid, origins, tip = (np.asarray(x, float) for x in _chain_points(robot, q))
-        origins = origins.T
-        tips = tip[None]
-        mounts = np.asarray(robot.mount_xyz, float)[None]
-        mount_axes = rpy_matrix(np.asarray(robot.mount_rpy, float))[None]
-        chain = np.vstack([mounts, origins, tips])
-        segments = np.stack([chain[:-1], chain[1:]], axis=1)
-        arm = [0] * len(segments)
-        names = (robot.name,)
-    else:
-        raise TypeError(f"robot_drawing: a spatial or tree robot, got {type(robot).__name__}")
-    corners, _ = bus_box(robot)
-    place = lambda p: (np.asarray(p, float) - centroid) @ R.T  # bus frame to inertial, about the centroid
+    """The points drawn of ``robot`` at posture ``q`` (the joints ``(n,)`` of a spatial or tree
+    robot) and bus attitude ``rotation`` (3, 3) (identity by default), from its view model
+    (`spacearm.models.view_model.view_pose`, the tree walk the HTML views run; the tests hold
+    it to the kernels' body frames and tips); see `RobotDrawing`."""
+    model = view_model(robot)
+    pose = view_pose(model, q, rotation)
     return RobotDrawing(
-        bus=place(np.asarray(robot.base_com, float)),
-        bus_corners=place(corners),
-        mounts=place(mounts),
-        mount_axes=R @ mount_axes,
-        body_origins=place(origins),
-        segments=place(np.asarray(segments, float)),
-        segment_arm=np.asarray(arm, int),
-        tips=place(tips),
-        arm_names=names,
+        bus=pose["bus"],
+        bus_corners=pose["corners"],
+        mounts=pose["mounts"],
+        mount_axes=pose["mount_axes"],
+        body_origins=pose["bodies"],
+        segments=pose["segments"],
+        segment_arm=pose["owner"],
+        tips=pose["tips"],
+        arm_names=tuple(model["tip_names"]),
     )
 
 

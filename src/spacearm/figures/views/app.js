@@ -8,7 +8,10 @@
   var CONFIG = {displaylogo: false, responsive: true, showLink: false};
   var DEG = Math.PI / 180;
 
-  var M = D.model || {family: "spatial", joint_kinds: [], joint_names: []}, planar = M.family === "planar";
+  var M = D.model || {joint_kinds: [], joint_names: [], posture: {base_turn: null}, plane: null};
+  // A robot that moves in a plane is drawn flat, seen along the plane's normal; a posture
+  // that holds the bus attitude (base_turn) gets a slider for it instead of roll, pitch, yaw.
+  var plane = M.plane, turn = M.posture.base_turn;
   // Box corner c has signs (x, y, z) = bits (4, 2, 1); faces as two triangles each.
   var FACES = [[0,1,3],[0,3,2],[4,5,7],[4,7,6],[0,1,5],[0,5,4],[2,3,7],[2,7,6],[0,2,6],[0,6,4],[1,3,7],[1,7,5]];
   var EDGES = [[0,1],[0,2],[0,4],[1,3],[1,5],[2,3],[2,6],[3,7],[4,5],[4,6],[5,7],[6,7]];
@@ -26,20 +29,31 @@
   function segmentLine(segments) {
     var pts = []; segments.forEach(function (s) { pts.push(s[0], s[1], [null, null, null]); }); return cols(pts);
   }
-  // A tree's traces: bus, bus centroid to each mount, mount frames (x, y, z), the shared joints,
-  // each arm's links, the tips. Their number depends on the model only, never on the pose.
-  function treeTraces(pose, model) {
-    var bus = cols(pose.corners), edges = edgeLine(pose.corners), k = model.tip_bodies.length, L = 0.15;
-    var toMounts = segmentLine(pose.mounts.map(function (m) { return [pose.bus, m]; }));
-    var traces = [
+  // The joints on tip t's path from its mount, in order (the whole chain of a serial arm).
+  function tipPath(model, t) {
+    var path = [];
+    for (var b = model.tip_bodies[t]; b >= 0; b = model.parents[b]) path.unshift(b);
+    return path;
+  }
+  function busTraces(pose) {
+    var bus = cols(pose.corners), edges = edgeLine(pose.corners);
+    return [
       {type: "mesh3d", x: bus[0], y: bus[1], z: bus[2], i: FACES.map(function (f) { return f[0]; }),
        j: FACES.map(function (f) { return f[1]; }), k: FACES.map(function (f) { return f[2]; }),
        color: "#9aa7b8", opacity: 0.35, flatshading: true, name: "bus (equivalent box)", showlegend: true, hoverinfo: "name"},
       {type: "scatter3d", mode: "lines", x: edges[0], y: edges[1], z: edges[2], line: {color: "#56657a", width: 3},
-       name: "bus edges", showlegend: false, hoverinfo: "skip"},
+       name: "bus edges", showlegend: false, hoverinfo: "skip"}
+    ];
+  }
+  // Several tips: bus, bus centroid to each mount, mount frames (x, y, z), the shared joints,
+  // each arm's links, the tips. Their number depends on the model only, never on the pose.
+  function treeTraces(pose, model) {
+    var k = model.tip_bodies.length, L = 0.15;
+    var toMounts = segmentLine(pose.mounts.map(function (m) { return [pose.bus, m]; }));
+    var traces = busTraces(pose).concat([
       {type: "scatter3d", mode: "lines", x: toMounts[0], y: toMounts[1], z: toMounts[2], line: {color: "#56657a", width: 5},
        name: "bus centroid to the mounts", hoverinfo: "name"}
-    ];
+    ]);
     ["#d62728", "#2ca02c", "#1f77b4"].forEach(function (color, c) {
       var axis = segmentLine(pose.mounts.map(function (m, r) {
         var a = pose.mountAxes[r]; return [m, add3(m, [L * a[0][c], L * a[1][c], L * a[2][c]])];
@@ -54,45 +68,45 @@
       var color = t < 0 ? SHARED : ARM_COLORS[t % ARM_COLORS.length];
       traces.push({type: "scatter3d", mode: "lines+markers", x: xyz[0], y: xyz[1], z: xyz[2],
                    line: {color: color, width: 12}, marker: {size: 4, color: color},
-                   name: t < 0 ? "shared joints" : model.arm_names[t], hoverinfo: "name+x+y+z"});
+                   name: t < 0 ? "shared joints" : model.tip_names[t], hoverinfo: "name+x+y+z"});
     });
     var tips = cols(pose.tips);
     traces.push({type: "scatter3d", mode: "markers", x: tips[0], y: tips[1], z: tips[2],
                  marker: {size: 7, symbol: "diamond", color: pose.tips.map(function (p, t) { return ARM_COLORS[t % ARM_COLORS.length]; }),
                           line: {color: "black", width: 1}},
-                 name: "tips", text: model.arm_names, hoverinfo: "text+x+y+z"});
+                 name: "tips", text: model.tip_names, hoverinfo: "text+x+y+z"});
     return traces;
   }
   function add3(a, b) { return [a[0] + b[0], a[1] + b[1], a[2] + b[2]]; }
-  // The traces that move with the pose, in this order.
-  function poseTraces(pose, model) {
-    model = model || M;
-    if (model.family === "tree") return treeTraces(pose, model);
-    var bus = cols(pose.corners), edges = edgeLine(pose.corners), arm = cols(pose.joints);
-    var root = cols([pose.bus, pose.mount, pose.joints[0]]), tip = pose.joints[pose.joints.length - 1];
-    return [
-      {type: "mesh3d", x: bus[0], y: bus[1], z: bus[2], i: FACES.map(function (f) { return f[0]; }),
-       j: FACES.map(function (f) { return f[1]; }), k: FACES.map(function (f) { return f[2]; }),
-       color: "#9aa7b8", opacity: 0.35, flatshading: true, name: "bus (equivalent box)", showlegend: true, hoverinfo: "name"},
-      {type: "scatter3d", mode: "lines", x: edges[0], y: edges[1], z: edges[2], line: {color: "#56657a", width: 3},
-       name: "bus edges", showlegend: false, hoverinfo: "skip"},
+  // One tip: bus, bus centroid to the mount and joint 1, the links through the joint origins to the tip.
+  function armTraces(pose, model) {
+    var path = tipPath(model, 0), tip = pose.tips[0];
+    var points = path.map(function (j) { return pose.joints[j]; }).concat([tip]), arm = cols(points);
+    var mount = pose.mounts[-1 - model.parents[path[0]]], root = cols([pose.bus, mount, points[0]]);
+    return busTraces(pose).concat([
       {type: "scatter3d", mode: "lines+markers", x: root[0], y: root[1], z: root[2], line: {color: "#56657a", width: 6},
        marker: {size: 3, color: "#56657a"}, name: "bus centroid to joint 1", hoverinfo: "name"},
       {type: "scatter3d", mode: "lines+markers", x: arm[0], y: arm[1], z: arm[2], line: {color: "#1f77b4", width: 14},
        marker: {size: 6, color: "#0b3c68"}, name: "links (joint origins, tip)",
-       text: model.joint_names.concat(["tip"]), hoverinfo: "text+x+y+z"},
+       text: path.map(function (j) { return model.joint_names[j]; }).concat(["tip"]), hoverinfo: "text+x+y+z"},
       {type: "scatter3d", mode: "markers", x: [tip[0]], y: [tip[1]], z: [tip[2]], marker: {size: 7, color: "#d62728", symbol: "diamond"},
        name: "tip", hoverinfo: "name+x+y+z"}
-    ];
+    ]);
+  }
+  // The traces that move with the pose, in this order.
+  function poseTraces(pose, model) {
+    model = model || M;
+    return model.tip_bodies.length > 1 ? treeTraces(pose, model) : armTraces(pose, model);
   }
   function fixedTraces() {
     return [{type: "scatter3d", mode: "markers", x: [0], y: [0], z: [0], marker: {size: 5, color: "black", symbol: "x"},
              name: "system centroid (origin)", hoverinfo: "name"}];
   }
-  function sceneLayout(E, flat) {
+  function sceneLayout(E, plane) {
     return {aspectmode: "cube", xaxis: {range: [-E, E], title: {text: "x, m"}}, yaxis: {range: [-E, E], title: {text: "y, m"}},
             zaxis: {range: [-E, E], title: {text: "z, m"}},
-            camera: flat ? {eye: {x: 0, y: 0, z: 2.0}, up: {x: 0, y: 1, z: 0}, projection: {type: "orthographic"}}
+            camera: plane ? {eye: {x: 2.0 * plane.normal[0], y: 2.0 * plane.normal[1], z: 2.0 * plane.normal[2]},
+                            up: {x: 0, y: 1, z: 0}, projection: {type: "orthographic"}}
                          : {eye: {x: 1.4, y: -1.4, z: 1.0}}};
   }
   if (D.mode === "front") {
@@ -105,10 +119,9 @@
       readout.textContent = String(p.text || "").replace(/<br>/g, "\n");
       var r = D.robots && p.customdata !== undefined && p.customdata !== null ? D.robots[p.customdata] : null;
       if (!r) return;
-      var flat = r.model.family === "planar";
       Plotly.react(robotDiv, poseTraces(spacearmPose(r.model, r.posture, null), r.model).concat(fixedTraces()),
         {margin: {l: 0, r: 0, t: 20, b: 0}, showlegend: false, title: {text: "the picked design", font: {size: 12}},
-         scene: sceneLayout(r.extent, flat)}, CONFIG);
+         scene: sceneLayout(r.extent, r.model.plane)}, CONFIG);
     });
     document.body.dataset.spacearm = "ready";
     return;
@@ -145,7 +158,7 @@
   var layout = {
     margin: {l: 0, r: 0, t: 30, b: 0}, legend: {x: 0, y: 1},
     title: {text: D.title || "", font: {size: 14}},
-    scene: sceneLayout(E, planar)
+    scene: sceneLayout(E, plane)
   };
   var MOVING = [0, 1, 2, 3, 4];
   function restyle(traces, indices) {
@@ -155,13 +168,13 @@
   }
   function fmt(v) { return (v >= 0 ? " " : "") + v.toFixed(4); }
   function tipText(pose) {
-    if (pose.tips) {
+    if (pose.tips.length > 1) {
       return "tips about the system centroid, m" + pose.tips.map(function (t, i) {
-        return "\n" + M.arm_names[i] + "\n x " + fmt(t[0]) + "\n y " + fmt(t[1]) + "\n z " + fmt(t[2]);
+        return "\n" + M.tip_names[i] + "\n x " + fmt(t[0]) + "\n y " + fmt(t[1]) + "\n z " + fmt(t[2]);
       }).join("");
     }
-    var t = pose.joints[pose.joints.length - 1];
-    return "tip about the system centroid, m\n x " + fmt(t[0]) + "\n y " + fmt(t[1]) + (planar ? "" : "\n z " + fmt(t[2]));
+    var t = pose.tips[0];
+    return "tip about the system centroid, m\n x " + fmt(t[0]) + "\n y " + fmt(t[1]) + (plane ? "" : "\n z " + fmt(t[2]));
   }
   function slider(label, min, max, step, value, unit, onInput) {
     var div = document.createElement("div"); div.className = "control";
@@ -177,17 +190,16 @@
 
   if (D.mode === "arm") {
     var posture = D.posture.slice(), attitude = (D.rpy || [0, 0, 0]).slice();
-    var pose = function () { return spacearmPose(M, posture, planar ? null : rpy(attitude[0], attitude[1], attitude[2])); };
+    var pose = function () { return spacearmPose(M, posture, turn ? null : rpy(attitude[0], attitude[1], attitude[2])); };
     var update = function () { var p = pose(); restyle(poseTraces(p), MOVING); readout.textContent = tipText(p); };
     var first = pose();
     var moving = poseTraces(first);
     MOVING = moving.map(function (t, i) { return i; });
     Plotly.newPlot(plot, moving.concat(fixedTraces()), layout, CONFIG);
     readout.textContent = tipText(first);
-    var offset = 0;
-    if (planar) {
-      slider("phi0 (base attitude)", -180, 180, 0.5, posture[0] / DEG, "deg", function (v) { posture[0] = v * DEG; update(); });
-      offset = 1;
+    var offset = M.posture.joint_offset;
+    if (turn) {
+      slider(turn.name, -180, 180, 0.5, posture[turn.index] / DEG, "deg", function (v) { posture[turn.index] = v * DEG; update(); });
     }
     M.joint_names.forEach(function (name, i) {
       var prismatic = M.joint_kinds[i] === "prismatic", lo = M.lower[i], hi = M.upper[i];
@@ -199,7 +211,7 @@
         slider(name, lo, hi, 0.5, posture[i + offset] / DEG, "deg", function (v) { posture[i + offset] = v * DEG; update(); });
       }
     });
-    if (!planar) {
+    if (!turn) {
       ["bus roll", "bus pitch", "bus yaw"].forEach(function (name, i) {
         slider(name, -180, 180, 0.5, attitude[i] / DEG, "deg", function (v) { attitude[i] = v * DEG; update(); });
       });
@@ -213,8 +225,8 @@
     var F = D.frames, count = F.q.length, frame = 0, timer = null;
     var poseAt = function (k) { return spacearmPose(M, F.q[k], F.R ? F.R[k] : null); };
     var tip3 = F.tip.map(function (t) { return [t[0], t[1], t.length > 2 ? t[2] : 0]; });
-    var turn = function (k) {
-      if (planar) return (F.q[k][0] - F.q[0][0]) / DEG;
+    var turnedBy = function (k) {
+      if (turn) return (F.q[k][turn.index] - F.q[0][turn.index]) / DEG;
       var a = F.R[0], b = F.R[k], tr = 0;
       for (var i = 0; i < 3; i++) for (var j = 0; j < 3; j++) tr += a[j][i] * b[j][i];
       return Math.acos(Math.max(-1, Math.min(1, (tr - 1) / 2))) / DEG;
@@ -240,7 +252,7 @@
       var traces = poseTraces(p); traces.push(t);
       restyle(traces, MOVING.concat([TRACE]));
       readout.textContent = "frame " + (k + 1) + " of " + count + (F.phase ? " (" + F.phase[k] + ")" : "") +
-        "\nbus turned " + turn(k).toFixed(3) + " deg from the start\n" + tipText(p);
+        "\nbus turned " + turnedBy(k).toFixed(3) + " deg from the start\n" + tipText(p);
     };
     Plotly.newPlot(plot, firstTraces.concat(fixedTraces(), extra), layout, CONFIG);
     var play = document.createElement("button"); play.textContent = "play"; controls.appendChild(play);

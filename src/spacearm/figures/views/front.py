@@ -14,8 +14,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ...models.planar import PlanarRobot
-from .model import chain_model, scene_extent
+from .model import view_model
 from .page import write_page
 
 __all__ = ["MAX_ROBOTS", "front_view", "write_front_view"]
@@ -61,8 +60,8 @@ def write_front_view(
     traces, models, index = [], [], {}
     for row, robot in (robots or {}).items():
         index[row] = len(models)
-        posture = np.zeros(robot.n_links + 1 if isinstance(robot, PlanarRobot) else robot.n_joints)
-        models.append(dict(model=chain_model(robot), posture=posture, extent=scene_extent(robot)))
+        model = view_model(robot)
+        models.append(dict(model=model, posture=np.zeros(model["posture"]["size"]), extent=model["extent"]))
     for method, (designs, objectives) in fronts.items():
         designs, objectives = np.asarray(designs, float), np.asarray(objectives, float)
         order = np.argsort(objectives[:, 0])

@@ -12,8 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._core.errors import ConfigError
-from ...models.planar import PlanarRobot
-from .model import chain_model, scene_extent
+from .model import view_model
 from .page import write_page
 
 __all__ = ["replay_from_npz", "write_replay_view"]
@@ -22,24 +21,28 @@ __all__ = ["replay_from_npz", "write_replay_view"]
 def write_replay_view(
     robot,
     path: str | Path,
+    postures=None,
     *,
-    joints=None,
     base_rotation=None,
-    phi=None,
     tip,
     target=None,
     phase=None,
     seconds: float = 6.0,
     title: str | None = None,
+    joints=None,
+    phi=None,
 ) -> Path:
     """Write the replay of a maneuver.
 
     Args:
-        robot: the planar or spatial robot that moved (one design).
+        robot: the robot that moved (one design).
         path: the HTML file to write.
-        joints: spatial robots: ``(k, n)`` joint values along the maneuver, rad (m for prismatic joints).
-        base_rotation: spatial robots: ``(k, 3, 3)`` the bus attitude at each frame.
-        phi: planar robots: ``(k, n+1)`` postures [phi0, phi1..phin], rad.
+        postures: ``(k, size)`` the postures along the maneuver, laid out as the robot's family
+            lays them out (``view_model(robot)["posture"]``: a planar arm's [phi0, phi1..phin];
+            a spatial or tree robot's joints), rad (m for prismatic joints). ``joints`` and
+            ``phi`` are other names for it (what spatial and planar histories call it).
+        base_rotation: ``(k, 3, 3)`` the bus attitude at each frame, for robots whose posture
+            does not hold it (identity when absent).
         tip: ``(k, 2)`` or ``(k, 3)`` the tip about the system centroid, inertial axes, m.
         target: ``(2,)`` or ``(3,)`` the point reached, drawn when given.
         phase: ``(k,)`` a label per frame (e.g. ``"loop"``, ``"straight"``), shown with the frame; the
@@ -50,31 +53,22 @@ def write_replay_view(
         MissingViewExtra: plotly is not installed.
         ValueError: the arrays do not fit the robot or each other.
     """
-    model = chain_model(robot)
-    n = len(model["joint_kinds"])
+    model = view_model(robot)
+    given = [x for x in (postures, joints, phi) if x is not None]
+    if len(given) != 1:
+        raise ValueError("postures: give the posture history (k, size) once (postures, joints or phi)")
+    q, size = np.asarray(given[0], float), model["posture"]["size"]
+    if q.ndim != 2 or q.shape[1] != size:
+        raise ValueError(f"postures: expected shape (k, {size}), got {q.shape}")
+    R = _attitudes(model, base_rotation, len(q))
     tip = np.asarray(tip, float)
-    if isinstance(robot, PlanarRobot):
-        if phi is None:
-            raise ValueError("phi: a planar replay needs the postures (k, n+1)")
-        q, R = np.asarray(phi, float), None
-        if q.ndim != 2 or q.shape[1] != n + 1:
-            raise ValueError(f"phi: expected shape (k, {n + 1}), got {q.shape}")
-    else:
-        if joints is None:
-            raise ValueError("joints: a spatial replay needs the joint history (k, n)")
-        q = np.asarray(joints, float)
-        if q.ndim != 2 or q.shape[1] != n:
-            raise ValueError(f"joints: expected shape (k, {n}), got {q.shape}")
-        R = np.broadcast_to(np.eye(3), (len(q), 3, 3)) if base_rotation is None else np.asarray(base_rotation, float)
-        if R.shape != (len(q), 3, 3):
-            raise ValueError(f"base_rotation: expected shape ({len(q)}, 3, 3), got {R.shape}")
     if tip.ndim != 2 or tip.shape[0] != len(q):
         raise ValueError(f"tip: expected {len(q)} rows, got shape {tip.shape}")
     frames = dict(
         q=q, R=R, tip=tip, phase=None if phase is None else [_phase_name(p) for p in np.asarray(phase).ravel()]
     )
     reach = float(np.max(np.linalg.norm(tip, axis=-1)))
-    extent = max(scene_extent(robot), 1.1 * reach, 0.0 if target is None else 1.1 * float(np.linalg.norm(target)))
+    extent = max(model["extent"], 1.1 * reach, 0.0 if target is None else 1.1 * float(np.linalg.norm(target)))
     data = dict(
         mode="replay",
         model=model,
@@ -91,6 +85,21 @@ def write_replay_view(
     return write_page(path, title=f"spacearm replay: {model['name']}", note=note, data=data)
 
 
+def _attitudes(model: dict, base_rotation, count: int):
+    """The ``(count, 3, 3)`` bus attitudes a replay carries, or ``None`` where the posture holds
+    the attitude (the page turns the bus from the posture itself)."""
+    if model["posture"]["base_turn"] is not None:
+        if base_rotation is not None:
+            raise ValueError("base_rotation: this robot's posture holds its bus attitude; give the postures alone")
+        return None
+    if base_rotation is None:
+        return np.broadcast_to(np.eye(3), (count, 3, 3))
+    R = np.asarray(base_rotation, float)
+    if R.shape != (count, 3, 3):
+        raise ValueError(f"base_rotation: expected shape ({count}, 3, 3), got {R.shape}")
+    return R
+
+
 # The integer phases of spacearm.planning.reach.ReachPlan.phase.
 _PHASES = {0: "repositioning move", 1: "reorientation loop", 2: "straight tip path"}
 
@@ -102,33 +111,33 @@ def _phase_name(value) -> str:
 
 
 def replay_from_npz(robot, npz_path: str | Path, path: str | Path, **options) -> Path:
-    """The replay of a ``reach.npz`` history: keys ``joints`` and ``base_rotation``
-    (spatial) or ``phi`` (planar), and ``tip``; the planar ``postures_rad`` and ``tips_m``
-    are read too, and ``target_m`` and ``phase`` when present.
+    """The replay of a ``reach.npz`` history: the postures (the first of the keys
+    ``postures_rad``, ``phi`` and ``joints`` with the robot's posture size), the tip (``tip`` or ``tips_m``), and ``base_rotation``, ``target``
+    (or ``target_m``) and ``phase`` when present.
 
     Raises:
-        ConfigError: the file holds no joint history (naming the file and the keys).
+        ConfigError: the file holds no history (naming the file and the keys).
     """
     with np.load(npz_path) as archive:
         arrays = {key: archive[key] for key in archive.files}
+    # The first of these keys that holds whole postures of this robot: a planar history keeps
+    # its joints apart from its postures, which lead with the bus attitude.
+    size = view_model(robot)["posture"]["size"]
+    keys = [key for key in ("postures_rad", "phi", "joints") if np.shape(arrays.get(key))[1:] == (size,)]
+    postures = arrays[keys[0]] if keys else None
     tip = arrays.get("tip", arrays.get("tips_m"))
-    target = arrays.get("target", arrays.get("target_m"))
-    phase = arrays.get("phase")
-    if isinstance(robot, PlanarRobot):
-        phi = arrays.get("phi", arrays.get("postures_rad"))
-        if phi is None or tip is None:
-            raise ConfigError(f"{npz_path}: no history to replay (needs 'phi' or 'postures_rad', and 'tip')")
-        return write_replay_view(robot, path, phi=phi, tip=tip, target=target, phase=phase, **options)
-    joints = arrays.get("joints")
-    if joints is None or tip is None:
-        raise ConfigError(f"{npz_path}: no history to replay (needs 'joints', 'base_rotation' and 'tip')")
+    if postures is None or tip is None:
+        raise ConfigError(
+            f"{npz_path}: no history to replay (needs the postures, 'joints', 'phi' or 'postures_rad', "
+            "and the tip, 'tip' or 'tips_m')"
+        )
     return write_replay_view(
         robot,
         path,
-        joints=joints,
+        postures,
         base_rotation=arrays.get("base_rotation"),
         tip=tip,
-        target=target,
-        phase=phase,
+        target=arrays.get("target", arrays.get("target_m")),
+        phase=arrays.get("phase"),
         **options,
     )

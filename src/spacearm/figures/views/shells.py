@@ -16,9 +16,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ...models.spatial import SpatialRobot
 from ...studies.designs import build_designs
-from .model import chain_model, scene_extent
+from .model import view_model
 from .page import view_extra_available, write_page
 
 __all__ = ["MAX_DESIGNS", "SHELL_COLUMNS", "shells_view", "write_shells_view"]
@@ -37,13 +36,15 @@ def write_shells_view(path: str | Path, robots, radii: Mapping[str, np.ndarray],
 
     Args:
         path: the HTML file to write.
-        robots: one spatial robot per design.
+        robots: one robot per design (robots that move in 3-D: the shells are spheres).
         radii: column name of `SHELL_COLUMNS` -> ``(designs,)`` radius, m (inf or NaN: none drawn).
         labels: one line per design (its axis values).
         title: the page title.
     """
-    designs = []
+    designs, extents = [], []
     for k, robot in enumerate(robots):
+        model = view_model(robot)
+        extents.append(model["extent"])
         shells = []
         for column, values in radii.items():
             value = float(np.asarray(values)[k])
@@ -52,10 +53,10 @@ def write_shells_view(path: str | Path, robots, radii: Mapping[str, np.ndarray],
                 dict(name=f"{name}: {value:.4g} m", radius=value if np.isfinite(value) else None, color=colour)
             )
         designs.append(
-            dict(model=chain_model(robot), posture=np.zeros(robot.n_joints), label=str(labels[k]), shells=shells)
+            dict(model=model, posture=np.zeros(model["posture"]["size"]), label=str(labels[k]), shells=shells)
         )
     extent = max(
-        [scene_extent(robot) for robot in robots]
+        extents
         + [1.1 * float(np.nanmax(np.where(np.isfinite(v), v, np.nan))) for v in radii.values() if np.isfinite(v).any()]
     )
     note = (
@@ -68,10 +69,12 @@ def write_shells_view(path: str | Path, robots, radii: Mapping[str, np.ndarray],
 
 
 def shells_view(spec, out_dir: Path, table: Mapping[str, np.ndarray]) -> list[Path]:
-    """``shells.html`` for a spatial sweep with a shell column (a `spacearm.studies.runner.SweepOutput`);
-    nothing otherwise, or without the ``view`` extra. At most `MAX_DESIGNS` designs, evenly spaced."""
+    """``shells.html`` for a sweep with a shell column (a `spacearm.studies.runner.SweepOutput`)
+    of a robot that moves in 3-D (its view model has no ``plane``: a planar arm's radii are disks,
+    drawn in its own figures); nothing otherwise, or without the ``view`` extra. At most
+    `MAX_DESIGNS` designs, evenly spaced."""
     columns = [c for c in SHELL_COLUMNS if c in table]
-    if not columns or not isinstance(spec.robot, SpatialRobot) or not view_extra_available():
+    if not columns or view_model(spec.robot)["plane"] is not None or not view_extra_available():
         return []
     robot, points = build_designs(spec)
     count = spec.n_designs
