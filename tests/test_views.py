@@ -142,6 +142,28 @@ def test_replay_frames_reproduce_the_recorded_tip(robots, pages):
     assert angle > 0.5  # the loop turns the bus: the attitude is part of what is checked
 
 
+@pytest.mark.parametrize("name", CONFIGS)
+def test_view_model_is_one_tree_for_every_family(robots, name):
+    """The model a page holds names no family: the same keys for every robot, and its NumPy
+    walk (`view_pose`, the twin of fk.js) puts the tip where `spacearm.tip_position` does."""
+    from spacearm.models.view_model import view_model, view_pose
+
+    robot = robots[name]
+    model = view_model(robot)
+    assert "family" not in model and set(model) == set(view_model(robots["ur5-smallsat.yaml"]))
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-np.pi, np.pi, size=(4, model["posture"]["size"]))
+    R = np.stack([rpy_matrix(r) for r in rng.uniform(-np.pi, np.pi, size=(4, 3))])
+    if model["posture"]["base_turn"] is None:
+        expected = np.asarray(sa.tip_position(robot, q, base_rotation=R))
+    else:  # the posture holds the bus attitude
+        expected, R = np.asarray(sa.tip_position(robot, q)), [None] * len(q)
+    drawn = np.stack([view_pose(model, qk, Rk)["tips"][0] for qk, Rk in zip(q, R, strict=True)])
+    np.testing.assert_allclose(drawn[:, : expected.shape[-1]], expected, rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match="one design"):
+        view_model(jax.tree_util.tree_map(lambda leaf: np.stack([leaf, leaf]), robot))
+
+
 def test_replay_from_npz_reads_both_layouts(robots, tmp_path):
     """Planar reach.npz (postures_rad, tips_m) and the spatial history keys (joints, base_rotation, tip)."""
     planar, ur5 = robots["umetani1990.yaml"], robots["ur5-smallsat.yaml"]
