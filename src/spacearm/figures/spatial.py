@@ -57,15 +57,14 @@ BUS_LABEL = "bus (the uniform box of its mass and inertia)"
 
 @dataclasses.dataclass(frozen=True)
 class RobotDrawing:
-    """A spatial or tree robot in one posture as drawn: inertial axes about the system centroid, m.
+    """A robot in one posture as drawn: inertial axes about the system centroid, m.
 
     Attributes:
         bus: ``(3,)`` bus centroid.
         bus_corners: ``(8, 3)`` corners of the bus's equivalent uniform box (same mass and
             principal moments; `spacearm.models.view_model.box_corners`).
         mounts: ``(r, 3)`` root (arm mount) origins.  mount_axes: ``(r, 3, 3)`` their axes as columns.
-        body_origins: ``(n, 3)`` body frame origins (joint origins, slid along prismatic axes;
-            for a single spatial arm, the joint origins).
+        body_origins: ``(n, 3)`` body frame origins (joint origins, slid along prismatic axes).
         segments: ``(s, 2, 3)`` links as segments joint to joint: parent body (or mount) to
             joint origin, joint origin to body origin where a prismatic joint slid, and body to tip.
         segment_arm: ``(s,)`` the arm (tip index) each segment belongs to, -1 when several share it.
@@ -85,8 +84,9 @@ class RobotDrawing:
 
 
 def robot_drawing(robot, q, rotation=None) -> RobotDrawing:
-    """The points drawn of ``robot`` at posture ``q`` (the joints ``(n,)`` of a spatial or tree
-    robot) and bus attitude ``rotation`` (3, 3) (identity by default), from its view model
+    """The points drawn of ``robot`` at posture ``q`` (laid out as ``view_model(robot)["posture"]``
+    says: the joints ``(n,)`` of a serial or tree arm) and bus attitude ``rotation`` (3, 3)
+    (identity by default; a posture that holds the attitude turns the bus itself), from its view model
     (`spacearm.models.view_model.view_pose`, the tree walk the HTML views run; the tests hold
     it to the kernels' body frames and tips); see `RobotDrawing`."""
     model = view_model(robot)
@@ -111,7 +111,7 @@ SHARED_COLOR = "0.35"  # joints that move several tips (a shared torso or turret
 def draw_robot(
     ax, robot, q, rotation=None, *, colors=None, alpha=1.0, label=None, bus_half=None, frames=True, frame_length=0.15
 ) -> RobotDrawing:
-    """Draw a spatial or tree robot in one posture on 3-D axes; returns what was drawn.
+    """Draw a robot in one posture on 3-D axes; returns what was drawn.
 
     The bus as a box (its equivalent uniform box from mass and inertia, or a cube of half
     edge ``bus_half`` about its centroid), a line from the bus centroid to each mount, the
@@ -296,7 +296,7 @@ def fig_spatial_straight(out_dir: Path) -> list[Path]:
 
 
 def _drawn_points(robot, q, R) -> np.ndarray:
-    """Every point drawn for one posture (spatial or tree robot): links, tips and the bus box's corners."""
+    """Every point drawn for one posture: links, tips and the bus box's corners."""
     return drawn_points(robot_drawing(robot, q, R))
 
 
