@@ -48,7 +48,8 @@ def register(subparsers) -> None:
         dest="attitude",
         default=None,
         metavar="R,P,Y",
-        help="spatial robots: the first bus attitude as roll, pitch, yaw (URDF convention), degrees",
+        help="the first bus attitude as roll, pitch, yaw (URDF convention), degrees, for robots whose posture "
+        "does not hold it (a planar posture starts with its base attitude)",
     )
     parser.add_argument("--radians", action="store_true", help="read --posture and --attitude-rpy in radians")
     parser.add_argument("--out", default="results/view", help="output folder (default results/view)")

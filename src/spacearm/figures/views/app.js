@@ -47,7 +47,7 @@
   }
   // Several tips: bus, bus centroid to each mount, mount frames (x, y, z), the shared joints,
   // each arm's links, the tips. Their number depends on the model only, never on the pose.
-  function treeTraces(pose, model) {
+  function armsTraces(pose, model) {
     var k = model.tip_bodies.length, L = 0.15;
     var toMounts = segmentLine(pose.mounts.map(function (m) { return [pose.bus, m]; }));
     var traces = busTraces(pose).concat([
@@ -96,7 +96,7 @@
   // The traces that move with the pose, in this order.
   function poseTraces(pose, model) {
     model = model || M;
-    return model.tip_bodies.length > 1 ? treeTraces(pose, model) : armTraces(pose, model);
+    return model.tip_bodies.length > 1 ? armsTraces(pose, model) : armTraces(pose, model);
   }
   function fixedTraces() {
     return [{type: "scatter3d", mode: "markers", x: [0], y: [0], z: [0], marker: {size: 5, color: "black", symbol: "x"},
@@ -245,7 +245,7 @@
         marker: {size: 6, color: "#2ca02c", symbol: "circle-open"}, name: "target", hoverinfo: "name+x+y+z"});
     }
     var firstTraces = poseTraces(poseAt(0));
-    MOVING = firstTraces.map(function (t, i) { return i; });  // a tree has more traces than one arm
+    MOVING = firstTraces.map(function (t, i) { return i; });  // several arms draw more traces than one
     var TRACE = MOVING.length + 2;
     var show = function (k) {
       frame = k; var p = poseAt(k), t = trace(k);
