@@ -156,6 +156,11 @@ class RobotFamily:
         family writes one (planar); ``None``: the file's own mapping stands for it."""
         return None
 
+    def view_model(self, robot) -> dict:
+        """The robot (one design) as the family-free tree of bodies a view draws
+        (`spacearm.models.view_model`: mounts, joints, tips, bus box, posture layout)."""
+        raise NotImplementedError(f"the {self.name} family writes no view model")
+
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 
     def tip_shell(self, robot) -> tuple[float, float]:

@@ -37,6 +37,7 @@ from .closed_forms import (
 from .robot import PlanarRobot
 from .schema import robot_to_mapping
 from .singularities import two_link_path_independent_radius
+from .view import planar_view_model
 
 __all__ = ["PLANAR", "PlanarFamily"]
 
@@ -75,6 +76,10 @@ class PlanarFamily(RobotFamily):
     def normal_form(self, robot: PlanarRobot) -> dict:
         """The ``robot:`` mapping of the design's numbers (`spacearm.models.planar.schema.robot_to_mapping`)."""
         return robot_to_mapping(robot)
+
+    def view_model(self, robot: PlanarRobot) -> dict:
+        """The arm as the view tree (`spacearm.models.planar.view`): joints about z, the bus turned by phi0."""
+        return planar_view_model(robot)
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links

@@ -46,6 +46,7 @@ from .primitives import (
 )
 from .robot import SpatialRobot
 from .shell import tip_shell
+from .view import spatial_view_model
 
 __all__ = ["SPATIAL", "SpatialFamily"]
 
@@ -151,6 +152,10 @@ class SpatialFamily(RobotFamily):
     def tip_shell(self, robot: SpatialRobot) -> tuple[float, float]:
         """The virtual manipulator's shell (`spacearm.models.spatial.shell.tip_shell`)."""
         return tip_shell(robot)
+
+    def view_model(self, robot: SpatialRobot) -> dict:
+        """The arm as the one-tip view tree (`spacearm.models.spatial.view`)."""
+        return spatial_view_model(robot)
 
 
 SPATIAL = SpatialFamily()

@@ -48,6 +48,7 @@ from .primitives import (
 )
 from .robot import TreeRobot
 from .shell import tip_shell
+from .view import tree_view_model
 
 __all__ = ["TREE", "TreeFamily"]
 
@@ -229,6 +230,10 @@ class TreeFamily(RobotFamily):
         """The tree's virtual-manipulator shell of the active tip (`spacearm.models.tree.shell`)."""
         _require_tip(robot, "the tip shell")
         return tip_shell(robot, robot.active_tip)
+
+    def view_model(self, robot: TreeRobot) -> dict:
+        """The tree as the view tree (`spacearm.models.tree.view`)."""
+        return tree_view_model(robot)
 
     def loop_holonomy(
         self, robot: TreeRobot, waypoints: jax.Array, *, steps: int = DEFAULT_STEPS, order=DEFAULT_ORDER
