@@ -95,7 +95,7 @@ def test_straight_field_takes_one_chain_pass_and_equals_the_two_pass_field(ur5):
     )
     field = jax.jit(lambda d, y: generic_straight_field(ur5, d, jnp.asarray(1.0))(y))
     maps = np.asarray(maps_of(ur5, q))
-    np.testing.assert_array_equal(maps[:, :3], np.asarray(jstar(ur5, q))[:, :3])
+    np.testing.assert_allclose(maps[:, :3], np.asarray(jstar(ur5, q))[:, :3], rtol=0, atol=1e-15)
     np.testing.assert_allclose(maps[:, 3:], np.asarray(twist_map(ur5, q))[:, 3:], rtol=0, atol=1e-15)
     # the same pass also gives a path's end quantities: fixed-base J_v and the tip
     both, fixed_v, tip = (np.asarray(x) for x in maps_and_ends(ur5, q))

@@ -1,8 +1,8 @@
 """Per-posture primitives of the tree family: one design, one posture, no batch axes.
 
-The same pass as the spatial chain (`spacearm.models.spatial.primitives`, whose scalar
-helpers and forward/backward steps are imported, not copied), walked over a tree:
-the joints split into segments, maximal runs where joint j hangs from body j-1. The
+One forward and one backward pass over the tree, written in the scalar algebra of
+`spacearm.models.tree.algebra` (its forward and backward steps per joint): the joints
+split into segments, maximal runs where joint j hangs from body j-1. The
 forward pass scans each segment from its parent frame (a root's mount frame, or a
 body of an earlier segment); the backward pass walks the segments in reverse order,
 each body adding the totals (first mass moment, inertia about the bus-frame origin)
@@ -34,7 +34,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..spatial.primitives import (
+from .algebra import (
     _add,
     _axis_frame,
     _backward_step,
@@ -70,13 +70,17 @@ __all__ = [
     "fixed_base_jacobian_and_tips",
     "generalized_jacobian",
     "jacobians",
+    "joint_points",
     "manipulability",
     "mass_matrix",
     "momentum_map",
     "posture_quantities",
     "segments",
+    "straight_maps_and_ends",
     "straight_path_maps",
     "tip",
+    "tip_and_fixed_base_jacobian",
+    "tip_and_generalized_jacobian",
     "tip_frames",
     "tip_pose",
     "tree_constants",
@@ -495,6 +499,40 @@ def _arm_inertia_minor(robot, q):
     return _mass_from(robot, state) - _outer(state.momentum, state.momentum) / state.mass - _outer(coupling, solved)
 
 
+def _centred_tip_rows(state, shape):
+    """``(k, 3, *shape)``: the tips about the system centroid, repeated over the columns."""
+    tips = _sub(state.tips, tuple(c[None] for c in state.centroid))  # (k, *batch)
+    return jnp.stack([jnp.broadcast_to(t[:, None], shape[:1] + shape[2:]) for t in tips], axis=1)
+
+
+def _jstar_tips_minor(robot, q):
+    """J* of every tip (rows 0-5) and the tips about the centroid (rows 6-8, the same in every
+    column), ``(k, 9, n, *batch)``, from one pass."""
+    state = _tree_pass(robot, q)
+    jstar = _jstar_from(robot, state)
+    return jnp.concatenate([jstar, _centred_tip_rows(state, jstar.shape)], axis=1)
+
+
+def _fixed_centred_minor(robot, q):
+    """Fixed-base twists of every tip (rows 0-5) and the tips about the centroid (rows 6-8),
+    ``(k, 9, n, *batch)``, from one pass."""
+    state = _tree_pass(robot, q)
+    fixed = _tip_rows(*_fixed_columns(robot, state))
+    return jnp.concatenate([fixed, _centred_tip_rows(state, fixed.shape)], axis=1)
+
+
+def _straight_ends_minor(robot, q):
+    """`_straight_maps_minor`'s rows (6k + 3), then every tip's fixed-base J_v (3k rows) and the
+    tips about the centroid (3k rows, the same in every column), from one pass."""
+    state = _tree_pass(robot, q)
+    jstar = _jstar_from(robot, state)
+    _, solved = _coupling(state)
+    fixed_v = _tip_rows(_fixed_columns(robot, state)[0])
+    flat = lambda x: x.reshape((-1,) + x.shape[2:])
+    parts = [flat(jstar), _rows(_scale(-1.0, solved)), flat(fixed_v), flat(_centred_tip_rows(state, fixed_v.shape))]
+    return jnp.concatenate(parts, axis=0)
+
+
 # Primitives (one design, one posture; also any leading batch of postures) -----------------
 
 tip = batched(_tip_minor, 2)
@@ -529,6 +567,46 @@ base_twist_map.__doc__ = """``(..., 6, n)`` C(q): bus twist [v of bus centroid; 
 straight_path_maps = batched(_straight_maps_minor, 2)
 straight_path_maps.__doc__ = """``(..., 6k + 3, n)``: rows 6t..6t+5 J* [v; w] of tip t, the last 3 rows C_w (bus
 angular velocity per joint rate), bus axes, from one pass over the tree (what straight tip and pose paths need)."""
+
+_jstar_tips = batched(_jstar_tips_minor, 3)
+_fixed_centred = batched(_fixed_centred_minor, 3)
+_straight_ends = batched(_straight_ends_minor, 2)
+
+
+def tip_and_generalized_jacobian(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``(..., k, 6, n)`` J* and ``(..., k, 3)`` tips about the system centroid, bus axes, from one
+    pass per posture (equal to `generalized_jacobian` and `tip`; for code that needs both)."""
+    stacked = _jstar_tips(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:, 0]
+
+
+def tip_and_fixed_base_jacobian(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``(..., k, 6, n)`` fixed-base Jacobians and ``(..., k, 3)`` tips about the system centroid,
+    bus axes, from one pass per posture (equal to `fixed_base_jacobian` and `tip`)."""
+    stacked = _fixed_centred(robot, q)
+    return stacked[..., :6, :], stacked[..., 6:, 0]
+
+
+def straight_maps_and_ends(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """`straight_path_maps` ``(..., 6k + 3, n)``, every tip's fixed-base J_v ``(..., k, 3, n)`` and
+    the tips about the system centroid ``(..., k, 3)``, bus axes, from one pass per posture: a
+    straight path's field and its end quantities."""
+    k, n = robot.n_tips, robot.n_joints
+    stacked = _straight_ends(robot, q)
+    maps, fixed_v, tips = (
+        stacked[..., : 6 * k + 3, :],
+        stacked[..., 6 * k + 3 : 9 * k + 3, :],
+        stacked[..., 9 * k + 3 :, 0],
+    )
+    return maps, fixed_v.reshape(fixed_v.shape[:-2] + (k, 3, n)), tips.reshape(tips.shape[:-1] + (k, 3))
+
+
+def joint_points(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """One posture: the system centroid ``(3,)``, the joint origins ``(n, 3)`` and the tip origins
+    ``(k, 3)``, bus frame, m, from the kernels' pass (what a drawing of the robot needs)."""
+    state = _tree_pass(robot, jnp.asarray(q))
+    return jnp.stack(state.centroid), jnp.stack(state.origins, axis=-1), jnp.stack(state.tips, axis=-1)
+
 
 mass_matrix = batched(_mass_minor, 2)
 mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arms with the bus held fixed."""

@@ -35,7 +35,7 @@ from ..._core.errors import ConfigError
 from ..._core.schema import did_you_mean
 from ..spatial.urdf import ArmChain, check_inertia, rpy_matrix
 
-__all__ = ["TreeLabels", "TreeRobot", "stack_tree_robots", "support_mask", "tree_from_chains"]
+__all__ = ["TreeLabels", "TreeRobot", "stack_tree_robots", "support_mask", "tree_from_chains", "tree_view"]
 
 # Leaf fields in a fixed order: (name, trailing shape given n joints, r roots, k tips).
 _LEAF_SHAPES = {
@@ -487,6 +487,13 @@ def _check_fields(robot: TreeRobot) -> None:
 def _check_rotation(where: str, rotation: np.ndarray) -> None:
     if np.max(np.abs(rotation @ rotation.T - np.eye(3))) > 1e-9 or np.linalg.det(rotation) < 0:
         raise ConfigError(f"{where}: must be a rotation matrix (orthonormal, determinant +1)")
+
+
+def tree_view(leaves, joint_kinds, parents, tip_bodies, labels: TreeLabels | None = None) -> TreeRobot:
+    """A `TreeRobot` over ``leaves`` (a mapping of every leaf field) without validation: another
+    robot's design seen as a tree (its leaves already checked, or traced)."""
+    structure = _Structure(tuple(joint_kinds), tuple(parents), tuple(tip_bodies), labels or TreeLabels())
+    return _unflatten(structure, [leaves[field] for field in _LEAF_FIELDS])
 
 
 def stack_tree_robots(robots: list[TreeRobot]) -> TreeRobot:
