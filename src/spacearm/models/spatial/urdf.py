@@ -17,8 +17,9 @@ movable joint off the path at 0 (or its nearest limit; a ``<mimic>`` follower of
 joint where its leader puts it), and without it one message names every movable joint
 off the path that is not locked. A ``<mimic>`` joint on the path moves on its own.
 
-The pieces (`parse_document`, `rigid_closure`, `merge_links`, `check_link`,
-`check_lock_joints`) also serve the tree reader, `spacearm.models.tree.urdf`.
+The pieces (`parse_document`, `rigid_closure`, `checked_bodies`, `merge_links`,
+`joint_and_body_fields`, `check_link`, `check_lock_joints`, `movable_off`) also serve the
+tree reader, `spacearm.models.tree.urdf`.
 
 Inertias as written (checked for the links kept, not the dropped ones): a link without
 ``<inertial>`` has zero mass and zero inertia. A link with mass 0 is taken as written,
@@ -55,9 +56,12 @@ __all__ = [
     "check_kinds",
     "check_link",
     "check_lock_joints",
+    "checked_bodies",
     "held_value",
     "hold_others",
+    "joint_and_body_fields",
     "merge_links",
+    "movable_off",
     "parse_document",
     "parse_urdf",
     "read_urdf",
@@ -616,6 +620,45 @@ def merge_links(document: UrdfDocument, body: list[Pose]) -> tuple[float, np.nda
     return mass, com, 0.5 * (inertia + inertia.T)
 
 
+def movable_off(joints: list[_Joint], kept: set[str], locks: Mapping[str, float]) -> list[_Joint]:
+    """The movable joints of ``joints`` neither kept nor locked: the side branches to settle."""
+    return [joint for joint in joints if joint.kind in MOVABLE and joint.name not in kept and joint.name not in locks]
+
+
+def checked_bodies(
+    document: UrdfDocument,
+    starts: list[str],
+    cut: set[str],
+    locks: Mapping[str, float],
+    inertia_as_written: bool,
+    keys: str,
+) -> list[list[Pose]]:
+    """The rigid body of each start link (`rigid_closure`), every link in it checked (`check_link`)."""
+    bodies = [rigid_closure(document, start, cut, locks) for start in starts]
+    for body in bodies:
+        for name, _, _ in body:
+            check_link(document.source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
+    return bodies
+
+
+def joint_and_body_fields(document: UrdfDocument, joints: list[_Joint], bodies: list[list[Pose]]) -> dict:
+    """The fields an `ArmChain` and a tree share: the joints' names, kinds, axes and limits, and
+    each body's links merged (`merge_links`)."""
+    merged = [merge_links(document, body) for body in bodies]
+    return dict(
+        joint_names=tuple(j.name for j in joints),
+        joint_kinds=tuple("prismatic" if j.kind == "prismatic" else "revolute" for j in joints),
+        urdf_types=tuple(j.kind for j in joints),
+        joint_axis=np.array([j.axis for j in joints]),
+        joint_lower=np.array([j.lower for j in joints]),
+        joint_upper=np.array([j.upper for j in joints]),
+        body_mass=np.array([m for m, _, _ in merged]),
+        body_com=np.array([c for _, c, _ in merged]),
+        body_inertia=np.array([i for _, _, i in merged]),
+        body_links=tuple(tuple(name for name, _, _ in body) for body in bodies),
+    )
+
+
 def parse_urdf(
     text: str,
     *,
@@ -657,17 +700,56 @@ def parse_urdf(
 
     document = parse_document(text, source=source, root_link=root_link)
     check_lock_joints(document, lock_joints, field("lock_joints"))
+    path = _arm_path(document, root_link, tip, field)
+    below = document.subtree_joints(root_link)
+    check_kinds(document, below)
+    arm = _arm_joints(source, path, lock_joints, root_link=root_link, tip=tip, keys=keys)
+    arm_names = {j.name for j in arm}
+    where = f"off the path from '{root_link}' to '{tip}'"
+    held, dropped = side_branches(
+        source,
+        movable_off(below, arm_names, lock_joints),
+        lock_joints,
+        hold=lock_others,
+        drop=drop_others,
+        where=where,
+        keys=keys,
+    )
+    lock_joints.update(held)
+
+    starts = [root_link] + [j.child for j in arm]
+    bodies = checked_bodies(document, starts, arm_names | dropped, lock_joints, inertia_as_written, keys)
+    joint_rotation, joint_translation, tip_rotation, tip_translation = _arm_frames(source, arm, bodies, tip)
+    return ArmChain(
+        source=source,
+        root_link=root_link,
+        tip=tip,
+        joint_rotation=joint_rotation,
+        joint_translation=joint_translation,
+        tip_rotation=tip_rotation,
+        tip_translation=tip_translation,
+        **joint_and_body_fields(document, arm, bodies),
+    )
+
+
+def _arm_path(document: UrdfDocument, root_link: str, tip: str, field) -> list[_Joint]:
+    """The joints from ``root_link`` down to ``tip``; `ConfigError` (``field(role)`` first) when
+    either link is missing or the tip is not below the root."""
     for role, name in (("root_link", root_link), ("tip", tip)):
         if name not in document.links:
             extra = did_you_mean(str(name), list(document.links))
             raise ConfigError(f"{field(role)}link {quote(name)} is not in the URDF{extra}")
-
     path = document.path(root_link, tip)
     if path is None:
         raise ConfigError(f"{field('tip')}link '{tip}' is not below root_link '{root_link}'")
-    below = document.subtree_joints(root_link)
-    check_kinds(document, below)
-    arm = [j for j in path if j.kind in MOVABLE and j.name not in lock_joints]
+    return path
+
+
+def _arm_joints(
+    source: str, path: list[_Joint], locks: Mapping[str, float], *, root_link: str, tip: str, keys: str
+) -> list[_Joint]:
+    """The arm: the movable joints of ``path`` not in ``locks``, at least one and at most `MAX_ARM_JOINTS`."""
+    arm = [j for j in path if j.kind in MOVABLE and j.name not in locks]
     if not arm:
         raise ConfigError(
             f"{source}: no movable joint between root_link '{root_link}' and tip '{tip}' (all fixed or locked)"
@@ -677,25 +759,15 @@ def parse_urdf(
             f"{source}: the arm from '{root_link}' to '{tip}' has {len(arm)} movable joints; "
             f"at most {MAX_ARM_JOINTS} are supported (lock the others in {keys}lock_joints)"
         )
-    arm_names = {j.name for j in arm}
-    others = [
-        joint
-        for joint in below
-        if joint.kind in MOVABLE and joint.name not in arm_names and joint.name not in lock_joints
-    ]
-    where = f"off the path from '{root_link}' to '{tip}'"
-    held, dropped = side_branches(
-        source, others, lock_joints, hold=lock_others, drop=drop_others, where=where, keys=keys
-    )
-    lock_joints.update(held)
+    return arm
 
-    starts = [root_link] + [j.child for j in arm]
-    bodies = [rigid_closure(document, start, arm_names | dropped, lock_joints) for start in starts]
-    for body in bodies:
-        for name, _, _ in body:
-            check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
+
+def _arm_frames(
+    source: str, arm: list[_Joint], bodies: list[list[Pose]], tip: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Joint frames ``(n, 3, 3)``, ``(n, 3)`` in their parent bodies, and the tip frame
+    ``(3, 3)``, ``(3,)`` in the last body."""
     pose_in_body = [{name: (r, t) for name, r, t in body} for body in bodies]
-
     n = len(arm)
     joint_rotation = np.zeros((n, 3, 3))
     joint_translation = np.zeros((n, 3))
@@ -706,27 +778,7 @@ def parse_urdf(
     if tip not in pose_in_body[n]:  # cannot happen: the tip is on the path below the last arm joint
         raise ConfigError(f"{source}: tip: link '{tip}' is not rigidly attached to the last arm joint")
     tip_rotation, tip_translation = pose_in_body[n][tip]
-
-    merged = [merge_links(document, body) for body in bodies]
-    return ArmChain(
-        source=source,
-        root_link=root_link,
-        tip=tip,
-        joint_names=tuple(j.name for j in arm),
-        joint_kinds=tuple("prismatic" if j.kind == "prismatic" else "revolute" for j in arm),
-        urdf_types=tuple(j.kind for j in arm),
-        joint_rotation=joint_rotation,
-        joint_translation=joint_translation,
-        joint_axis=np.array([j.axis for j in arm]),
-        joint_lower=np.array([j.lower for j in arm]),
-        joint_upper=np.array([j.upper for j in arm]),
-        body_mass=np.array([m for m, _, _ in merged]),
-        body_com=np.array([c for _, c, _ in merged]),
-        body_inertia=np.array([i for _, _, i in merged]),
-        body_links=tuple(tuple(name for name, _, _ in body) for body in bodies),
-        tip_rotation=tip_rotation,
-        tip_translation=tip_translation,
-    )
+    return joint_rotation, joint_translation, tip_rotation, tip_translation
 
 
 def read_urdf_text(path: str) -> str:
