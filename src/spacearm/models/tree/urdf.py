@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import os
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,15 +28,20 @@ from ..._core.errors import ConfigError
 from ..._core.schema import did_you_mean, quote
 from ..spatial.urdf import (
     MOVABLE,
+    Pose,
+    UrdfDocument,
     check_kinds,
-    check_link,
     check_lock_joints,
-    merge_links,
+    checked_bodies,
+    joint_and_body_fields,
+    movable_off,
     parse_document,
     read_urdf_text,
-    rigid_closure,
     side_branches,
 )
+
+if TYPE_CHECKING:
+    from ..spatial.urdf import _Joint
 
 __all__ = ["MAX_TREE_JOINTS", "UrdfTree", "parse_urdf_tree", "read_urdf_tree"]
 
@@ -135,6 +141,39 @@ def parse_urdf_tree(
 
     document = parse_document(text, source=source, root_link=base_link)
     check_lock_joints(document, lock_joints, field("lock_joints"))
+    paths = _tip_paths(document, base_link, tips, field)
+    below = document.subtree_joints(base_link)
+    check_kinds(document, below)
+    order, kept = _joint_order(paths, lock_joints)
+    _check_joint_order(source, order, kept, paths, base_link, tips, field, keys)
+    where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
+    held, dropped = side_branches(
+        source,
+        movable_off(below, kept, lock_joints),
+        lock_joints,
+        hold=lock_others,
+        drop=drop_others,
+        where=where,
+        keys=keys,
+    )
+    lock_joints.update(held)
+
+    starts = [base_link] + [joint.child for joint in order]
+    bodies = checked_bodies(document, starts, kept | dropped, lock_joints, inertia_as_written, keys)
+    frames = _tree_frames(order, tips, bodies)
+    return UrdfTree(
+        source=source,
+        base_link=base_link,
+        tips=tuple(tips),
+        **frames,
+        **joint_and_body_fields(document, order, bodies),
+        locked=lock_joints,
+    )
+
+
+def _tip_paths(document: UrdfDocument, base_link: str, tips: Sequence[str], field) -> list[list[_Joint]]:
+    """The joints from ``base_link`` down to each tip; `ConfigError` (``field(name)`` first) for a
+    missing base or tip, no tips, a tip given twice, or a tip not below the base."""
     if base_link not in document.links:
         extra = did_you_mean(str(base_link), list(document.links))
         raise ConfigError(f"{field('base_link')}link {quote(base_link)} is not in the URDF{extra}")
@@ -152,18 +191,33 @@ def parse_urdf_tree(
         if path is None:
             raise ConfigError(f"{where}link '{tip}' is not below base_link '{base_link}'")
         paths.append(path)
+    return paths
 
-    below = document.subtree_joints(base_link)
-    check_kinds(document, below)
 
-    # Joint order: tip by tip, each path from the bus outward, no joint twice.
+def _joint_order(paths: list[list[_Joint]], locks: Mapping[str, float]) -> tuple[list[_Joint], set[str]]:
+    """The tree's joints: tip by tip, each path from the bus outward, no joint twice, none
+    locked; and the set of their names."""
     order = []
     kept: set[str] = set()
     for path in paths:
         for joint in path:
-            if joint.kind in MOVABLE and joint.name not in lock_joints and joint.name not in kept:
+            if joint.kind in MOVABLE and joint.name not in locks and joint.name not in kept:
                 order.append(joint)
                 kept.add(joint.name)
+    return order, kept
+
+
+def _check_joint_order(
+    source: str,
+    order: list[_Joint],
+    kept: set[str],
+    paths: list[list[_Joint]],
+    base_link: str,
+    tips: Sequence[str],
+    field,
+    keys: str,
+) -> None:
+    """`ConfigError` for a tip with no movable joint on its path, or more than `MAX_TREE_JOINTS` joints."""
     for t, path in enumerate(paths):
         if not any(joint.name in kept for joint in path):
             raise ConfigError(
@@ -175,21 +229,11 @@ def parse_urdf_tree(
             f"{source}: the paths from '{base_link}' to the tips have {len(order)} movable joints; "
             f"at most {MAX_TREE_JOINTS} are supported (lock some in {keys}lock_joints)"
         )
-    others = [
-        joint for joint in below if joint.kind in MOVABLE and joint.name not in kept and joint.name not in lock_joints
-    ]
-    where = f"off the paths from base_link '{base_link}' to the tips {', '.join(repr(t) for t in tips)}"
-    held, dropped = side_branches(
-        source, others, lock_joints, hold=lock_others, drop=drop_others, where=where, keys=keys
-    )
-    lock_joints.update(held)
 
-    starts = [base_link] + [joint.child for joint in order]
-    bodies = [rigid_closure(document, start, kept | dropped, lock_joints) for start in starts]
-    for body in bodies:
-        for name, _, _ in body:
-            check_link(source, document.links[name], inertia_as_written, f"{keys}inertia_as_written")
 
+def _tree_frames(order: list[_Joint], tips: Sequence[str], bodies: list[list[Pose]]) -> dict:
+    """The `UrdfTree` fields that place joints and tips in their bodies: ``parents``, the joint
+    frames and, per tip, its body and frame."""
     # Where each kept link sits: (body index, pose in that body's frame); body 0 is the bus.
     home = {name: (b, r, t) for b, body in enumerate(bodies) for name, r, t in body}
     n = len(order)
@@ -207,29 +251,13 @@ def parse_urdf_tree(
         tip_bodies.append(b - 1)
         tip_rotation.append(r)
         tip_translation.append(t)
-
-    merged = [merge_links(document, body) for body in bodies]
-    return UrdfTree(
-        source=source,
-        base_link=base_link,
-        tips=tuple(tips),
-        joint_names=tuple(j.name for j in order),
-        joint_kinds=tuple("prismatic" if j.kind == "prismatic" else "revolute" for j in order),
-        urdf_types=tuple(j.kind for j in order),
+    return dict(
         parents=tuple(parents),
         joint_rotation=joint_rotation,
         joint_translation=joint_translation,
-        joint_axis=np.array([j.axis for j in order]),
-        joint_lower=np.array([j.lower for j in order]),
-        joint_upper=np.array([j.upper for j in order]),
-        body_mass=np.array([m for m, _, _ in merged]),
-        body_com=np.array([c for _, c, _ in merged]),
-        body_inertia=np.array([i for _, _, i in merged]),
-        body_links=tuple(tuple(name for name, _, _ in body) for body in bodies),
         tip_bodies=tuple(tip_bodies),
         tip_rotation=np.array(tip_rotation),
         tip_translation=np.array(tip_translation),
-        locked=lock_joints,
     )
 
 
