@@ -173,6 +173,156 @@ def _split(settings: LoopSettings) -> tuple[_LoopShape, dict]:
     return shape, options
 
 
+class _LoopProblem(NamedTuple):
+    """What every candidate loop of one request shares (traced arrays, `_loop_problem`)."""
+
+    robot: PlanarRobot
+    q0: jax.Array  # (n,) start joints, rad
+    delta: jax.Array  # the requested base rotation, rad
+    magnitude: jax.Array  # |delta|, at least 1e-9, rad
+    sigma: jax.Array  # the curl's top singular value at q0, rad / rad^2
+    e1: jax.Array  # (n,) its left singular vector
+    e2: jax.Array  # (n,) its right singular vector
+    sign: jax.Array  # -1 for delta >= 0, else +1: the orientation of the initial circles
+    basis: jax.Array  # (k+1, 2 M) the loop basis (`_loop_basis`)
+    lower: jax.Array  # (n,) joint limits, rad
+    upper: jax.Array
+    room_up: jax.Array  # (n,) allowed displacement from q0 upwards, rad
+    room_down: jax.Array  # (n,) and downwards
+    travel_weight: jax.Array
+
+
+def _curl_plane(robot: PlanarRobot, q0: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """The plane and strength of the curl at q0 (top singular pair of Omega): ``(sigma, e1, e2)``."""
+    omega = rotation_curl(robot, q0)
+    u_mat, sig, vt = jnp.linalg.svd(omega)
+    sigma = jnp.maximum(sig[0], 1e-12)
+    return sigma, u_mat[:, 0], vt[0]  # Omega e2 = sigma e1; e1 . e2 = 0 (Omega antisymmetric)
+
+
+def _loop_problem(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, opt: dict, settings: _LoopShape) -> _LoopProblem:
+    """The curl plane at q0, the loop basis, and the box the loops must stay in."""
+    dtype = q0.dtype
+    basis = jnp.asarray(_loop_basis(settings), dtype)
+    lower = jnp.asarray(robot.joint_lower, dtype)
+    upper = jnp.asarray(robot.joint_upper, dtype)
+    sigma, e1, e2 = _curl_plane(robot, q0)
+    # A loop q0 + r[(1 - cos t) c + sin t c_perp] with (c, c_perp) a rotation of (e1, e2)
+    # encloses area pi r^2 clockwise in the (c, c_perp) orientation: its rotation is about
+    # -sigma pi r^2. Flip c_perp for the requested sign.
+    sign = jnp.where(delta >= 0, -1.0, 1.0).astype(dtype)
+    magnitude = jnp.maximum(jnp.abs(delta), 1e-9)
+    # Allowed displacement from q0 per joint and direction: the excursion bound and the
+    # joint limits, shrunk by `room_fraction` so the final Newton scaling has room. The box
+    # contains q0 and is convex, so the loop q0 + c x(s) stays inside for every scale c
+    # up to `_largest_scale` (x).
+    room_up = opt["room_fraction"] * jnp.clip(upper - opt["limit_margin"] - q0, 0.0, opt["max_excursion"])
+    room_down = opt["room_fraction"] * jnp.clip(q0 - (lower + opt["limit_margin"]), 0.0, opt["max_excursion"])
+    return _LoopProblem(
+        robot, q0, delta, magnitude, sigma, e1, e2, sign, basis, lower, upper, room_up, room_down, opt["travel_weight"]
+    )
+
+
+def _initial_loop(problem: _LoopProblem, harmonics: int, alpha, r) -> jax.Array:
+    """``(2 M, n)`` Fourier coefficients, normalized by r, of the circle of radius r about
+    q0 + r c, c at angle ``alpha`` from e1 in the curl plane, turning the requested way."""
+    e1, e2 = problem.e1, problem.e2
+    c = jnp.cos(alpha) * e1 + jnp.sin(alpha) * e2
+    c_perp = problem.sign * (-jnp.sin(alpha) * e1 + jnp.cos(alpha) * e2)
+    coeffs = jnp.zeros((2 * harmonics, problem.q0.shape[0]), problem.q0.dtype)
+    coeffs = coeffs.at[0].set(r * c).at[harmonics].set(r * c_perp)
+    return coeffs / r  # normalized by r
+
+
+def _loop_points(problem: _LoopProblem, normalized, r, scale=1.0) -> jax.Array:
+    """``(k+1, n)`` waypoints of the loop with coefficients ``r * normalized``, scaled about q0."""
+    return problem.q0 + scale * r * (problem.basis @ normalized)
+
+
+def _largest_scale(problem: _LoopProblem, offsets) -> jax.Array:
+    """The largest c for which q0 + c ``offsets`` ``(k+1, n)`` stays in the allowed box."""
+    ratio_up = jnp.where(offsets > 0, problem.room_up / jnp.where(offsets > 0, offsets, 1.0), jnp.inf)
+    ratio_down = jnp.where(offsets < 0, problem.room_down / jnp.where(offsets < 0, -offsets, 1.0), jnp.inf)
+    return jnp.min(jnp.minimum(ratio_up, ratio_down))
+
+
+def _project(problem: _LoopProblem, normalized, r) -> jax.Array:
+    """Projection onto the allowed box by shrinking the loop about q0."""
+    return normalized * jnp.minimum(1.0, _largest_scale(problem, r * (problem.basis @ normalized)))
+
+
+def _loop_objective(problem: _LoopProblem, normalized, r, count) -> jax.Array:
+    """Squared rotation error (relative to the request) plus the weighted squared joint travel
+    of ``count`` passes (relative to the circle that would turn the base by the request)."""
+    points = _loop_points(problem, normalized, r)
+    rotation = count * _loop_rotation(problem.robot, problem.q0, points)
+    rot_err = (rotation - problem.delta) / problem.magnitude
+    travel = count * _path_length(points) / (2.0 * jnp.pi * jnp.sqrt(problem.magnitude / (jnp.pi * problem.sigma)))
+    return rot_err**2 + problem.travel_weight * travel**2
+
+
+def _cosine_schedule(learning_rate, steps, dtype):
+    """optax.cosine_decay_schedule(learning_rate, steps, alpha=0.02), with ``steps`` traced."""
+
+    def schedule(count):
+        decay_steps = jnp.maximum(steps, 1).astype(dtype)
+        fraction = jnp.minimum(count.astype(dtype), decay_steps) / decay_steps
+        return learning_rate * (0.98 * 0.5 * (1.0 + jnp.cos(jnp.pi * fraction)) + 0.02)
+
+    return schedule
+
+
+def _refine_loop(problem: _LoopProblem, optimizer, steps, params, r, count) -> jax.Array:
+    """``steps`` projected Adam steps on `_loop_objective` from ``params``."""
+    state = optimizer.init(params)
+    grad_fn = jax.grad(functools.partial(_loop_objective, problem))
+
+    def step(_, carry):
+        params, state = carry
+        grad = grad_fn(params, r, count)
+        updates, state = optimizer.update(grad, state, params)
+        return _project(problem, optax.apply_updates(params, updates), r), state
+
+    params, _ = jax.lax.fori_loop(0, steps, step, (params, state))
+    return params
+
+
+def _rotation_scale(problem: _LoopProblem, params, r, count, newton_steps) -> jax.Array:
+    """Newton on the scale factor c of the loop about q0: count * R(c) = delta (c in [0.25, 4])."""
+
+    def rotation_at(scale):
+        return count * _loop_rotation(problem.robot, problem.q0, _loop_points(problem, params, r, scale))
+
+    def newton(_, scale):
+        value, slope = jax.value_and_grad(rotation_at)(scale)
+        safe = jnp.where(jnp.abs(slope) > 1e-300, slope, 1.0)
+        return jnp.clip(scale - (value - problem.delta) / safe, 0.25, 4.0)
+
+    return jax.lax.fori_loop(0, newton_steps, newton, jnp.asarray(1.0, problem.q0.dtype))
+
+
+def _candidate_record(problem: _LoopProblem, points, count) -> dict:
+    """The candidate's loop ``points`` with its total rotation, travel, excursion and limit violation."""
+    rotation = count * _loop_rotation(problem.robot, problem.q0, points)
+    upper, lower = problem.upper, problem.lower
+    violation = jnp.max(jnp.concatenate([jax.nn.relu(points - upper).ravel(), jax.nn.relu(lower - points).ravel()]))
+    return dict(
+        points=points,
+        rotation=rotation,
+        travel=count * _path_length(points),
+        excursion=jnp.max(jnp.abs(points - problem.q0)),
+        limit_violation=violation,
+    )
+
+
+def _solve_candidate(problem: _LoopProblem, optimizer, options: dict, harmonics: int, alpha, r, count) -> dict:
+    """One candidate: the circle at ``alpha`` of radius ``r``, refined, then scaled to the request."""
+    params = _project(problem, _initial_loop(problem, harmonics, alpha, r), r)
+    params = _refine_loop(problem, optimizer, options["steps"], params, r, count)
+    scale = _rotation_scale(problem, params, r, count, options["newton_steps"])
+    return _candidate_record(problem, _loop_points(problem, params, r, scale), count)
+
+
 @functools.partial(jax.jit, static_argnames=("settings",))
 def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, options: dict, settings: _LoopShape):
     """Optimize one loop per (repetition count, centre direction) candidate.
@@ -184,106 +334,18 @@ def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, options
     ``(C, k+1, n)``, ``loops`` ``(C,)``, ``rotation`` (total, rad), ``travel`` (total, rad),
     ``excursion`` (max |q - q0|, rad), ``limit_violation`` (rad, 0 when inside).
     """
-    n = q0.shape[0]
     dtype = q0.dtype
     opt = {
         name: value.astype(dtype) if name not in ("steps", "newton_steps") else value for name, value in options.items()
     }
-    basis = jnp.asarray(_loop_basis(settings), dtype)
-    lower = jnp.asarray(robot.joint_lower, dtype)
-    upper = jnp.asarray(robot.joint_upper, dtype)
-
-    # The plane and strength of the curl at q0 (top singular pair of Omega).
-    omega = rotation_curl(robot, q0)
-    u_mat, sig, vt = jnp.linalg.svd(omega)
-    sigma = jnp.maximum(sig[0], 1e-12)
-    e1, e2 = u_mat[:, 0], vt[0]  # Omega e2 = sigma e1; e1 . e2 = 0 (Omega antisymmetric)
-    # A loop q0 + r[(1 - cos t) c + sin t c_perp] with (c, c_perp) a rotation of (e1, e2)
-    # encloses area pi r^2 clockwise in the (c, c_perp) orientation: its rotation is about
-    # -sigma pi r^2. Flip c_perp for the requested sign.
-    sign = jnp.where(delta >= 0, -1.0, 1.0).astype(dtype)
-
+    problem = _loop_problem(robot, q0, delta, opt, settings)
     counts = np.repeat(np.asarray(settings.loop_counts), settings.directions)
     alphas = np.tile(2.0 * np.pi * np.arange(settings.directions) / settings.directions, len(settings.loop_counts))
     counts_j = jnp.asarray(counts, dtype)
-    magnitude = jnp.maximum(jnp.abs(delta), 1e-9)
-    radius = jnp.sqrt(magnitude / (counts_j * jnp.pi * sigma))
+    radius = jnp.sqrt(problem.magnitude / (counts_j * jnp.pi * problem.sigma))
     radius = jnp.minimum(radius, 0.5 * opt["max_excursion"])
-
-    def initial(alpha, r):
-        c = jnp.cos(alpha) * e1 + jnp.sin(alpha) * e2
-        c_perp = sign * (-jnp.sin(alpha) * e1 + jnp.cos(alpha) * e2)
-        coeffs = jnp.zeros((2 * settings.harmonics, n), dtype)
-        coeffs = coeffs.at[0].set(r * c).at[settings.harmonics].set(r * c_perp)
-        return coeffs / r  # normalized by r
-
-    def points_of(normalized, r, scale=1.0):
-        return q0 + scale * r * (basis @ normalized)
-
-    # Allowed displacement from q0 per joint and direction: the excursion bound and the
-    # joint limits, shrunk by `room_fraction` so the final Newton scaling has room. The box
-    # contains q0 and is convex, so the loop q0 + c x(s) stays inside for every scale c
-    # up to largest_scale(x).
-    room_up = opt["room_fraction"] * jnp.clip(upper - opt["limit_margin"] - q0, 0.0, opt["max_excursion"])
-    room_down = opt["room_fraction"] * jnp.clip(q0 - (lower + opt["limit_margin"]), 0.0, opt["max_excursion"])
-
-    def largest_scale(offsets):
-        ratio_up = jnp.where(offsets > 0, room_up / jnp.where(offsets > 0, offsets, 1.0), jnp.inf)
-        ratio_down = jnp.where(offsets < 0, room_down / jnp.where(offsets < 0, -offsets, 1.0), jnp.inf)
-        return jnp.min(jnp.minimum(ratio_up, ratio_down))
-
-    def project(normalized, r):
-        # Projection onto the allowed box by shrinking the loop about q0.
-        return normalized * jnp.minimum(1.0, largest_scale(r * (basis @ normalized)))
-
-    def objective(normalized, r, count):
-        points = points_of(normalized, r)
-        rotation = count * _loop_rotation(robot, q0, points)
-        rot_err = (rotation - delta) / magnitude
-        travel = count * _path_length(points) / (2.0 * jnp.pi * jnp.sqrt(magnitude / (jnp.pi * sigma)))
-        return rot_err**2 + opt["travel_weight"] * travel**2
-
-    def schedule(count):  # optax.cosine_decay_schedule(learning_rate, steps, alpha=0.02), traced
-        decay_steps = jnp.maximum(options["steps"], 1).astype(dtype)
-        fraction = jnp.minimum(count.astype(dtype), decay_steps) / decay_steps
-        return opt["learning_rate"] * (0.98 * 0.5 * (1.0 + jnp.cos(jnp.pi * fraction)) + 0.02)
-
-    optimizer = optax.adam(schedule)
-
-    def solve(alpha, r, count):
-        params = project(initial(alpha, r), r)
-        state = optimizer.init(params)
-        grad_fn = jax.grad(objective)
-
-        def step(_, carry):
-            params, state = carry
-            grad = grad_fn(params, r, count)
-            updates, state = optimizer.update(grad, state, params)
-            return project(optax.apply_updates(params, updates), r), state
-
-        params, _ = jax.lax.fori_loop(0, options["steps"], step, (params, state))
-
-        # Newton on the scale factor c of the loop about q0: count * R(c) = delta.
-        def rotation_at(scale):
-            return count * _loop_rotation(robot, q0, points_of(params, r, scale))
-
-        def newton(_, scale):
-            value, slope = jax.value_and_grad(rotation_at)(scale)
-            safe = jnp.where(jnp.abs(slope) > 1e-300, slope, 1.0)
-            return jnp.clip(scale - (value - delta) / safe, 0.25, 4.0)
-
-        scale = jax.lax.fori_loop(0, options["newton_steps"], newton, jnp.asarray(1.0, dtype))
-        points = points_of(params, r, scale)
-        rotation = count * _loop_rotation(robot, q0, points)
-        violation = jnp.max(jnp.concatenate([jax.nn.relu(points - upper).ravel(), jax.nn.relu(lower - points).ravel()]))
-        return dict(
-            points=points,
-            rotation=rotation,
-            travel=count * _path_length(points),
-            excursion=jnp.max(jnp.abs(points - q0)),
-            limit_violation=violation,
-        )
-
+    optimizer = optax.adam(_cosine_schedule(opt["learning_rate"], options["steps"], dtype))
+    solve = functools.partial(_solve_candidate, problem, optimizer, options, settings.harmonics)
     result = jax.vmap(solve)(jnp.asarray(alphas, dtype), radius, counts_j)
     result["loops"] = jnp.asarray(counts)
     return result
