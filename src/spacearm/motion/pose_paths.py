@@ -39,6 +39,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -46,7 +48,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.groups import SO3, expm, geodesic_distance, log
-from ..models.family import family_of
+from ..models.family import RobotFamily, family_of
 from .dop853 import rk_step
 from .path_ends import REASON_JOINT_LIMIT, REASON_MAX_LENGTH, REASON_SINGULAR
 
@@ -194,101 +196,107 @@ def _inertial_frame(family, robot, joints, R):
     return R @ p, R @ T
 
 
-@functools.partial(jax.jit, static_argnames=("steps",))
-def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, steps):
-    """One straight pose path and its history (module docstring); one program per shape and ``steps``."""
-    family = family_of(robot)
-    group = family.attitude
-    n = family.joint_count(robot)
-    dtype = q0.dtype
-    lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
-    upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
-    p0, T0 = _inertial_frame(family, robot, q0, R0)
-    xi = log(T0.T @ target_rotation)
-    twist = jnp.concatenate([target_position - p0, T0 @ xi])
-    field = _pose_field(family, robot, twist)
-    h = jnp.asarray(1.0 / steps, dtype)
-    y0 = family.join_state(robot, q0, group.to_coords(R0))
+class _Stepper(NamedTuple):
+    """What every step of one pose path needs (built in `_pose_path`)."""
 
-    def step(y, h):
-        """The next state, and sigma_min of J* at the step's start (the first stage) and at
-        its end (a 13th stage evaluates the field there inside the stage loop): one copy
-        of the pass over the chain."""
-        y_new, sigmas = rk_step(field, y, h, rolled=True, end_slope=True, aux=jnp.zeros((1,), dtype))
-        return y_new, sigmas[0, 0], sigmas[-1, 0]
+    family: RobotFamily
+    robot: Any
+    field: Callable  # `_pose_field`
+    h: jax.Array  # a full step in s: 1 / steps
+    lower: jax.Array  # (n,) joint limits
+    upper: jax.Array
+    sing_threshold: jax.Array
+    steps: int  # static
 
-    def check(y, sigma):
-        """(sigma_min of J*, singular, past a limit, the joints past a limit) at a state."""
-        joints, _ = family.split_state(robot, y)
-        outside = (joints < lower) | (joints > upper)
-        singular = ~jnp.all(jnp.isfinite(y)) | ~(sigma >= sing_threshold)
-        return sigma, singular, jnp.any(outside) & ~singular, outside
 
-    # One scan, one copy of the step in the program: full steps while no event; after
-    # one, bisection on the rejected step's fraction, keeping the side before the event.
-    # Every step before an event is accepted, so output i is the state at s = (i + 1) / steps.
+def _step(stepper: _Stepper, y, h):
+    """The next state, and sigma_min of J* at the step's start (the first stage) and at
+    its end (a 13th stage evaluates the field there inside the stage loop): one copy
+    of the pass over the chain."""
+    y_new, sigmas = rk_step(stepper.field, y, h, rolled=True, end_slope=True, aux=jnp.zeros((1,), stepper.h.dtype))
+    return y_new, sigmas[0, 0], sigmas[-1, 0]
 
-    def advance(state):
-        y, mode = state["y"], state["mode"]
-        locating = mode == LOCATING
-        middle = 0.5 * (state["low"] + state["high"])
-        y_try, sigma_start, sigma_try = step(y, jnp.where(locating, middle, 1.0) * h)
-        sigma, singular, limit, outside = check(y_try, sigma_try)
-        ok = ~(singular | limit)
-        k = state["k"] + jnp.where(~locating & ok, 1, 0)
-        event = ~locating & ~ok
-        low = jnp.where(locating & ok, middle, state["low"])
-        halvings = state["halvings"] + jnp.where(locating, 1, 0)
-        mode = jnp.where(
-            locating,
-            jnp.where(halvings >= EVENT_BISECTIONS, DONE, LOCATING),
-            jnp.where(ok, jnp.where(k >= steps, DONE, STEPPING), LOCATING),
-        )
-        return dict(
-            y=jnp.where(~locating & ok, y_try, y),
-            y_low=jnp.where(locating & ok, y_try, jnp.where(event, y, state["y_low"])),
-            mode=mode,
-            k=k,
-            reason=jnp.where(event, jnp.where(singular, REASON_SINGULAR, REASON_JOINT_LIMIT), state["reason"]),
-            limit_joint=jnp.where(event & limit, jnp.argmax(outside).astype(jnp.int32), state["limit_joint"]),
-            low=low,
-            high=jnp.where(locating & ~ok, middle, state["high"]),
-            halvings=halvings,
-            # The current state's sigma (the start's at the first step), and the new one's.
-            min_sigma=jnp.minimum(
-                jnp.minimum(state["min_sigma"], sigma_start), jnp.where(ok, sigma, state["min_sigma"])
-            ),
-        )
 
-    def scan_body(state, _):
-        state = jax.lax.cond(state["mode"] == DONE, lambda state: state, advance, state)
-        return state, state["y"]
+def _check(stepper: _Stepper, y, sigma):
+    """(sigma_min of J*, singular, past a limit, the joints past a limit) at a state."""
+    joints, _ = stepper.family.split_state(stepper.robot, y)
+    outside = (joints < stepper.lower) | (joints > stepper.upper)
+    singular = ~jnp.all(jnp.isfinite(y)) | ~(sigma >= stepper.sing_threshold)
+    return sigma, singular, jnp.any(outside) & ~singular, outside
 
-    zero = jnp.zeros((), dtype)
-    start = dict(
+
+def _next_mode(locating, ok, k, halvings, steps: int):
+    """STEPPING until an event or the last step, then LOCATING for `EVENT_BISECTIONS` halvings, then DONE."""
+    return jnp.where(
+        locating,
+        jnp.where(halvings >= EVENT_BISECTIONS, DONE, LOCATING),
+        jnp.where(ok, jnp.where(k >= steps, DONE, STEPPING), LOCATING),
+    )
+
+
+def _start_state(y0, dtype) -> dict:
+    """The scan's state at s = 0."""
+    return dict(
         y=y0,
         y_low=y0,
         mode=jnp.asarray(STEPPING),
         k=jnp.asarray(0),
         reason=jnp.asarray(REASON_MAX_LENGTH, jnp.int32),
         limit_joint=jnp.asarray(-1, jnp.int32),
-        low=zero,
+        low=jnp.zeros((), dtype),
         high=jnp.ones((), dtype),
         halvings=jnp.asarray(0),
         min_sigma=jnp.asarray(jnp.inf, dtype),
     )
-    end, outputs = jax.lax.scan(scan_body, start, None, length=steps + EVENT_BISECTIONS)
-    k_end, reason, limit_joint, min_sigma = end["k"], end["reason"], end["limit_joint"], end["min_sigma"]
+
+
+def _advance(stepper: _Stepper, state: dict) -> dict:
+    """A full step while no event; after one, a halving of the rejected step's fraction,
+    keeping the side before the event (``low``: the last fraction before it)."""
+    y, mode = state["y"], state["mode"]
+    locating = mode == LOCATING
+    middle = 0.5 * (state["low"] + state["high"])
+    y_try, sigma_start, sigma_try = _step(stepper, y, jnp.where(locating, middle, 1.0) * stepper.h)
+    sigma, singular, limit, outside = _check(stepper, y_try, sigma_try)
+    ok = ~(singular | limit)
+    k = state["k"] + jnp.where(~locating & ok, 1, 0)
+    event = ~locating & ~ok
+    low = jnp.where(locating & ok, middle, state["low"])
+    halvings = state["halvings"] + jnp.where(locating, 1, 0)
+    return dict(
+        y=jnp.where(~locating & ok, y_try, y),
+        y_low=jnp.where(locating & ok, y_try, jnp.where(event, y, state["y_low"])),
+        mode=_next_mode(locating, ok, k, halvings, stepper.steps),
+        k=k,
+        reason=jnp.where(event, jnp.where(singular, REASON_SINGULAR, REASON_JOINT_LIMIT), state["reason"]),
+        limit_joint=jnp.where(event & limit, jnp.argmax(outside).astype(jnp.int32), state["limit_joint"]),
+        low=low,
+        high=jnp.where(locating & ~ok, middle, state["high"]),
+        halvings=halvings,
+        # The current state's sigma (the start's at the first step), and the new one's.
+        min_sigma=jnp.minimum(jnp.minimum(state["min_sigma"], sigma_start), jnp.where(ok, sigma, state["min_sigma"])),
+    )
+
+
+def _scan_body(stepper: _Stepper, state: dict, _):
+    state = jax.lax.cond(state["mode"] == DONE, lambda state: state, functools.partial(_advance, stepper), state)
+    return state, state["y"]
+
+
+def _pose_history(family, robot, y0, end: dict, outputs, steps: int, dtype) -> tuple[PoseHistory, jax.Array]:
+    """The history (`PoseHistory`: the scan's full steps, then the located end), and the
+    progress s at the end."""
+    k_end, reason = end["k"], end["reason"]
     stopped = reason != REASON_MAX_LENGTH
     y = jnp.where(stopped, end["y_low"], end["y"])
-    progress = (k_end.astype(dtype) + jnp.where(stopped, end["low"], zero)) / steps
+    progress = (k_end.astype(dtype) + jnp.where(stopped, end["low"], jnp.zeros((), dtype))) / steps
     rows = jnp.arange(steps + 1)
     ys = jnp.concatenate([y0[None], outputs[:steps]], axis=0)
     ys = jnp.where((rows > k_end)[:, None], y, ys)  # after the end: the located end
 
     def frame(y):
         joints, coords = family.split_state(robot, y)
-        R = group.from_coords(coords)
+        R = family.attitude.from_coords(coords)
         p, T = _inertial_frame(family, robot, joints, R)
         return joints, R, p, T
 
@@ -300,19 +308,43 @@ def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, 
         tip=p,
         tip_rotation=T,
     )
+    return history, progress
+
+
+@functools.partial(jax.jit, static_argnames=("steps",))
+def _pose_path(robot, q0, R0, target_position, target_rotation, sing_threshold, steps):
+    """One straight pose path and its history (module docstring); one program per shape and ``steps``."""
+    family = family_of(robot)
+    n = family.joint_count(robot)
+    dtype = q0.dtype
+    lower = jnp.broadcast_to(robot.joint_lower, (n,)).astype(dtype)
+    upper = jnp.broadcast_to(robot.joint_upper, (n,)).astype(dtype)
+    p0, T0 = _inertial_frame(family, robot, q0, R0)
+    xi = log(T0.T @ target_rotation)
+    twist = jnp.concatenate([target_position - p0, T0 @ xi])
+    field = _pose_field(family, robot, twist)
+    stepper = _Stepper(family, robot, field, jnp.asarray(1.0 / steps, dtype), lower, upper, sing_threshold, steps)
+    y0 = family.join_state(robot, q0, family.attitude.to_coords(R0))
+    # One scan, one copy of the step in the program: full steps while no event; after
+    # one, bisection on the rejected step's fraction, keeping the side before the event.
+    # Every step before an event is accepted, so output i is the state at s = (i + 1) / steps.
+    body = functools.partial(_scan_body, stepper)
+    end, outputs = jax.lax.scan(body, _start_state(y0, dtype), None, length=steps + EVENT_BISECTIONS)
+    history, progress = _pose_history(family, robot, y0, end, outputs, steps, dtype)
     # The last row is the end (rows after the end hold it): its frame is the history's.
-    q_end, R_end, p_end, T_end = joints[-1], R[-1], p[-1], T[-1]
+    q_end, R_end = history.joints[-1], history.base_rotation[-1]
+    p_end, T_end = history.tip[-1], history.tip_rotation[-1]
     return PosePath(
         end_joints=q_end,
         end_rotation=R_end,
         end_tip=p_end,
         end_tip_rotation=T_end,
         progress=progress,
-        reason=reason,
-        limit_joint=limit_joint,
+        reason=end["reason"],
+        limit_joint=end["limit_joint"],
         position_error=jnp.linalg.norm(p_end - target_position),
         rotation_error=geodesic_distance(T_end, target_rotation),
-        min_singular=min_sigma,
+        min_singular=end["min_sigma"],
         history=history,
     )
 
