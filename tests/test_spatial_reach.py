@@ -10,7 +10,8 @@ from scipy.spatial.transform import Rotation
 
 import spacearm as sa
 import spacearm.motion
-from spacearm.models.spatial.shell import tip_shell, virtual_link_lengths
+from spacearm.models.spatial.primitives import as_tree
+from spacearm.models.tree.shell import tip_shell as tree_tip_shell, virtual_link_lengths
 from spacearm.planning import LoopSettings, SpatialLoopSettings
 
 from .conftest import count_compiles
@@ -36,12 +37,17 @@ def near(arm3):
 # The shell of every tip position -----------------------------------------------------------
 
 
+def tip_shell(robot):
+    return tree_tip_shell(as_tree(robot), 0)
+
+
 def test_virtual_link_lengths_equal_the_planar_coefficients():
     """The Table 1 robot as a spatial file: its virtual links are the paper's K0, K1, K2 (eq. 1)."""
     spatial = sa.load_robot(os.path.join(CONFIGS, "umetani1990-spatial.yaml"))
     planar = sa.load_robot(os.path.join(CONFIGS, "umetani1990.yaml"))
     K = np.asarray(sa.tip_coefficients(planar))
-    np.testing.assert_allclose(virtual_link_lengths(spatial)[:, 0], K, rtol=1e-12)
+    lengths = virtual_link_lengths(as_tree(spatial), 0)[:, 0]  # the bodies after each joint, then the bus
+    np.testing.assert_allclose(lengths, np.roll(K, -1), rtol=1e-12)
     np.testing.assert_allclose(tip_shell(spatial), (0.0, K.sum()), rtol=1e-12)
 
 

@@ -29,7 +29,6 @@ from spacearm.cli import main
 from spacearm.kinematics import generic_generalized_jacobian, generic_tip_position
 from spacearm.models.family import family_of
 from spacearm.models.spatial import locate_package_file, read_urdf
-from spacearm.models.spatial.shell import tip_shell as spatial_tip_shell
 from spacearm.models.tree import tree_from_chains
 from spacearm.models.tree.primitives import tip_pose
 from spacearm.models.tree.shell import tip_shell
@@ -219,7 +218,8 @@ def test_tip_shell_holds_every_sampled_tip(name):
         assert distance[:, t].max() > 0.75 * outer  # not a loose bound
 
 
-def test_tip_shell_of_a_one_arm_tree_is_the_spatial_shell():
+def test_a_one_arm_tree_is_the_spatial_arm():
+    """The UR5 smallsat written as an arms: tree of one arm: tips and the shell of the serial arm."""
     arm = sa.load_robot(os.path.join(ROOT, "configs", "ur5-smallsat.yaml"))
     path = locate_package_file("test", "example-robot-data", "robots/ur_description/urdf/ur5_robot.urdf")
     chain = read_urdf(path, root_link="base_link", tip="tool0")
@@ -234,7 +234,7 @@ def test_tip_shell_of_a_one_arm_tree_is_the_spatial_shell():
     )
     q = np.random.default_rng(2).uniform(-3, 3, (8, 6))
     np.testing.assert_allclose(sa.tip_position(tree, q)[:, 0], sa.tip_position(arm, q), atol=1e-14)
-    np.testing.assert_allclose(tip_shell(tree, 0), spatial_tip_shell(arm), rtol=1e-14)
+    np.testing.assert_allclose(tip_shell(tree, 0), family_of(arm).tip_shell(arm), rtol=1e-14)
 
 
 # Joint paths, straight paths, the balance arm ---------------------------------------------------

@@ -28,7 +28,9 @@ from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import FastPaths, RobotFamily
+from ..tree.shell import tip_shell
 from .primitives import (
+    as_tree,
     arm_inertia,
     base_twist_map,
     fixed_base_jacobian,
@@ -45,7 +47,6 @@ from .primitives import (
     tip_frame,
 )
 from .robot import SpatialRobot
-from .shell import tip_shell
 from .view import spatial_view_model
 
 __all__ = ["SPATIAL", "SpatialFamily"]
@@ -150,8 +151,8 @@ class SpatialFamily(RobotFamily):
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 
     def tip_shell(self, robot: SpatialRobot) -> tuple[float, float]:
-        """The virtual manipulator's shell (`spacearm.models.spatial.shell.tip_shell`)."""
-        return tip_shell(robot)
+        """The virtual manipulator's shell of the arm as a one-tip tree (`spacearm.models.tree.shell`)."""
+        return tip_shell(as_tree(robot), 0)
 
     def view_model(self, robot: SpatialRobot) -> dict:
         """The arm as the one-tip view tree (`spacearm.models.spatial.view`)."""

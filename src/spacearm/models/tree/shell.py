@@ -18,7 +18,9 @@ the joint limits. Whatever the joints (of every arm) and the bus attitude,
 
     max(0, max_j (min |V_j| - sum_{k != j} max |V_k|))  <=  |tip_t - G|  <=  sum_k max |V_k|,
 
-the tree form of `spacearm.models.spatial.shell` (equal to it for a one-arm tree).
+a shell that contains every position of the tip (equal to the Maximum Reachable space
+when every V_k can be aligned, as for a planar arm without limits; a serial arm is the
+one-arm tree, `spacearm.models.spatial.primitives.as_tree`).
 Host-side NumPy: no program is compiled.
 """
 
@@ -26,10 +28,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..spatial.shell import _segment_norms
 from ..spatial.urdf import rpy_matrix
 
 __all__ = ["tip_shell", "virtual_link_lengths"]
+
+
+def _segment_norms(u: np.ndarray, a: np.ndarray, lo: float, hi: float) -> tuple[float, float]:
+    """min and max of |u + t a| for t in [lo, hi] (a non-zero)."""
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return (0.0, np.inf)
+    t_star = float(np.clip(-(u @ a) / (a @ a), lo, hi))
+    low = float(np.linalg.norm(u + t_star * a))
+    high = max(float(np.linalg.norm(u + lo * a)), float(np.linalg.norm(u + hi * a)))
+    return low, high
 
 
 def virtual_link_lengths(robot, tip: int) -> np.ndarray:
