@@ -32,9 +32,38 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._core.errors import ConfigError
 from .._core.groups import Group
 
-__all__ = ["FastPaths", "RobotFamily", "family_of", "require_family"]
+__all__ = ["Capabilities", "FastPaths", "RobotFamily", "family_of", "known_families", "require_family"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Capabilities:
+    """The optional analyses a family offers beyond its primitives: what the sweep metrics and
+    design objectives above `spacearm.models` may ask of its robots (each declares which it needs).
+
+    Attributes:
+        virtual_manipulator: the paper's virtual-manipulator closed forms (K_i of eq. 1, the
+            workspace radii and areas S_M, S_G, the w-bar of eq. 12; `spacearm.paper`).
+        joint_box_averages: the averages over the joint box of w*, 1/kappa, ||C_w||_F and the
+            dynamic manipulability (the arm inertia H*), and the metrics at one posture.
+        tip_radius_search: one tip whose reach and path-independent radius a search over the
+            joint box finds (several tips: not built).
+    """
+
+    virtual_manipulator: bool = False
+    joint_box_averages: bool = False
+    tip_radius_search: bool = False
+
+
+_FAMILIES: list[RobotFamily] = []
+
+
+def known_families() -> tuple[RobotFamily, ...]:
+    """Every family record made so far (each family's module makes one), by name: what a
+    message listing the families that offer something names."""
+    return tuple(sorted(_FAMILIES, key=lambda family: family.name))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -111,6 +140,10 @@ class RobotFamily:
     straight_field_loops: ClassVar[bool] = True
     straight_defaults: ClassVar[Mapping[str, Any]] = {}
     fields: ClassVar[Any] = None
+    capabilities: ClassVar[Capabilities] = Capabilities()
+
+    def __init__(self) -> None:
+        _FAMILIES.append(self)
 
     def joint_count(self, robot) -> int:
         """The number of joints n (static)."""
@@ -139,6 +172,22 @@ class RobotFamily:
     def fixed_base_jacobian(self, robot, joints: jax.Array) -> jax.Array:
         """``(m, n)`` Jacobian of the same arm with its base held fixed."""
         raise NotImplementedError
+
+    def joint_kinds(self, robot) -> tuple[str, ...]:
+        """Static ``n`` joint kinds, ``"revolute"`` or ``"prismatic"`` (every joint revolute by default)."""
+        return ("revolute",) * self.joint_count(robot)
+
+    def joint_names(self, robot) -> tuple[str, ...]:
+        """Static ``n`` joint names, or ``()`` where the family's joints have none (they are numbered)."""
+        return ()
+
+    def arm_inertia(self, robot, posture: jax.Array) -> jax.Array:
+        """``(..., n, n)`` H*, the arm inertia at zero momentum, batched over postures.
+
+        Raises:
+            ConfigError: where the family gives none.
+        """
+        raise ConfigError(f"metric: the arm inertia H* is not available for {self.name} robots")
 
     def moving_joints(self, robot):
         """``(n,)`` 1 for the joints a planner may move and 0 for held ones (all move, unless the

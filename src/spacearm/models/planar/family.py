@@ -19,7 +19,7 @@ import spacearm.models.planar.fields as planar_fields  # the module, not the pac
 
 from ..._core.groups import SO2
 from ..._core.magnus import composite_gauss, line_integral
-from ..family import FastPaths, RobotFamily
+from ..family import Capabilities, FastPaths, RobotFamily
 from .closed_forms import (
     arm_jacobian,
     base_jacobian,
@@ -62,6 +62,7 @@ class PlanarFamily(RobotFamily):
         path_independent_radius=two_link_path_independent_radius,
     )
     fields = planar_fields
+    capabilities = Capabilities(virtual_manipulator=True, tip_radius_search=True)
 
     attitude = SO2
     straight_field_loops = False  # the closed-form field: stages written out run faster

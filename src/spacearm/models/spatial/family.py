@@ -27,11 +27,11 @@ import spacearm.models.spatial.fields as spatial_fields  # the module, not the p
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
-from ..family import FastPaths, RobotFamily
+from ..family import Capabilities, FastPaths, RobotFamily
 from ..tree.shell import tip_shell
 from .primitives import (
-    as_tree,
     arm_inertia,
+    as_tree,
     base_twist_map,
     fixed_base_jacobian,
     generalized_jacobian,
@@ -91,6 +91,7 @@ class SpatialFamily(RobotFamily):
         straight_maps_and_ends=straight_maps_and_ends,
     )
     fields = spatial_fields
+    capabilities = Capabilities(joint_box_averages=True, tip_radius_search=True)
 
     attitude = SO3
     straight_field_loops = True  # the chain pass is a scan: roll the DOP853 stages
@@ -143,6 +144,12 @@ class SpatialFamily(RobotFamily):
     def mass_matrix(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H_m, the arm inertia with the bus held fixed."""
         return mass_matrix(robot, joints)
+
+    def joint_kinds(self, robot: SpatialRobot) -> tuple[str, ...]:
+        return tuple(robot.joint_kinds)
+
+    def joint_names(self, robot: SpatialRobot) -> tuple[str, ...]:
+        return tuple(robot.labels.joint_names)
 
     def arm_inertia(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H*, the arm inertia at zero momentum."""

@@ -30,7 +30,7 @@ import spacearm.models.tree.fields as tree_fields  # the module, not the package
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
-from ..family import FastPaths, RobotFamily
+from ..family import Capabilities, FastPaths, RobotFamily
 from .primitives import (
     arm_inertia,
     base_twist_map,
@@ -173,6 +173,7 @@ class TreeFamily(RobotFamily):
         fixed_base_jacobian_and_tips=_fixed_base_jacobian_and_tips,
     )
     fields = tree_fields
+    capabilities = Capabilities(joint_box_averages=True, tip_radius_search=False)
     attitude = SO3
     straight_field_loops = True
     straight_defaults: ClassVar[Mapping[str, Any]] = {
@@ -263,6 +264,12 @@ class TreeFamily(RobotFamily):
     def mass_matrix(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H_m, all arms with the bus held fixed (a focused tree: its held joints locked)."""
         return _locked(robot, mass_matrix(robot, joints))
+
+    def joint_kinds(self, robot: TreeRobot) -> tuple[str, ...]:
+        return tuple(robot.joint_kinds)
+
+    def joint_names(self, robot: TreeRobot) -> tuple[str, ...]:
+        return tuple(robot.labels.joint_names)
 
     def arm_inertia(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H*, the inertia of all arms at zero momentum (a focused tree: its held joints locked)."""
