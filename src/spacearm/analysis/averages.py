@@ -20,7 +20,7 @@ spectral norm has kinks where singular values cross), which gradient search need
 
 Why the translational rows for w_d: the spatial J* is 6 x n; for n < 6 the full Gram
 determinant vanishes identically, so w_d uses J*_v, as w* does (and as
-``models.spatial.dynamic_manipulability``).
+the spatial family's ``dynamic_manipulability``).
 
 Estimator. Randomized quasi-Monte Carlo: R independent digital shifts of one Sobol
 sequence (`joint_box`); points come in blocks of B per shift, and after 2^j
@@ -63,7 +63,6 @@ from .._core.linalg import gram_root_determinant, symmetric_eigenvalues
 from .._core.schema import did_you_mean
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
-from ..models.spatial.metrics import dynamic_manipulability
 from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
 
 __all__ = [
@@ -135,9 +134,7 @@ def posture_quantities(robot, posture: jax.Array, needs: tuple[str, ...]) -> dic
         return fast(robot, posture, tuple(needs))
     out = {}
     if "arm_inertia" in needs:
-        if not hasattr(family, "arm_inertia"):
-            raise ConfigError(f"metric: the arm inertia H* is not available for {family.name} robots")
-        out["arm_inertia"] = family.arm_inertia(robot, posture)  # batched over postures (tree primitives)
+        out["arm_inertia"] = family.arm_inertia(robot, posture)  # batched over postures; ConfigError where none
     if "jacobian" in needs:
         out["jacobian"] = generalized_jacobian(robot, posture)
     if "base_rate" in needs:
@@ -278,8 +275,8 @@ def base_disturbance_metric(robot, posture):
 
 
 def dynamic_manipulability_metric(robot, posture):
-    """w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) (spatial robots)."""
-    return dynamic_manipulability(robot, posture)
+    """w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) (families that give the arm inertia H*)."""
+    return posture_metrics(robot, posture, ("dynamic_manipulability",))[..., 0]
 
 
 METRICS = {

@@ -180,11 +180,8 @@ def digital_shifts(seed, randomizations: int, dimension: int):
 
 
 def joint_kinds(robot) -> tuple[str, ...]:
-    """Static joint kinds: the spatial robot's ``joint_kinds``; every planar joint is revolute."""
-    kinds = getattr(robot, "joint_kinds", None)
-    if kinds:
-        return tuple(kinds)
-    return ("revolute",) * family_of(robot).joint_count(robot)
+    """Static joint kinds, ``"revolute"`` or ``"prismatic"`` (the family's `RobotFamily.joint_kinds`)."""
+    return family_of(robot).joint_kinds(robot)
 
 
 def periodic_joints(robot) -> np.ndarray:
@@ -225,7 +222,7 @@ def check_joint_box(robot) -> None:
             f"joints: the joint-box averages support 1 to {MAX_SOBOL_DIMENSION} joints, the robot has {len(kinds)}"
         )
     lower, upper = np.asarray(robot.joint_lower), np.asarray(robot.joint_upper)
-    names = getattr(getattr(robot, "labels", None), "joint_names", ()) or ()
+    names = family_of(robot).joint_names(robot)
     for i, kind in enumerate(kinds):
         if kind == "prismatic" and not (np.all(np.isfinite(lower[..., i])) and np.all(np.isfinite(upper[..., i]))):
             label = f"'{names[i]}'" if i < len(names) else f"{i}"
