@@ -14,13 +14,8 @@ import numpy as np
 from matplotlib.patches import Ellipse
 
 from ..io import save_figure
-from ..models.planar import umetani1990
-from ..models.planar.closed_forms import (
-    manipulability,
-    manipulability_ellipse,
-    robot_frame_tip_position,
-)
-from ..paper import inverse_kinematics, workspace_map
+from ..kinematics import manipulability
+from ..paper import inverse_kinematics, manipulability_ellipse, robot_frame_tip_position, umetani1990, workspace_map
 from ..studies.table2_readings import Derivation, derivation_coefficients
 from . import figure
 

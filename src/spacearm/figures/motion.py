@@ -20,13 +20,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..io import save_figure
-from ..models.planar import umetani1990
-from ..models.planar.closed_forms import (
-    fixed_base_manipulability,
-    manipulability,
-    manipulability_ellipse,
-)
+from ..kinematics import fixed_base_manipulability, manipulability
 from ..motion import go_and_back, joint_path_history, straight_tip_path, straight_tip_path_history
+from ..paper import manipulability_ellipse, umetani1990
 from . import figure
 from .robot import base_square, draw_planar_robot, robot_outline
 

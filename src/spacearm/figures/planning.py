@@ -17,8 +17,7 @@ import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 
 from ..io import atomic_path, save_figure
-from ..models.planar import umetani1990
-from ..paper import straight_path_workspace
+from ..paper import straight_path_workspace, umetani1990
 from ..planning import PHASE_LOOP, PHASE_REPOSITION, PHASE_STRAIGHT, plan_reach, reachable_bounds
 from . import figure
 from .robot import base_square, draw_planar_robot, robot_outline

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.planar.closed_forms import centroid_positions
+from ..paper.planar_parts import centroid_positions
 
 __all__ = ["base_square", "draw_planar_robot", "robot_outline"]
 

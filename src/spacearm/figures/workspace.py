@@ -10,9 +10,8 @@ import numpy as np
 from .. import analysis, paper
 from ..io import save_figure
 from ..kinematics import generalized_jacobian, tip_position
-from ..models.planar import umetani1990
-from ..models.planar.closed_forms import tip_coefficients
 from ..motion import straight_tip_path_history
+from ..paper import tip_coefficients, umetani1990
 from . import figure
 from .robot import draw_planar_robot
 

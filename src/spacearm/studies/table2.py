@@ -10,6 +10,7 @@ cannot compare with the paper.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -18,7 +19,8 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from ..io import write_text
-from ..models.planar import PlanarRobot, stack_robots, umetani1990
+from ..paper import PlanarRobot, umetani1990
+from ..paper.planar_parts import stack_robots
 from .table2_readings import (
     AVERAGES,
     DEPARTURES,
@@ -357,10 +359,10 @@ def check_table2(spec) -> None:
         raise ConfigError(
             f"{where} compares the area average of eq. 12; drop wbar's measure: {wbar.options['measure']}"
         )
-    paper = umetani1990()
+    ours, paper = dataclasses.asdict(spec.robot), dataclasses.asdict(umetani1990())
     for field in ("base_mass", "base_inertia", "base_attach", "link_mass", "link_inertia", "link_a", "link_b"):
-        if np.shape(getattr(spec.robot, field)) != np.shape(getattr(paper, field)) or not np.allclose(
-            getattr(spec.robot, field), getattr(paper, field), rtol=1e-12, atol=0.0
+        if np.shape(ours[field]) != np.shape(paper[field]) or not np.allclose(
+            ours[field], paper[field], rtol=1e-12, atol=0.0
         ):
             raise ConfigError(f"{where} compares with the paper's Table 1 robot; this robot's {field} differs")
 

@@ -37,14 +37,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.batching import pad_leading
-from ..models.planar import PlanarRobot, stack_robots, umetani1990
-from ..models.planar.closed_forms import (
+from ..paper import PlanarRobot, umetani1990
+from ..paper.planar_parts import (
     DesignCoefficients,
-    _manipulability_from_columns,
-    _momentum_rows as _faithful_momentum_rows,
-    _momentum_terms,
-    _tip_columns,
     grid_angle_tables,
+    manipulability_from_columns as _manipulability_from_columns,
+    momentum_rows as _faithful_momentum_rows,
+    momentum_terms as _momentum_terms,
+    stack_robots,
+    tip_columns as _tip_columns,
 )
 
 __all__ = [
