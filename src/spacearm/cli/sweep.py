@@ -16,9 +16,10 @@ ROWS_SHOWN = 20  # a longer table prints its first rows and a summary of every c
 
 
 def _epilog() -> str:
-    from ..studies.designs import FIELD_HELP, SPATIAL_FIELD_HELP
+    from ..models.family import known_families
     from ..studies.metrics import AVERAGE_OPTIONS, METRICS, WBAR_OPTIONS
 
+    families = known_families()
     return (
         "examples:\n"
         "  spacearm sweep sweeps/table2.yaml\n"
@@ -26,11 +27,14 @@ def _epilog() -> str:
         "  SPACEARM_COORDINATOR=127.0.0.1:8476 SPACEARM_NUM_PROCESSES=2 SPACEARM_PROCESS_ID=0 spacearm sweep FILE &\n"
         "  SPACEARM_COORDINATOR=127.0.0.1:8476 SPACEARM_NUM_PROCESSES=2 SPACEARM_PROCESS_ID=1 spacearm sweep FILE\n"
         "    (two processes, one sweep: jax.distributed over gloo; process 0 writes the results)\n"
-        f"design fields for axes: {FIELD_HELP}\n"
-        f"  of a spatial robot (a robot file with arm:): {SPATIAL_FIELD_HELP}\n"
-        f"metrics (planar): {', '.join(sorted(n for n, m in METRICS.items() if 'planar' in m.families))}\n"
-        f"metrics (spatial): {', '.join(sorted(n for n, m in METRICS.items() if 'spatial' in m.families))}; "
-        f"the joint-box averages take {', '.join(AVERAGE_OPTIONS)}\n"
+        "design fields for axes, by robot family:\n"
+        + "".join(f"  {family.name}: {family.fields.FIELD_HELP}\n" for family in families)
+        + "".join(
+            f"metrics ({family.name}): "
+            f"{', '.join(sorted(n for n, m in METRICS.items() if m.offered(family.capabilities)))}\n"
+            for family in families
+        )
+        + f"the joint-box averages take {', '.join(AVERAGE_OPTIONS)}\n"
         f"wbar options ({{name: wbar, ...}}): {', '.join(WBAR_OPTIONS)}; rule: product trades the\n"
         "  default's ~1e-13 for ~1e-4 and a fixed node grid that is many times faster for big sweeps"
     )

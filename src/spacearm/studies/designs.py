@@ -16,15 +16,12 @@ import jax
 import numpy as np
 
 from .._core.errors import ConfigError
-from ..models.family import family_of
-from ..models.planar import PlanarRobot, fields as planar_fields
-from ..models.spatial import SpatialRobot, fields as spatial_fields
+from ..models.family import family_of, known_families
 
 __all__ = [
     "DERIVED_FIELDS",
     "FIELD_HELP",
     "SIMPLE_FIELDS",
-    "SPATIAL_FIELD_HELP",
     "Axis",
     "axis_points",
     "axis_unit",
@@ -49,7 +46,7 @@ class Axis:
 class SweepSpec(Protocol):
     """What design construction reads of a sweep (`spacearm.studies.spec.SweepSpec`)."""
 
-    robot: PlanarRobot | SpatialRobot
+    robot: Any  # a robot of any family (`spacearm.models.family_of` gives its record)
     axes: tuple[Axis, ...]
     combine: str
     source: str
@@ -58,8 +55,8 @@ class SweepSpec(Protocol):
     def n_designs(self) -> int: ...
 
 
-SPATIAL_FIELD_HELP = spatial_fields.FIELD_HELP
-FIELD_HELP = planar_fields.FIELD_HELP
+# The design fields of every family, one line each (a robot's own: ``family_of(robot).fields.FIELD_HELP``).
+FIELD_HELP = "\n".join(f"{family.name} robots: {family.fields.FIELD_HELP}" for family in known_families())
 SIMPLE_FIELDS = {
     "base.mass": ("base_mass", "kg"),
     "base.inertia": ("base_inertia", "kg_m2"),
@@ -68,16 +65,11 @@ SIMPLE_FIELDS = {
 DERIVED_FIELDS = {"arm.mass": "kg", "arm.mass_ratio": "1", "arm.length_split": "1"}
 
 
-def _fields(robot):
-    """The design fields of the robot's family (`RobotFamily.fields`); a planar link count is accepted."""
-    return planar_fields if isinstance(robot, int) else family_of(robot).fields
-
-
-def check_field(where: str, field: Any, robot: PlanarRobot | SpatialRobot | int) -> str:
+def check_field(where: str, field: Any, robot: Any) -> str:
     """The field name of an axis, or `ConfigError` naming ``where`` (with a did-you-mean).
 
-    ``robot``: the sweep's base robot (a planar robot's link count is accepted too)."""
-    return _fields(robot).check_field(where, field, robot)
+    ``robot``: the sweep's base robot (its family's `RobotFamily.fields` name the fields)."""
+    return family_of(robot).fields.check_field(where, field, robot)
 
 
 def axis_points(spec: SweepSpec) -> dict[str, np.ndarray]:
@@ -88,10 +80,10 @@ def axis_points(spec: SweepSpec) -> dict[str, np.ndarray]:
     return {a.name: m.reshape(-1) for a, m in zip(spec.axes, mesh, strict=False)}
 
 
-def check_axes_compatible(where: str, axes: Sequence[Axis], robot: PlanarRobot | SpatialRobot | int) -> None:
+def check_axes_compatible(where: str, axes: Sequence[Axis], robot: Any) -> None:
     """Refuse two axes that set the same design number: the result would depend on the
     order of application (the family's `conflicting_number`)."""
-    fields = _fields(robot)
+    fields = family_of(robot).fields
     for i, first in enumerate(axes):
         for second in axes[i + 1 :]:
             shared = fields.conflicting_number(first.field, second.field, robot)
@@ -102,7 +94,7 @@ def check_axes_compatible(where: str, axes: Sequence[Axis], robot: PlanarRobot |
                 )
 
 
-def build_designs(spec: SweepSpec) -> tuple[PlanarRobot | SpatialRobot, dict[str, np.ndarray]]:
+def build_designs(spec: SweepSpec) -> tuple[Any, dict[str, np.ndarray]]:
     """Every sweep point as one batched robot of the base robot's family, and the axis values per point.
 
     Axes are applied in a fixed order whatever their order in the file (the family's
@@ -131,7 +123,7 @@ def build_designs(spec: SweepSpec) -> tuple[PlanarRobot | SpatialRobot, dict[str
         raise
 
 
-def design_columns(robot: PlanarRobot | SpatialRobot, axes: Sequence[Axis]) -> dict[str, np.ndarray]:
+def design_columns(robot: Any, axes: Sequence[Axis]) -> dict[str, np.ndarray]:
     """The varied design numbers per point, SI units in the column names."""
     return family_of(robot).fields.field_columns(robot, [axis.field for axis in axes])
 

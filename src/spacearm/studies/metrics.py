@@ -19,16 +19,17 @@ from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, 
 from ..analysis.joint_box import check_joint_box
 from ..analysis.spatial_workspaces import reachable_radii, singular_radius
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
-from ..models.planar import PlanarRobot
-from ..models.planar.closed_forms import tip_coefficients
+from ..models.family import Capabilities, known_families
 from ..paper import (
+    PlanarRobot,
     attachment_condition,
     check_average_options,
     normalized_areas,
+    normalized_wbar,
     normalized_workspace_areas,
     straight_path_workspace,
+    tip_coefficients,
 )
-from ..paper.manipulability_average import normalized_wbar
 
 __all__ = [
     "METRICS",
@@ -54,18 +55,24 @@ class MetricSpec:
 class Metric:
     """Per-design scalars: ``fn(robot, options) -> {column: value}``, traceable."""
 
-    fn: Callable[[PlanarRobot, dict], dict]
+    fn: Callable[[Any, dict], dict]
     columns: Callable[[dict], list[str]]
     check: Callable[[str, dict], None] = lambda where, options: _no_options(where, options)
     description: str = ""
     # Checks that need the base robot (e.g. its number of links).
-    check_robot: Callable[[str, dict, PlanarRobot], None] = lambda where, options, robot: None
-    # The robot families the metric is defined for ("planar", "spatial").
-    families: tuple[str, ...] = ("planar",)
+    check_robot: Callable[[str, dict, Any], None] = lambda where, options, robot: None
+    # Whether a family offers the metric, from what it declares (`RobotFamily.capabilities`);
+    # by default the paper's virtual-manipulator closed forms.
+    offered: Callable[[Capabilities], bool] = lambda capabilities: capabilities.virtual_manipulator
     # At most this many designs vmapped together per device step (None: the runner's
     # default). Adaptive loops (the joint-box averages) run a vmapped step until its
     # slowest design is done, so they want small steps.
     designs_per_step: int | None = None
+
+    @property
+    def families(self) -> tuple[str, ...]:
+        """The names of the families that offer the metric (for messages and help)."""
+        return tuple(family.name for family in known_families() if self.offered(family.capabilities))
 
 
 def _no_options(where: str, options: dict) -> None:
@@ -362,17 +369,25 @@ METRICS: dict[str, Metric] = {
         _posture_columns,
         check=_check_posture,
         check_robot=_check_posture_robot,
-        families=("spatial", "tree"),
+        offered=lambda capabilities: capabilities.joint_box_averages,
         description="at one posture q_deg (default 30 deg each): translational w* (m^3), "
         "1/kappa(J*_v) (of one tip: option tip on a robot with several), ||C_w||_F (bus rad/s per joint rad/s)",
     ),
 }
+
+
+def _offers_tip_search(capabilities: Capabilities) -> bool:
+    """The joint-box search for one tip's radii, where the family has no closed form for them
+    (the paper's arms give theirs in closed form: metric ``radii``)."""
+    return capabilities.tip_radius_search and not capabilities.virtual_manipulator
+
+
 METRICS["reach_radii"] = Metric(
     _reach,
     lambda o: ["R_max_m", "R_inner_m"],
     check=_integer_options(_REACH_OPTIONS),
     check_robot=_check_average_robot,
-    families=("spatial",),
+    offered=_offers_tip_search,
     designs_per_step=8,
     description="Maximum Reachable shell about the system centroid (outer and inner radius, m) by multi-start "
     "search over the joint box; options starts, steps, seed",
@@ -382,7 +397,7 @@ METRICS["path_independent_radius"] = Metric(
     lambda o: ["R_path_independent_m"],
     check=_integer_options(_SINGULAR_OPTIONS),
     check_robot=_check_average_robot,
-    families=("spatial",),
+    offered=_offers_tip_search,
     designs_per_step=8,
     description="path-independent workspace radius (Papadopoulos & Dubowsky), m: the closest dynamic-singular tip "
     "position to the centroid (inf: none found); options samples, keep, candidates, descent_steps, "
@@ -395,7 +410,7 @@ for _name, (_kind, _column, _text) in _AVERAGES.items():
         functools.partial(_average_columns, _name),
         check=_check_average,
         check_robot=_check_average_robot,
-        families=("spatial", "tree"),
+        offered=lambda capabilities: capabilities.joint_box_averages,
         designs_per_step=8,
         description=_text
         + (" (of one tip: option tip, a name or an index, on a robot with several)" if _per_tip else "")
@@ -413,7 +428,7 @@ def metric_columns(metrics: Sequence[MetricSpec]) -> list[str]:
     return names
 
 
-def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], dict]:
+def design_function(metrics: Sequence[MetricSpec]) -> Callable[[Any], dict]:
     """The per-design function of a sweep's metrics: robot -> {column: scalar}, traceable.
 
     Joint-box averages with the same options share one `joint_averages` call: one set
@@ -425,7 +440,7 @@ def design_function(metrics: Sequence[MetricSpec]) -> Callable[[PlanarRobot], di
             settings = {key: value for key, value in metric.options.items() if key != "tip"}
             groups.setdefault(json.dumps(settings, sort_keys=True), []).append(metric)
 
-    def evaluate(robot: PlanarRobot) -> dict:
+    def evaluate(robot) -> dict:
         values: dict = {}
         done: set = set()
         for group in groups.values():

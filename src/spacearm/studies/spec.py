@@ -41,9 +41,7 @@ from .._core.schema import (
 )
 from ..models import load_robot, robot_from_file_mapping
 from ..models.family import family_of
-from ..models.planar import PlanarRobot
-from ..models.spatial import SpatialRobot
-from .designs import FIELD_HELP, Axis, axis_points, build_designs, check_axes_compatible, check_field, field_axis_unit
+from .designs import Axis, axis_points, build_designs, check_axes_compatible, check_field, field_axis_unit
 from .metrics import METRICS, MetricSpec, metric_specs, resolve_tips
 from .table2 import REPORT_CHECKS, REPORTS
 
@@ -70,7 +68,7 @@ class SweepSpec:
 
     name: str
     config: dict
-    robot: PlanarRobot | SpatialRobot
+    robot: Any  # a robot of any family (`spacearm.models.family_of` gives its record)
     axes: tuple[Axis, ...]
     combine: str
     metrics: tuple[MetricSpec, ...]
@@ -290,7 +288,7 @@ def _parse_axes(where: str, axes_entry: Any, robot) -> list[Axis]:
             raise ConfigError(f"{at}: must be a mapping with field and values or range")
         check_keys(f"{at}: ", spec, _AXIS_KEYS)
         if "field" not in spec:
-            raise ConfigError(f"{at}.field: missing required key; fields: {FIELD_HELP}")
+            raise ConfigError(f"{at}.field: missing required key; fields: {family_of(robot).fields.FIELD_HELP}")
         field = check_field(at, spec["field"], robot)
         relative = spec.get("relative", False)
         if not isinstance(relative, bool):
@@ -334,14 +332,14 @@ def _run_settings(where: str, config: Mapping, name: str) -> tuple[int, str, str
 def _check_metrics(where: str, metrics: tuple[MetricSpec, ...], robot) -> tuple[MetricSpec, ...]:
     """The metrics, each checked against the robot's family and the robot; a tip index
     becomes the tip's name."""
-    family = family_of(robot).name
+    family = family_of(robot)
     for i, metric in enumerate(metrics):
         entry = METRICS[metric.name]
-        if family not in entry.families:
-            others = ", ".join(sorted(name for name, m in METRICS.items() if family in m.families))
+        if not entry.offered(family.capabilities):
+            others = ", ".join(sorted(name for name, m in METRICS.items() if m.offered(family.capabilities)))
             raise ConfigError(
                 f"{where}: metrics[{i}]: '{metric.name}' is a metric of {' and '.join(entry.families)} "
-                f"robots; the robot is {family}; its metrics: {others}"
+                f"robots; the robot is {family.name}; its metrics: {others}"
             )
         entry.check_robot(f"{where}: metrics[{i}]", metric.options, robot)
     return resolve_tips(f"{where}: metrics", metrics, robot)
