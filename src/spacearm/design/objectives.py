@@ -28,10 +28,8 @@ import jax.numpy as jnp
 from .._core.errors import ConfigError
 from ..analysis.averages import split_metric, tip_metric
 from ..analysis.spatial_workspaces import singular_radius
-from ..models.family import family_of
-from ..models.planar import PlanarRobot
-from ..models.planar.closed_forms import tip_coefficients
-from ..paper.manipulability_average import normalized_wbar
+from ..models.family import RobotFamily, family_of
+from ..paper import PlanarRobot, normalized_wbar, tip_coefficients
 
 __all__ = [
     "AVERAGE_OBJECTIVES",
@@ -75,17 +73,18 @@ RADIUS_OBJECTIVES = ("reach_radius",)  # the path-independent workspace radius, 
 # 16) can miss the global minimum.
 RADIUS_OPTIONS = {"samples": 4096, "keep": 1024, "candidates": 32, "descent_steps": 80, "newton_steps": 4, "seed": 0}
 
-# The objectives each robot family offers (the planar ones are the paper's closed forms).
-_BY_FAMILY = {
-    "planar": (*OBJECTIVES, *RADIUS_OBJECTIVES),
-    "spatial": (*AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES, *RADIUS_OBJECTIVES),
-}
 
-
-def objectives_for(family: str) -> tuple[str, ...]:
-    """The objective names a design problem over robots of ``family`` may use (a tree's
-    list names ``reach_radius`` so that asking for it gets `objective_name`'s reason, not a guess)."""
-    return _BY_FAMILY.get(family, (*AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES, *RADIUS_OBJECTIVES))
+def objectives_for(family: RobotFamily) -> tuple[str, ...]:
+    """The objective names a design problem over robots of ``family`` may use, from what the
+    family declares (`RobotFamily.capabilities`): the paper's closed forms (`OBJECTIVES`) where it
+    has the virtual manipulator's, the joint-box averages and the launch mass where it has those.
+    ``reach_radius`` is listed for every family, so that asking for it where the family has no
+    one-tip search gets `objective_name`'s reason, not a guess."""
+    capabilities = family.capabilities
+    offered = OBJECTIVES if capabilities.virtual_manipulator else ()
+    if capabilities.joint_box_averages:
+        offered = (*offered, *AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES)
+    return (*offered, *RADIUS_OBJECTIVES)
 
 
 def guaranteed_area(robot: PlanarRobot, *, clamp: bool = True) -> jax.Array:
@@ -164,7 +163,7 @@ def objective_name(where: str, robot, name: str, tip: str | int | None = None) -
     """The canonical name of an objective on ``robot``: a per-tip average on a robot with
     several tips carries its tip's name (``w_avg[left/tool0]``); checked (`tip_metric`)."""
     base, written = split_objective(name)
-    if base in RADIUS_OBJECTIVES and family_of(robot).name not in ("planar", "spatial"):
+    if base in RADIUS_OBJECTIVES and not family_of(robot).capabilities.tip_radius_search:
         raise ConfigError(
             f"{where}: {base}: single-arm robots only (planar or spatial); the path-independent "
             f"radius of a robot with several tips is not built yet"

@@ -57,9 +57,8 @@ from ..analysis.averages import joint_averages
 from ..analysis.joint_box import check_joint_box
 from ..models import load_robot
 from ..models.family import family_of
-from ..models.planar import PlanarRobot, fields as planar_fields
-from ..paper import check_average_options
-from ..paper.manipulability_average import normalized_wbar
+from ..paper import PlanarRobot, check_average_options, normalized_wbar
+from ..paper.planar_parts import design_field_aliases
 from .objectives import (
     AVERAGE_OBJECTIVES,
     RADIUS_OBJECTIVES,
@@ -332,7 +331,7 @@ _POSITIVE = ("base.mass", "base.inertia", "arm.mass", "arm.mass_ratio", "arm.mas
 
 def variable_names_for(n_links: int) -> tuple[str, ...]:
     """The names of the first planar problem files for an n-link arm (aliases of design fields)."""
-    return planar_fields.alias_names(n_links)
+    return design_field_aliases(n_links)
 
 
 def _uniform_rod_arm(source: str, fixed: Mapping[str, Any]) -> tuple[PlanarRobot, dict]:
@@ -516,7 +515,7 @@ def _fixed_base(source: str, base, n: int, variables: list[Variable], fixed_valu
             settings.append((field, value))
     for field, value in sorted(settings, key=lambda p: fields.field_stage(p[0])):
         base = fields.set_field(base, field, value)
-    if family.name == "planar":
+    if family.capabilities.virtual_manipulator:  # the paper's arm: b0 chosen, every box design physical
         box = {v.field: (v.lower, v.upper, v.name) for v in variables}
         if "base.attach" not in box and "b0" not in fixed_values:
             raise ConfigError(f"{source}: b0: give it in fixed (a value) or in variables (bounds)")
@@ -528,16 +527,17 @@ def _fixed_base(source: str, base, n: int, variables: list[Variable], fixed_valu
 
 
 def _parse_objectives(source: str, config: Mapping[str, Any], family, base) -> tuple[str, ...]:
-    """The ``objectives:`` list: at least two distinct objectives of the family (default:
-    the planar pair, or each tip's w_avg and the system's disturbance)."""
-    allowed = objectives_for(family.name)
+    """The ``objectives:`` list: at least two distinct objectives of the family (default: each
+    tip's w_avg and the system's disturbance where the family has the joint-box averages, else
+    its first two objectives, the paper's w-bar and S_G)."""
+    allowed = objectives_for(family)
     raw = config.get("objectives")
     if "objectives" not in config:
         tips = family.tip_count(base)
         default = ["w_avg", "low_disturbance"]
         if tips is not None and tips > 1:  # several arms: each tip's w_avg, and the system's disturbance
             default = [{"name": "w_avg", "tip": t} for t in range(tips)] + ["low_disturbance"]
-        raw = list(allowed[:2]) if family.name == "planar" else default
+        raw = default if family.capabilities.joint_box_averages else list(allowed[:2])
     if not isinstance(raw, (list, tuple)):
         raise ConfigError(f"{source}: objectives: must be a list of objective names ({', '.join(allowed)})")
     if len(raw) > MAX_OBJECTIVES:
