@@ -14,6 +14,7 @@ move; default all, so the other arms move too), through
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -166,8 +167,8 @@ def run(args: argparse.Namespace) -> int:
     # written into a staging folder that replaces --out as a whole.
     with claimed_folder(out, "reach", label=f"--out {out}"):
         if args.target_rpy is not None:
-            return _run_pose(args, robot, out)
-        return _run_spatial(args, robot, out) if spatial else _run_planar(args, robot, out)
+            return _run_pose(args, robot, out, several)
+        return _run_spatial(args, robot, out, several) if spatial else _run_planar(args, robot, out)
 
 
 def _settings(args: argparse.Namespace, robot):
@@ -248,7 +249,7 @@ def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
     return 0
 
 
-def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
+def _run_spatial(args: argparse.Namespace, robot, out: Path, several: bool) -> int:
     from ..figures.spatial import draw_spatial_reach
     from ..io import write_npz
     from ..planning import plan_reach
@@ -267,7 +268,7 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
         loop_rotation=plan.loop_rotation,
         target_m=target,
     )
-    tree = _tree_record(robot, arrays)
+    tree = _tree_record(robot, arrays) if several else []
     _check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn})
     with _result_folder(out) as staging:
         draw_spatial_reach(robot, plan, staging / "reach.png")  # one arm or several
@@ -292,10 +293,8 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path) -> int:
 
 
 def _tree_record(robot, arrays: dict) -> list[str]:
-    """Several arms on one bus: add the chosen tip and the moving mask to reach.npz's arrays;
-    the summary's lines naming them (none for a robot with one arm)."""
-    if getattr(robot, "active_tip", None) is None:
-        return []
+    """Several arms on one bus (the tree `_focus` made): add the chosen tip and the moving mask
+    to reach.npz's arrays; the summary's lines naming them."""
     arrays.update(tip_index=np.asarray(robot.active_tip), moving=robot.moving_mask)
     lines = [f"tip            {robot.active_tip_name}"]
     if not robot.moving_mask.all():
@@ -305,8 +304,6 @@ def _tree_record(robot, arrays: dict) -> list[str]:
 
 def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(joints, start bus attitude, prismatic mask)`` from --from and --attitude-rpy."""
-    from ..models.spatial.urdf import rpy_matrix
-
     q = comma_numbers(args.start, robot.n_joints, "--from")
     prismatic = np.array([kind == "prismatic" for kind in robot.joint_kinds])
     if not args.radians:
@@ -323,8 +320,22 @@ def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndar
     R0 = np.eye(3)
     if args.attitude is not None:
         rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
-        R0 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
+        R0 = np.asarray(_rpy_matrix(rpy if args.radians else np.radians(rpy)))
     return q, R0, prismatic
+
+
+def _rpy_matrix(rpy) -> np.ndarray:
+    """The rotation R = Rz(yaw) Ry(pitch) Rx(roll) of URDF roll, pitch, yaw (fixed axes x, y, z), rad:
+    what --attitude-rpy and --to-rpy name (the inverse of `_rpy_of`)."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def _rpy_of(R: np.ndarray) -> np.ndarray:
@@ -333,16 +344,15 @@ def _rpy_of(R: np.ndarray) -> np.ndarray:
     return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
 
 
-def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
+def _run_pose(args: argparse.Namespace, robot, out: Path, several: bool) -> int:
     from ..figures.spatial import draw_spatial_reach
     from ..io import write_npz
-    from ..models.spatial.urdf import rpy_matrix
     from ..planning import plan_pose_reach
 
     q, R0, prismatic = _spatial_start(args, robot)
     target = comma_numbers(args.target, 3, "--to")
     rpy = comma_numbers(args.target_rpy, 3, "--to-rpy")
-    T1 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
+    T1 = np.asarray(_rpy_matrix(rpy if args.radians else np.radians(rpy)))
     if args.animate:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
     plan = plan_pose_reach(robot, q, target, T1, base_rotation=R0)
@@ -356,7 +366,7 @@ def _run_pose(args: argparse.Namespace, robot, out: Path) -> int:
         target_m=target,
         target_rotation=T1,
     )
-    tree = _tree_record(robot, arrays)
+    tree = _tree_record(robot, arrays) if several else []
     _check_finite({**arrays, "tip error": plan.error, "tip axes error": plan.rotation_error})
     with _result_folder(out) as staging:
         draw_spatial_reach(robot, plan, staging / "reach.png")  # one arm or several

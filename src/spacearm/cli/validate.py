@@ -42,8 +42,8 @@ def check_problem_memory(where: str, problem) -> float:
 def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     """Validate a robot, sweep or design-problem file; return (kind, one-line summary) or raise ConfigError."""
     from ..design.hybrid import parse_hybrid
-    from ..design.spatial_problem import load_design_problem
-    from ..models import is_robot_mapping, robot_from_file_mapping
+    from ..design.problem import load_problem as load_design_problem
+    from ..models import family_of, is_robot_mapping, robot_from_file_mapping
     from ..studies.runner import check_sweep_memory
     from ..studies.spec import load_sweep
 
@@ -51,7 +51,7 @@ def validate_file(path: str | os.PathLike) -> tuple[str, str]:
     config = read_yaml(path, what="YAML file")
     if is_robot_mapping(config):
         robot = robot_from_file_mapping(config, source=path, base_dir=os.path.dirname(os.path.abspath(path)))
-        if hasattr(robot, "tip_bodies"):  # several arms on one bus
+        if family_of(robot).tip_count(robot) is not None:  # several arms on one bus (a tip axis)
             return "robot", f"{robot.name}, {robot.n_joints} joints, tips {', '.join(robot.tip_names)}"
         return "robot", f"{robot.name}, {robot.n_links} links, L = {float(robot.reach):g} m"
     if isinstance(config, Mapping) and ("variables" in config or "objectives" in config):
