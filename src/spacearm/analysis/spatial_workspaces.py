@@ -42,6 +42,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -671,6 +672,186 @@ def _median_of_first(values, count):
     return jnp.where(jnp.any(jnp.isnan(values) & real), jnp.nan, middle)
 
 
+class _Search(NamedTuple):
+    """The layout of one singular-radius search (`_singular_radius`): its rows, sizes and phases."""
+
+    robot: Any  # the design, its gradient stopped
+    jacobian: str  # static
+    lower: jax.Array  # (n,) the joint box
+    upper: jax.Array
+    wraps: jax.Array  # (n,) the joints that cover a turn
+    padded: jax.Array  # (whole blocks, n) the Sobol samples; rows past ``samples`` copy the first
+    real: jax.Array  # (whole blocks,) which rows of ``padded`` are samples
+    samples: jax.Array  # traced sizes
+    keep: jax.Array
+    candidates: int  # rows per iteration (static)
+    keep_room: int  # static
+    chunk_room: int  # keep_room in whole chunks of candidates (static)
+    factor: float  # the on-set bound relative to the samples' median |s|
+    blocks: jax.Array  # iterations 0..blocks-1 evaluate the samples
+    chunks: jax.Array  # then ``chunks`` project the kept ones onto the set
+    descend: jax.Array  # the first descent iteration
+    last: jax.Array  # the iteration that evaluates the chosen posture (without polish)
+    span: jax.Array  # the widest joint range
+    descent_steps: jax.Array
+    projection_steps: Any
+    newton_steps: Any
+
+
+def _search_layout(
+    robot,
+    jacobian,
+    samples,
+    keep,
+    candidates,
+    descent_steps,
+    projection_steps,
+    newton_steps,
+    seed,
+    sample_room,
+    keep_room,
+) -> _Search:
+    """The Sobol samples of the box, padded to whole blocks of ``candidates`` rows, and the
+    iterations of each phase."""
+    n = family_of(robot).joint_count(robot)
+    lower, upper = joint_box(robot)
+    wraps = _wraps(robot)
+    samples, keep = jnp.asarray(samples), jnp.asarray(keep)
+    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
+    joints = lower + (upper - lower) * unit
+    block_room, chunk_room = -(-sample_room // candidates), -(-keep_room // candidates)
+    real = jnp.arange(block_room * candidates) < samples
+    padded = jnp.concatenate([joints, jnp.broadcast_to(joints[:1], (block_room * candidates - sample_room, n))])
+    padded = jnp.where(real[:, None], padded, joints[:1])  # rows past the samples: copies of the first
+    blocks = (samples + candidates - 1) // candidates
+    factor = 1e-9 if n == family_of(robot).translational_rows else 1e-6
+    chunks = (keep + candidates - 1) // candidates
+    descend = blocks + chunks  # the first descent iteration
+    span = jnp.max(upper - lower)
+    descent_steps = jnp.asarray(descent_steps)
+    last = descend + jnp.maximum(descent_steps, 1)  # without polish: evaluates the chosen posture
+    return _Search(
+        robot,
+        jacobian,
+        lower,
+        upper,
+        wraps,
+        padded,
+        real,
+        samples,
+        keep,
+        candidates,
+        keep_room,
+        chunk_room,
+        factor,
+        blocks,
+        chunks,
+        descend,
+        last,
+        span,
+        descent_steps,
+        projection_steps,
+        newton_steps,
+    )
+
+
+def _nearest_samples(search: _Search, measures):
+    """The ``keep`` samples of smallest |s| (padded to whole chunks), and the on-set bound."""
+    # Rows past the samples are NaN: top_k ranks them last (after any real NaN), the median skips them.
+    n = search.padded.shape[1]
+    absolute = jnp.where(search.real, jnp.abs(measures), jnp.nan)
+    _, nearest = jax.lax.top_k(-absolute, search.keep_room)
+    buffer = search.padded[nearest]
+    rows = search.chunk_room * search.candidates
+    buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (rows - search.keep_room, n))])
+    buffer = jnp.where(jnp.arange(rows)[:, None] < search.keep, buffer, buffer[:1])
+    return buffer, search.factor * _median_of_first(absolute, search.samples)
+
+
+def _candidates_of(search: _Search, buffer, buffer_radius_sq):
+    """The ``candidates`` refined rows closest to the centroid, and their |tip|^2 (inf off
+    the set; padding never chosen)."""
+    radius_sq = jnp.where(jnp.arange(buffer_radius_sq.shape[0]) < search.keep, buffer_radius_sq, jnp.inf)
+    _, best = jax.lax.top_k(-radius_sq, search.candidates)
+    return buffer[best], radius_sq[best]
+
+
+def _chosen_posture(search: _Search, q, q_radius_sq):
+    """As `_closest_value` picks it: the best row, its joints near a limit moved onto it (every row)."""
+    best = q[jnp.argmin(q_radius_sq)]
+    at_lower, at_upper = _at_limits(best, search.lower, search.upper, search.wraps)
+    return jnp.broadcast_to(jnp.where(at_upper, search.upper, jnp.where(at_lower, search.lower, best)), q.shape)
+
+
+def _search_start(search: _Search) -> tuple:
+    """The loop state before the first iteration: (measures, buffer, buffer_radius_sq,
+    tolerance, q, q_radius_sq, posture_radius_sq)."""
+    dtype = search.padded.dtype
+    n = search.padded.shape[1]
+    rows = search.chunk_room * search.candidates
+    return (
+        jnp.zeros((search.padded.shape[0],), dtype),
+        jnp.zeros((rows, n), dtype),
+        jnp.full((rows,), jnp.inf, dtype),
+        jnp.zeros((), dtype),
+        jnp.zeros((search.candidates, n), dtype),
+        jnp.full((search.candidates,), jnp.inf, dtype),
+        jnp.zeros((), dtype),
+    )
+
+
+def _refine_inputs(search: _Search, t, phases, buffer, q, q_radius_sq):
+    """What `_refine` takes at iteration ``t``: the rows (a block of samples, a chunk of the
+    kept ones, the candidates, or the chosen posture), whether to evaluate first, the
+    Newton steps and the descent length; and where the chunk sits in the buffer."""
+    sampling, projecting, final = phases
+    candidates = search.candidates
+    block = jax.lax.dynamic_slice_in_dim(search.padded, jnp.minimum(t, search.blocks - 1) * candidates, candidates)
+    chunk_at = jnp.clip(t - search.blocks, 0, search.chunks - 1) * candidates
+    chunk = jax.lax.dynamic_slice_in_dim(buffer, chunk_at, candidates)
+    # geometric: 2 % of the box to ~5e-6
+    length = search.span * 0.02 * 0.5 ** (12.0 * (t - search.descend) / search.descent_steps)
+    steps = jnp.where(sampling, 0, jnp.where(projecting, search.projection_steps, search.newton_steps))
+    rows = jnp.where(final, _chosen_posture(search, q, q_radius_sq), q)
+    x = jnp.where(sampling, block, jnp.where(projecting, chunk, rows))
+    # sampling and the chosen posture: evaluate only; descent: tangent step first
+    first = jnp.where(sampling | projecting | final, 1, 0)
+    return (x, first, jnp.where(final, 0, steps), length), chunk_at
+
+
+def _search_step(search: _Search, t, state):
+    """Iteration ``t`` of the search: one `_refine` of ``candidates`` rows, its results
+    written where the phase keeps them."""
+    measures, buffer, buffer_radius_sq, tolerance, q, q_radius_sq, posture_radius_sq = state
+    blocks, descend = search.blocks, search.descend
+    phases = sampling, projecting, final = t < blocks, (t >= blocks) & (t < descend), t == search.last
+    buffer, tolerance = jax.lax.cond(
+        t == blocks, lambda: _nearest_samples(search, measures), lambda: (buffer, tolerance)
+    )
+    q, q_radius_sq = jax.lax.cond(
+        t == descend, lambda: _candidates_of(search, buffer, buffer_radius_sq), lambda: (q, q_radius_sq)
+    )
+    (x, first, steps, length), chunk_at = _refine_inputs(search, t, phases, buffer, q, q_radius_sq)
+    moved, moved_s, moved_radius_sq = _refine(
+        search.robot, x, search.jacobian, first, steps, length, search.lower, search.upper, search.wraps
+    )
+    measures = jnp.where(
+        sampling, jax.lax.dynamic_update_slice_in_dim(measures, moved_s, t * search.candidates, 0), measures
+    )
+    on_set = jnp.abs(moved_s) <= tolerance
+    refined = jnp.where(on_set, moved_radius_sq, jnp.inf)
+    buffer = jnp.where(projecting, jax.lax.dynamic_update_slice_in_dim(buffer, moved, chunk_at, 0), buffer)
+    buffer_radius_sq = jnp.where(
+        projecting, jax.lax.dynamic_update_slice_in_dim(buffer_radius_sq, refined, chunk_at, 0), buffer_radius_sq
+    )
+    # The step at t == descend exists only to pick the candidates when no descent is asked for.
+    accept = (t >= descend) & ~final & (search.descent_steps > 0) & (moved_radius_sq < q_radius_sq) & on_set
+    q = jnp.where(accept[:, None], moved, q)
+    posture_radius_sq = jnp.where(final, moved_radius_sq[0], posture_radius_sq)
+    q_radius_sq = jnp.where(accept, moved_radius_sq, q_radius_sq)
+    return measures, buffer, buffer_radius_sq, tolerance, q, q_radius_sq, posture_radius_sq
+
+
 @functools.partial(jax.jit, static_argnames=("jacobian", "sample_room", "keep_room", "candidates", "polish"))
 def _singular_radius(
     robot,
@@ -700,110 +881,25 @@ def _singular_radius(
     """
     design = robot
     robot = jax.tree_util.tree_map(jax.lax.stop_gradient, robot)
-    n = family_of(robot).joint_count(robot)
-    lower, upper = joint_box(robot)
-    wraps = _wraps(robot)
-    samples, keep = jnp.asarray(samples), jnp.asarray(keep)
-    unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, sample_room, digital_shifts(seed, 1, n))[0]
-    joints = lower + (upper - lower) * unit
-    block_room, chunk_room = -(-sample_room // candidates), -(-keep_room // candidates)
-    real = jnp.arange(block_room * candidates) < samples
-    padded = jnp.concatenate([joints, jnp.broadcast_to(joints[:1], (block_room * candidates - sample_room, n))])
-    padded = jnp.where(real[:, None], padded, joints[:1])  # rows past the samples: copies of the first
-    blocks = (samples + candidates - 1) // candidates
-    factor = 1e-9 if n == family_of(robot).translational_rows else 1e-6
-    chunks = (keep + candidates - 1) // candidates
-    descend = blocks + chunks  # the first descent iteration
-    span = jnp.max(upper - lower)
-    descent_steps = jnp.asarray(descent_steps)
-
-    def nearest_samples(measures):
-        # The keep samples of smallest |s| (padded to whole chunks), and the on-set bound.
-        # Rows past the samples are NaN: top_k ranks them last (after any real NaN), the median skips them.
-        absolute = jnp.where(real, jnp.abs(measures), jnp.nan)
-        _, nearest = jax.lax.top_k(-absolute, keep_room)
-        buffer = padded[nearest]
-        buffer = jnp.concatenate([buffer, jnp.broadcast_to(buffer[:1], (chunk_room * candidates - keep_room, n))])
-        buffer = jnp.where(jnp.arange(chunk_room * candidates)[:, None] < keep, buffer, buffer[:1])
-        return buffer, factor * _median_of_first(absolute, samples)
-
-    def candidates_of(buffer, buffer_radius_sq):
-        # The refined rows' |tip|^2 (inf off the set; padding never chosen).
-        radius_sq = jnp.where(jnp.arange(buffer_radius_sq.shape[0]) < keep, buffer_radius_sq, jnp.inf)
-        _, best = jax.lax.top_k(-radius_sq, candidates)
-        return buffer[best], radius_sq[best]
-
-    last = descend + jnp.maximum(descent_steps, 1)  # without polish: evaluates the chosen posture
-
-    def chosen_posture(q, q_radius_sq):
-        # As `_closest_value` picks it: the best row, its joints near a limit moved onto it.
-        best = q[jnp.argmin(q_radius_sq)]
-        at_lower, at_upper = _at_limits(best, lower, upper, wraps)
-        return jnp.broadcast_to(jnp.where(at_upper, upper, jnp.where(at_lower, lower, best)), q.shape)
-
-    def body(t, state):
-        measures, buffer, buffer_radius_sq, tolerance, q, q_radius_sq, posture_radius_sq = state
-        sampling, projecting, final = t < blocks, (t >= blocks) & (t < descend), t == last
-        buffer, tolerance = jax.lax.cond(t == blocks, lambda: nearest_samples(measures), lambda: (buffer, tolerance))
-        q, q_radius_sq = jax.lax.cond(
-            t == descend, lambda: candidates_of(buffer, buffer_radius_sq), lambda: (q, q_radius_sq)
-        )
-        block = jax.lax.dynamic_slice_in_dim(padded, jnp.minimum(t, blocks - 1) * candidates, candidates)
-        chunk_at = jnp.clip(t - blocks, 0, chunks - 1) * candidates
-        chunk = jax.lax.dynamic_slice_in_dim(buffer, chunk_at, candidates)
-        length = span * 0.02 * 0.5 ** (12.0 * (t - descend) / descent_steps)  # geometric: 2 % of the box to ~5e-6
-        steps = jnp.where(sampling, 0, jnp.where(projecting, projection_steps, newton_steps))
-        rows = jnp.where(final, chosen_posture(q, q_radius_sq), q)
-        moved, moved_s, moved_radius_sq = _refine(
-            robot,
-            jnp.where(sampling, block, jnp.where(projecting, chunk, rows)),
-            jacobian,
-            # sampling and the chosen posture: evaluate only; descent: tangent step first
-            jnp.where(sampling | projecting | final, 1, 0),
-            jnp.where(final, 0, steps),
-            length,
-            lower,
-            upper,
-            wraps,
-        )
-        measures = jnp.where(
-            sampling, jax.lax.dynamic_update_slice_in_dim(measures, moved_s, t * candidates, 0), measures
-        )
-        on_set = jnp.abs(moved_s) <= tolerance
-        refined = jnp.where(on_set, moved_radius_sq, jnp.inf)
-        buffer = jnp.where(projecting, jax.lax.dynamic_update_slice_in_dim(buffer, moved, chunk_at, 0), buffer)
-        buffer_radius_sq = jnp.where(
-            projecting, jax.lax.dynamic_update_slice_in_dim(buffer_radius_sq, refined, chunk_at, 0), buffer_radius_sq
-        )
-        # The step at t == descend exists only to pick the candidates when no descent is asked for.
-        accept = (t >= descend) & ~final & (descent_steps > 0) & (moved_radius_sq < q_radius_sq) & on_set
-        q = jnp.where(accept[:, None], moved, q)
-        posture_radius_sq = jnp.where(final, moved_radius_sq[0], posture_radius_sq)
-        return (
-            measures,
-            buffer,
-            buffer_radius_sq,
-            tolerance,
-            q,
-            jnp.where(accept, moved_radius_sq, q_radius_sq),
-            posture_radius_sq,
-        )
-
-    dtype = joints.dtype
-    state = (
-        jnp.zeros((block_room * candidates,), dtype),
-        jnp.zeros((chunk_room * candidates, n), dtype),
-        jnp.full((chunk_room * candidates,), jnp.inf, dtype),
-        jnp.zeros((), dtype),
-        jnp.zeros((candidates, n), dtype),
-        jnp.full((candidates,), jnp.inf, dtype),
-        jnp.zeros((), dtype),
+    search = _search_layout(
+        robot,
+        jacobian,
+        samples,
+        keep,
+        candidates,
+        descent_steps,
+        projection_steps,
+        newton_steps,
+        seed,
+        sample_room,
+        keep_room,
     )
     # The polished value evaluates its own posture: no iteration for the chosen one.
-    state = jax.lax.fori_loop(0, last + (0 if polish else 1), body, state)
+    count = search.last + (0 if polish else 1)
+    state = jax.lax.fori_loop(0, count, functools.partial(_search_step, search), _search_start(search))
     q, q_radius_sq = state[4], state[5]
     lower, upper = joint_box(design)  # limits are design leaves: a joint on a limit moves with it
-    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, wraps, polish, state[6])
+    return _closest_value(design, q, q_radius_sq, jacobian, lower, upper, search.wraps, polish, state[6])
 
 
 def singular_radius(
