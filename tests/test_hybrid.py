@@ -30,7 +30,7 @@ from spacearm.design.hybrid import (
     nondominated_ranks,
     parse_hybrid,
 )
-from spacearm.design.spatial_problem import load_design_problem
+from spacearm.design.problem import load_problem as load_design_problem
 from spacearm.models import load_robot
 from spacearm.models.spatial import fields
 

@@ -12,7 +12,7 @@ from spacearm._core.errors import ConfigError
 from spacearm.analysis.spatial_workspaces import singular_radius
 from spacearm.design.hybrid import HybridSettings, hybrid_search
 from spacearm.design.objectives import RADIUS_OPTIONS
-from spacearm.design.spatial_problem import load_design_problem
+from spacearm.design.problem import load_problem as load_design_problem
 from spacearm.models.planar import singularities
 
 from .test_design import CHEAP_WBAR, reference_config

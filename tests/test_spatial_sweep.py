@@ -11,7 +11,7 @@ import yaml
 import spacearm as sa
 from spacearm._core.errors import ConfigError
 from spacearm.cli.validate import validate_file
-from spacearm.design.spatial_problem import load_design_problem
+from spacearm.design.problem import load_problem as load_design_problem
 from spacearm.models.spatial import fields
 from spacearm.studies import build_designs, load_sweep, run_sweep
 from spacearm.studies.designs import design_columns

@@ -327,7 +327,7 @@ def test_reach_html_replays_the_planar_plan(tmp_path, capsys):
 def front_pages(tmp_path_factory):
     """front.html of a spatial problem (UR5 mount) from a made-up search result, and a 3-objective front."""
     from spacearm.design import SearchResult
-    from spacearm.design.spatial_problem import load_design_problem
+    from spacearm.design.problem import load_problem as load_design_problem
     from spacearm.figures.views import front_view, write_front_view
 
     out = tmp_path_factory.mktemp("fronts")
