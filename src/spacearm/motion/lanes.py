@@ -26,6 +26,8 @@ paths is traced, so any batch up to the padded size runs in one compiled program
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 
@@ -79,6 +81,21 @@ def start_lane(field, y0: jax.Array, max_step, params: dict, *, rolled: bool = F
     return dict(lane, f=f0, slope=(f1[-1] - f0[-1]) / PROBE)
 
 
+class _LaneSettings(NamedTuple):
+    """The settings of `step_lane` that every step of a batch shares."""
+
+    square: bool  # static
+    max_length: jax.Array
+    max_step: jax.Array
+    tol: jax.Array
+    rtol: jax.Array
+    sing_rate: jax.Array
+    max_steps: jax.Array
+    tip_tol: jax.Array
+    tableau: str  # static
+    rolled: bool  # static
+
+
 def step_lane(
     field,
     lane: dict,
@@ -128,72 +145,130 @@ def step_lane(
         (new lane state, finished, reason): finished when an event is located to ``tol``
         (reason = the event) or the step budget is spent (reason 3).
     """
+    settings = _LaneSettings(square, max_length, max_step, tol, rtol, sing_rate, max_steps, tip_tol, tableau, rolled)
     first, n = joints
     y, f, slope, h_control = lane["y"], lane["f"], lane["slope"], lane["h_control"]
-    dtype = y.dtype
-    inf = jnp.asarray(jnp.inf, dtype)
-    approach = 1.0 if square else 0.5
+    h_sing, h_len, h_lim = _event_steps(settings, y, f, slope, joints, lower, upper)
+    max_h = _largest_step(settings, f[-1], slope, y.dtype)
+    event, h_event, reached = _nearest_event(h_sing, h_len, h_lim, tol)
+    if not square:
+        event, reached = _stall(settings, f[-1], slope, h_len, h_lim, event, reached)
+    fresh = lane["fresh"] if rolled else jnp.bool_(False)  # f and slope not evaluated yet
+    reached = reached & ~fresh
+    h = _step_size(settings, h_event, max_h, h_control, reached, fresh)
+    y_new, slopes, auxes, f_new = _runge_kutta(settings, field, lane, h)
+    accept, h_control = _error_control(settings, h, slopes, f_new, y, y_new, h_control, reached | fresh)
+    count = lane["count"] + jnp.where(reached | fresh, 0, 1).astype(jnp.int32)
+    new_lane = _advanced_lane(lane, accept & ~reached, h, y_new, f_new, count, h_control, auxes)
+    if rolled:  # a fresh lane keeps y and takes f0 and the secant along the probe (unit joint rates)
+        started = _started_lane(lane, y[first : first + n], y_new[first : first + n], f_new, slopes, auxes)
+        new_lane = jax.tree_util.tree_map(lambda a, b: jnp.where(fresh, a, b), started, new_lane)
+    finished = (reached | (count >= max_steps)) & ~fresh
+    reason = jnp.where(reached, event, REASON_STEP_BUDGET)
+    return new_lane, finished, reason
 
-    # Newton predictions of the step to each event (negative: step back after overshoot).
+
+def _event_steps(settings: _LaneSettings, y, f, slope, joints, lower, upper):
+    """Newton predictions of the step to each event, ``(h_sing, h_len, h_lim)`` (negative:
+    step back after overshoot; inf: not ahead). The singular end is predicted from the
+    secant ``slope`` of ds/dsigma, at half the distance for a one-sided approach."""
+    first, n = joints
+    inf = jnp.asarray(jnp.inf, y.dtype)
+    approach = 1.0 if settings.square else 0.5
     rate = f[-1]
     approaching = slope < 0
     h_sing = jnp.where(approaching, approach * rate / -jnp.where(approaching, slope, -1.0), inf)
-    h_len = jnp.where(rate > 0, (max_length - y[-1]) / jnp.where(rate > 0, rate, 1.0), inf)
+    h_len = jnp.where(rate > 0, (settings.max_length - y[-1]) / jnp.where(rate > 0, rate, 1.0), inf)
     dq, q = f[first : first + n], y[first : first + n]
     safe_dq = jnp.where(dq == 0, 1.0, dq)
     h_up = jnp.where(dq > 0, (upper - q) / safe_dq, inf)
     h_lo = jnp.where(dq < 0, (lower - q) / safe_dq, inf)
     h_lim = jnp.min(jnp.minimum(h_up, h_lo))
-    max_h = max_step
-    if not square:
-        receding = approach * rate / jnp.where(approaching, 1.0, jnp.maximum(slope, 1e-300))
-        max_h = jnp.minimum(max_step, jnp.where(approaching, inf, receding))
+    return h_sing, h_len, h_lim
+
+
+def _largest_step(settings: _LaneSettings, rate, slope, dtype):
+    """``max_step``; for a one-sided approach (not square) also, while ds/dsigma recedes from
+    zero, half the distance its secant predicts back to zero."""
+    if settings.square:
+        return settings.max_step
+    approaching = slope < 0
+    receding = 0.5 * rate / jnp.where(approaching, 1.0, jnp.maximum(slope, 1e-300))
+    return jnp.minimum(settings.max_step, jnp.where(approaching, jnp.asarray(jnp.inf, dtype), receding))
+
+
+def _nearest_event(h_sing, h_len, h_lim, tol):
+    """The event predicted first (its reason), the step to it, and whether it is located to ``tol``."""
     candidates = jnp.stack([h_sing, h_len, h_lim])
     event = jnp.argmin(candidates).astype(jnp.int32)
     h_event = candidates[event]
-    reached = jnp.abs(h_event) <= tol
-    if not square:
-        # The stall: a slow rate, or a flat one whose travel to the next limit is below tip_tol.
-        finite = jnp.isfinite(h_lim)
-        span = jnp.where(finite, h_lim, 0.0)
-        flat = finite & ((slope >= 0) | (rate > -slope * span)) & (span > max_step) & (h_len > span)
-        travel = span * (rate + 0.5 * slope * span)
-        stalled = (rate <= sing_rate) | (flat & (travel <= tip_tol))
-        event = jnp.where(stalled & ~reached, REASON_SINGULAR, event).astype(jnp.int32)
-        reached = reached | stalled
-    fresh = lane["fresh"] if rolled else jnp.bool_(False)  # f and slope not evaluated yet
-    reached = reached & ~fresh
-    h = jnp.minimum(h_event, max_h)
+    return event, h_event, jnp.abs(h_event) <= tol
 
-    adaptive = tableau == "dop853"
-    if adaptive:
+
+def _stall(settings: _LaneSettings, rate, slope, h_len, h_lim, event, reached):
+    """The stall of a redundant arm (see `step_lane`): a slow rate, or a flat one whose travel
+    to the next limit is below ``tip_tol``, ends the path singular."""
+    finite = jnp.isfinite(h_lim)
+    span = jnp.where(finite, h_lim, 0.0)
+    flat = finite & ((slope >= 0) | (rate > -slope * span)) & (span > settings.max_step) & (h_len > span)
+    travel = span * (rate + 0.5 * slope * span)
+    stalled = (rate <= settings.sing_rate) | (flat & (travel <= settings.tip_tol))
+    event = jnp.where(stalled & ~reached, REASON_SINGULAR, event).astype(jnp.int32)
+    return event, reached | stalled
+
+
+def _step_size(settings: _LaneSettings, h_event, max_h, h_control, reached, fresh):
+    """The step to attempt: to the nearest event, within ``max_h`` and the error controller's
+    step (either sign); 0 once an event is located; `PROBE` on a fresh rolled lane."""
+    h = jnp.minimum(h_event, max_h)
+    if settings.tableau == "dop853":
         # The error controller's step bounds the event-limited step (either sign).
         h = jnp.clip(h, -h_control, h_control)
     h = jnp.where(reached, 0.0, h)
-    if rolled:  # field(y_new) as the loop's last stage: one copy of the field in the program
+    if settings.rolled:
         # A fresh lane's step is the start's probe: with f = 0 and h = PROBE the second
         # stage is field(y) = f0 and the last field(y + PROBE * (sum of b_i k_i, i > 1)).
         h = jnp.where(fresh, PROBE, h)
-        # With an aux vector: its value at y_new (last stage), at y for a fresh lane (second).
-        stepped = rk_step(field, y, h, tableau, True, rolled=True, first_slope=f, end_slope=True, aux=lane.get("aux"))
-        y_new, slopes, auxes = stepped if "aux" in lane else (*stepped, None)
-        f_new = slopes[-1]
-    else:
-        y_new, slopes = rk_step(field, y, h, tableau, return_slopes=True, first_slope=f)
-        f_new = field(y_new)
-    if adaptive:
-        error = error_norm(h, slopes, f_new, y, y_new, rtol)
-        accept = error <= 1.0
-        factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
-        limited = jnp.abs(h) < 0.999 * h_control
-        grown = jnp.where(accept & limited, h_control, jnp.abs(h) * factor)
-        h_control = jnp.where(reached | fresh, h_control, jnp.minimum(grown, max_step))
-    else:
-        accept = jnp.bool_(True)
-    take = accept & ~reached
+    return h
+
+
+def _runge_kutta(settings: _LaneSettings, field, lane: dict, h):
+    """One Runge-Kutta step from the lane's y: ``(y_new, stage slopes, aux vectors or None, field(y_new))``."""
+    y, f = lane["y"], lane["f"]
+    if not settings.rolled:
+        y_new, slopes = rk_step(field, y, h, settings.tableau, return_slopes=True, first_slope=f)
+        return y_new, slopes, None, field(y_new)
+    # field(y_new) as the loop's last stage: one copy of the field in the program.
+    # With an aux vector: its value at y_new (last stage), at y for a fresh lane (second).
+    stepped = rk_step(
+        field, y, h, settings.tableau, True, rolled=True, first_slope=f, end_slope=True, aux=lane.get("aux")
+    )
+    y_new, slopes, auxes = stepped if "aux" in lane else (*stepped, None)
+    return y_new, slopes, auxes, slopes[-1]
+
+
+def _error_control(settings: _LaneSettings, h, slopes, f_new, y, y_new, h_control, hold):
+    """DOP853's embedded error estimate: whether the step is accepted, and the controller's
+    next step (kept where ``hold``: an event located or a fresh lane). RK4 accepts every step."""
+    if settings.tableau != "dop853":
+        return jnp.bool_(True), h_control
+    error = error_norm(h, slopes, f_new, y, y_new, settings.rtol)
+    accept = error <= 1.0
+    factor = jnp.clip(0.9 * jnp.where(error > 0, error, 1e-30) ** (-1.0 / 8.0), 0.2, 10.0)
+    limited = jnp.abs(h) < 0.999 * h_control
+    grown = jnp.where(accept & limited, h_control, jnp.abs(h) * factor)
+    return accept, jnp.where(hold, h_control, jnp.minimum(grown, settings.max_step))
+
+
+def _advanced_lane(lane: dict, take, h, y_new, f_new, count, h_control, auxes) -> dict:
+    """The lane after the attempt: y, f, the secant slope of ds/dsigma, the arc and the aux
+    vector move where the step is taken."""
+    y, f, slope = lane["y"], lane["f"], lane["slope"]
     slope_new = jnp.where(h != 0, (f_new[-1] - f[-1]) / jnp.where(h != 0, h, 1.0), slope)
-    keep = lambda new, old: jnp.where(take, new, old)
-    count = lane["count"] + jnp.where(reached | fresh, 0, 1).astype(jnp.int32)
+
+    def keep(new, old):
+        return jnp.where(take, new, old)
+
     new_lane = dict(
         lane,
         y=keep(y_new, y),
@@ -205,17 +280,19 @@ def step_lane(
     )
     if "aux" in lane:
         new_lane["aux"] = keep(auxes[-1], lane["aux"])
-    if rolled:  # a fresh lane keeps y and takes f0 and the secant along the probe (unit joint rates)
-        f0 = slopes[1]
-        probe = jnp.linalg.norm(y_new[first : first + n] - q)
-        slope0 = (f_new[-1] - f0[-1]) / jnp.where(probe > 0, probe, 1.0)
-        started = dict(lane, f=f0, slope=jnp.where(probe > 0, slope0, 0.0), fresh=jnp.bool_(False))
-        if "aux" in lane:
-            started["aux"] = auxes[1]
-        new_lane = jax.tree_util.tree_map(lambda a, b: jnp.where(fresh, a, b), started, new_lane)
-    finished = (reached | (count >= max_steps)) & ~fresh
-    reason = jnp.where(reached, event, REASON_STEP_BUDGET)
-    return new_lane, finished, reason
+    return new_lane
+
+
+def _started_lane(lane: dict, q, q_probe, f_new, slopes, auxes) -> dict:
+    """A fresh rolled lane after its probe step: y kept, f0 (the second stage) and the secant
+    of ds/dsigma along the probe from joints ``q`` to ``q_probe``."""
+    f0 = slopes[1]
+    probe = jnp.linalg.norm(q_probe - q)
+    slope0 = (f_new[-1] - f0[-1]) / jnp.where(probe > 0, probe, 1.0)
+    started = dict(lane, f=f0, slope=jnp.where(probe > 0, slope0, 0.0), fresh=jnp.bool_(False))
+    if "aux" in lane:
+        started["aux"] = auxes[1]
+    return started
 
 
 def run_queue(start, step, count: int, width: int, real) -> dict:
