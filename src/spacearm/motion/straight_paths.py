@@ -445,26 +445,15 @@ def straight_tip_path(
         `StraightPath` (planar) or `SpatialStraightPath` (spatial) with batch shape ``(...)``.
     """
     family = family_of(robot)
-    defaults = family.straight_defaults
     phi_start, direction, max_length = _prepare_straight(robot, phi_start, direction, max_length)
     joints, coords = _split_start(robot, phi_start, base_rotation)
     batch, flat_robot, batched, (joints_flat, coords_flat, dir_flat, len_flat) = flatten_batch(
         robot, [(joints, 1), (coords, 1), (direction, 1), (max_length, 0)]
     )
     dtype = joints_flat.dtype
-    default_tol = 1e-12 if jnp.finfo(dtype).bits >= 64 else 1e-5
-
-    def option(value, name, fallback=None):
-        if value is not None:
-            return value
-        return fallback if defaults.get(name) is None else defaults[name]
-
-    tol = option(tol, "tol", default_tol)
-    rtol = option(rtol, "rtol", default_tol)
-    max_step = option(max_step, "max_step")
-    sing_rate = option(sing_rate, "sing_rate")
-    tip_tol = option(tip_tol, "tip_tol", -np.inf)
-    max_steps = option(max_steps, "max_steps")
+    settings = _integration_settings(
+        family, dtype, max_step=max_step, tol=tol, rtol=rtol, sing_rate=sing_rate, tip_tol=tip_tol, max_steps=max_steps
+    )
     if tableau not in ("dop853", "rk4"):
         raise ConfigError(f"tableau: unknown scheme {tableau!r}; use 'dop853' or 'rk4'")
     # One program for every batch of up to 512 paths, and one per power of two beyond:
@@ -480,18 +469,31 @@ def straight_tip_path(
         coords_flat,
         dir_flat,
         len_flat,
-        _as_array(max_step, dtype),
-        _as_array(tol, dtype),
-        _as_array(rtol, dtype),
-        _as_array(sing_rate, dtype),
-        _as_array(tip_tol, dtype),
-        np.int32(max_steps),
+        *settings,
         np.int32(count),
         batched,
         lane_count(padded, lanes),
         tableau,
     )
     return unpad(out, count, batch)
+
+
+def _integration_settings(family, dtype, **given) -> tuple:
+    """`straight_tip_path`'s ``(max_step, tol, rtol, sing_rate, tip_tol, max_steps)`` as
+    `_straight_flat` takes them: each as given, else the family's default
+    (``family.straight_defaults``), else the dtype's tolerance (``tol``, ``rtol``) or no
+    travel stall (``tip_tol``)."""
+    defaults = family.straight_defaults
+    default_tol = 1e-12 if jnp.finfo(dtype).bits >= 64 else 1e-5
+    fallbacks = {"tol": default_tol, "rtol": default_tol, "tip_tol": -np.inf}
+
+    def option(name):
+        if given[name] is not None:
+            return given[name]
+        return fallbacks.get(name) if defaults.get(name) is None else defaults[name]
+
+    floats = (_as_array(option(name), dtype) for name in ("max_step", "tol", "rtol", "sing_rate", "tip_tol"))
+    return (*floats, np.int32(option("max_steps")))
 
 
 def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps, tableau):
