@@ -506,8 +506,8 @@ def _history_one(robot, phi_start, direction, joint_arc, *, intervals, substeps,
 
     def advance(y, _):
         # A loop over the substeps rather than an unrolled body: the DOP853 stages are
-        # already unrolled inside one step, so unrolling the substeps only lengthens
-        # compiles (and ran no faster).
+        # already unrolled inside one step, so unrolling the substeps would only lengthen
+        # compiles.
         y = jax.lax.fori_loop(0, substeps, lambda _, y: rk_step(field, y, h, tableau), y)
         return y, y
 
