@@ -35,7 +35,7 @@ from spacearm._core.schema import read_yaml
 from spacearm.design.baselines import nsga2_search
 from spacearm.design.fronts import hypervolume
 from spacearm.design.hybrid import JACOBIANS, hybrid_search, parse_hybrid
-from spacearm.design.spatial_problem import load_design_problem
+from spacearm.design.problem import load_problem as load_design_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEMS = ("pareto-attachment", "pareto-6var", "pareto-mount-ur5", "pareto-ur5-arm")

@@ -54,7 +54,10 @@ def test_reach_radius_equals_the_radius_kernel_spatial(ur5_radius):
     values = np.asarray(batch(jnp.asarray(UR5_DESIGNS)))[:, 0]
     for x, value in zip(UR5_DESIGNS, values, strict=True):
         kernel = float(singular_radius(problem.robot(jnp.asarray(x)), **RADIUS_OPTIONS, polish=True)[0])
-        np.testing.assert_allclose(value, kernel, rtol=1e-10, atol=1e-12)  # batched vs single: rounding
+        # Batched vs single: the same search in two programs. The polished minimum over the
+        # singular set moves by ~1e-12 m (2e-9 relative at the 2 mm radius) with the
+        # rounding of J*, as the references below do at 1e-8.
+        np.testing.assert_allclose(value, kernel, rtol=1e-8, atol=1e-12)
     # The radii of the analysis defaults (2^14 samples) at these designs: the same minima.
     np.testing.assert_allclose(values, [0.0109377753, 0.0022230301, 0.0689811532], rtol=1e-8)
 

@@ -63,10 +63,13 @@ from .objectives import (
     guaranteed_area as guaranteed_area,
     maximum_reachable_area as maximum_reachable_area,
 )
+
+# load_problem reads planar (fixed:) and spatial (robot:) problem files alike.
 from .problem import (
     DesignProblem as DesignProblem,
     SearchSettings as SearchSettings,
     Variable as Variable,
+    load_problem as load_problem,
     problem_from_mapping as problem_from_mapping,
     variable_names_for as variable_names_for,
 )
@@ -76,9 +79,6 @@ from .search import (
     pareto_search as pareto_search,
     value_and_grad_cost_ratio as value_and_grad_cost_ratio,
 )
-
-# load_problem reads planar (fixed:) and spatial (robot:) problem files alike.
-from .spatial_problem import load_problem as load_problem
 
 __all__ = [
     "AVERAGE_OBJECTIVES",

@@ -37,7 +37,6 @@ __all__ = [
     "OBJECTIVES",
     "RADIUS_OBJECTIVES",
     "RADIUS_OPTIONS",
-    "SPATIAL_OBJECTIVES",
     "average_objective",
     "guaranteed_area",
     "maximum_reachable_area",
@@ -58,7 +57,6 @@ AVERAGE_OBJECTIVES = {
     "low_disturbance": ("base_disturbance", -1.0),  # minus the mean ||C_w||_F, rad/rad
     "w_d_avg": ("dynamic_manipulability", 1.0),  # mean dynamic manipulability
 }
-SPATIAL_OBJECTIVES = AVERAGE_OBJECTIVES
 
 # Objectives of the design itself, not averaged over postures (closed forms of the design numbers).
 DESIGN_OBJECTIVES = ("low_total_mass",)  # minus the bus mass plus every arm mass, kg

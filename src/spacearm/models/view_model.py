@@ -1,6 +1,6 @@
 """A robot as one family-free JSON tree of bodies on a free bus, for drawing.
 
-`view_model` describes any robot the way DESIGN.md ("One model") sees it: bodies joined
+`view_model` describes any robot as one articulated tree on a free bus: bodies joined
 by revolute or prismatic joints, rooted at mount frames fixed on the bus, with tips on
 bodies. A spatial arm is the one-tip tree with one mount; a planar arm is the same tree
 with every joint about z and the bus attitude a turn about z. The browser's forward
