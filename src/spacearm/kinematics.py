@@ -290,7 +290,7 @@ def fixed_base_manipulability(robot, joints: jax.Array) -> jax.Array:
 
 
 def _tip_index(robot, tip) -> int:
-    names = tuple(getattr(robot, "tip_names", ()))
+    names = family_of(robot).tip_names(robot)
     count = family_of(robot).tip_count(robot)
     if isinstance(tip, str):
         if tip not in names:

@@ -181,6 +181,10 @@ class RobotFamily:
         """Static ``n`` joint names, or ``()`` where the family's joints have none (they are numbered)."""
         return ()
 
+    def tip_names(self, robot) -> tuple[str, ...]:
+        """Static names of the tips a per-tip result indexes (``tip_count``), ``()`` without a tip axis."""
+        return ()
+
     def arm_inertia(self, robot, posture: jax.Array) -> jax.Array:
         """``(..., n, n)`` H*, the arm inertia at zero momentum, batched over postures.
 

@@ -33,8 +33,6 @@ from .._core.errors import ConfigError
 from .._core.groups import SO2, SO3
 from ..kinematics import tip_position
 from ..models.family import family_of
-from ..models.planar.robot import PlanarRobot
-from ..models.spatial.robot import SpatialRobot
 from ..motion import (
     REASON_MAX_LENGTH,
     compile_straight_tip_path_history,
@@ -116,7 +114,7 @@ class ReachPlan:
     error: float
 
 
-def reachable_bounds(robot: PlanarRobot) -> tuple[float, float]:
+def reachable_bounds(robot) -> tuple[float, float]:
     """Inner and outer radius of the Maximum Reachable space (Area 3) about the system centroid, m.
 
     Outer K0 + .. + Kn (sec. 3.1 (3-a)); inner max(0, 2 max_k K_k - sum_k K_k), the hole
@@ -168,7 +166,7 @@ def _choose_rotation(deltas: np.ndarray, slack: np.ndarray, feasible: np.ndarray
     return float(deltas[candidates[np.argmin(np.abs(deltas[candidates]))]])
 
 
-def _loop_history(robot: PlanarRobot, phi_from: np.ndarray, loop: ReorientationLoop, samples: int = 4):
+def _loop_history(robot, phi_from: np.ndarray, loop: ReorientationLoop, samples: int = 4):
     """Postures ``(S, n+1)`` and inertial tips ``(S, 2)`` along the N passes of a loop.
 
     One pass is integrated (a fixed shape, compiled once); pass i is the first turned by
@@ -190,7 +188,7 @@ def _loop_history(robot: PlanarRobot, phi_from: np.ndarray, loop: ReorientationL
 
 
 @jax.jit
-def _squared_radius_and_gradient(robot: PlanarRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+def _squared_radius_and_gradient(robot, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     """|tip|^2 about the centroid at phi = (0, q), and its gradient in q (one program per shape)."""
 
     def squared_radius(q):
@@ -200,7 +198,7 @@ def _squared_radius_and_gradient(robot: PlanarRobot, q: jax.Array) -> tuple[jax.
     return jax.value_and_grad(squared_radius)(q)
 
 
-def _reposition_joints(robot: PlanarRobot, q0: np.ndarray, radius: float) -> np.ndarray:
+def _reposition_joints(robot, q0: np.ndarray, radius: float) -> np.ndarray:
     """Joint angles nearest q0 (minimum-norm Newton steps) whose tip is ``radius`` from the centroid."""
 
     def value_and_grad(q):
@@ -245,7 +243,7 @@ def loop_settings(robot, **changes) -> LoopSettings | SpatialLoopSettings:
 
 
 def plan_reach(
-    robot: PlanarRobot | SpatialRobot,
+    robot,
     start,
     target,
     *,
@@ -423,7 +421,7 @@ def _candidates(group, job: ReachJob) -> np.ndarray:
 # The planar steps ---------------------------------------------------------------------------
 
 
-def _planar_check(robot: PlanarRobot, phi_start, target, options):
+def _planar_check(robot, phi_start, target, options):
     options.pop("given_grid")
     if options:
         name = sorted(options)[0]

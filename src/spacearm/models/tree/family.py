@@ -271,6 +271,9 @@ class TreeFamily(RobotFamily):
     def joint_names(self, robot: TreeRobot) -> tuple[str, ...]:
         return tuple(robot.labels.joint_names)
 
+    def tip_names(self, robot: TreeRobot) -> tuple[str, ...]:
+        return tuple(robot.tip_names)
+
     def arm_inertia(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
         """``(n, n)`` H*, the inertia of all arms at zero momentum (a focused tree: its held joints locked)."""
         return _locked(robot, arm_inertia(robot, joints))
