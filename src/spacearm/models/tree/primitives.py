@@ -238,6 +238,14 @@ def _tree_backward_step(carry, x):
 def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
     """Forward and backward pass for joint positions ``q (n, *batch)`` (batch axes last)."""
     cst = tree_constants(robot)
+    state, centroids, inertias = _forward_pass(robot, cst, q)
+    if with_momentum:
+        _backward_pass(robot, cst, state, centroids, inertias)
+    return state
+
+
+def _forward_pass(robot: TreeRobot, cst: TreeConstants, q):
+    """Frames down the tree: the state without momenta, and the body centroids and inertias (bus axes)."""
     q = jnp.asarray(q)
     batch = q.shape[1:]
     flags = jnp.asarray([k == "prismatic" for k in robot.joint_kinds], dtype=q.dtype)
@@ -303,9 +311,16 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
         tip_rotations=_matmul(body_rot, tip_rot),
         prismatic=flags,
     )
-    if not with_momentum:
-        return state
-    zero = jnp.zeros(batch, q.dtype)
+    return state, centroids, inertias
+
+
+def _backward_pass(robot: TreeRobot, cst: TreeConstants, state: _TreePass, centroids, inertias) -> None:
+    """Subtree momenta up the tree, then the system centroid, mass and inertia about it, into ``state``."""
+    segs = segments(robot.parents)
+    flags = state.prismatic
+    axes, origins = state.axes, state.origins
+    batch = axes[0].shape[1:]
+    zero = jnp.zeros(batch, flags.dtype)
     totals: dict[int, list] = {}  # parent body/root -> totals of the segments hanging from it
     momentum_parts, angular_parts = [None] * len(segs), [None] * len(segs)
     flat_flags = flags.reshape(-1)
@@ -348,7 +363,6 @@ def _tree_pass(robot: TreeRobot, q, with_momentum: bool = True) -> _TreePass:
     state.momentum, state.angular = _cat(momentum_parts), _cat(angular_parts)
     state.centroid, state.mass = centroid, mass
     state.inertia_g = tuple(x - y for x, y in zip(about, _point_inertia(mass, centroid), strict=False))
-    return state
 
 
 def _expand(x, batch_ndim):
