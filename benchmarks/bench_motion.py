@@ -276,8 +276,8 @@ def bench_loops(args, rng, robot, model, long=False):
     phi_start, waypoints = (long_paths if long else random_loops)(rng, count)
     phi_start, waypoints = jnp.asarray(phi_start), jnp.asarray(waypoints)
     problem = "long" if long else "loops"
-    reference = np.asarray(sa.integrate_joint_path(robot, phi_start, waypoints, nodes=40, pieces=64))[:, 0]
-    check = np.asarray(sa.integrate_joint_path(robot, phi_start, waypoints, nodes=64, pieces=64))[:, 0]
+    reference = np.asarray(sa.integrate_joint_path(robot, phi_start, waypoints, nodes=40, pieces=64)[0])
+    check = np.asarray(sa.integrate_joint_path(robot, phi_start, waypoints, nodes=64, pieces=64)[0])
     segments = waypoints.shape[1] - 1
     segment_max = float(np.max(np.abs(np.diff(np.asarray(waypoints), axis=1))))
     title = "long closed paths" if long else "cyclic loops (rectangles)"
@@ -301,7 +301,7 @@ def bench_loops(args, rng, robot, model, long=False):
     for nodes, pieces, label in rules:
 
         def fn(robot, phi, wp, nodes=nodes, pieces=pieces):
-            return sa.integrate_joint_path(robot, phi, wp, nodes=nodes, pieces=pieces)[:, 0]
+            return sa.integrate_joint_path(robot, phi, wp, nodes=nodes, pieces=pieces)[0]
 
         compiled, compile_s = tasks.compile(fn, robot, phi_start, waypoints)
         tasks.add(

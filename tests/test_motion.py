@@ -24,6 +24,12 @@ LOOP = np.array([[-60.0, 120.0], [30.0, 120.0], [30.0, 30.0], [-60.0, 30.0], [-6
 PHI_FIG3 = np.array([0.0, -60.0, 120.0]) * DEG
 
 
+def _posture(end):
+    """[phi0, joints] from `integrate_joint_path`'s (attitude, joints) of a planar robot."""
+    phi0, joints = end
+    return np.concatenate([np.asarray(phi0)[..., None], np.asarray(joints)], axis=-1)
+
+
 def reference_base_rotation(d, waypoints):
     """Line integral of eq. (5) by scipy.integrate.quad over the naive model, segment by segment."""
     total = 0.0
@@ -51,7 +57,7 @@ def central_derivative(values, h):
 
 def test_fig2_loop_matches_scipy_quadrature_and_reverses(table1):
     phi_start = np.r_[0.0, LOOP[0]]
-    phi_end = np.asarray(sa.integrate_joint_path(table1, phi_start, LOOP))
+    phi_end = _posture(sa.integrate_joint_path(table1, phi_start, LOOP))
     expected = reference_base_rotation(ref.design(table1), LOOP)
     assert abs(phi_end[0] - expected) < 1e-12
     np.testing.assert_allclose(phi_end[1:], LOOP[-1], atol=0)
@@ -59,10 +65,10 @@ def test_fig2_loop_matches_scipy_quadrature_and_reverses(table1):
     increments = np.asarray(motion.joint_path_base_increments(table1, LOOP))
     assert increments.shape == (4,) and abs(increments.sum() - phi_end[0]) < 1e-15
     # the same loop run backwards, from where the first one ended, undoes the rotation
-    back = np.asarray(sa.integrate_joint_path(table1, phi_end, LOOP[::-1]))
+    back = _posture(sa.integrate_joint_path(table1, phi_end, LOOP[::-1]))
     assert abs(back[0] - phi_start[0]) < 1e-13
     # and run backwards from the start, it turns the base the other way by the same angle
-    reverse = np.asarray(sa.integrate_joint_path(table1, phi_start, LOOP[::-1]))
+    reverse = _posture(sa.integrate_joint_path(table1, phi_start, LOOP[::-1]))
     assert abs(reverse[0] + phi_end[0]) < 1e-13
     # the tip does not come back to where it was (no one-to-one joint/inertial map)
     moved = np.linalg.norm(sa.tip_position(table1, phi_end) - sa.tip_position(table1, phi_start))
@@ -77,7 +83,7 @@ def test_random_paths_batched_over_designs_match_scipy(n):
     # long segments: every joint turns up to a full revolution per segment
     waypoints = rng.uniform(-np.pi, np.pi, (3, 4, n))
     phi_start = np.concatenate([rng.uniform(-1, 1, (3, 1)), waypoints[:, 0]], axis=-1)
-    phi_end = np.asarray(sa.integrate_joint_path(batch, phi_start, waypoints))
+    phi_end = _posture(sa.integrate_joint_path(batch, phi_start, waypoints))
     for i, robot in enumerate(robots):
         expected = phi_start[i, 0] + reference_base_rotation(ref.design(robot), waypoints[i])
         assert abs(phi_end[i, 0] - expected) < 1e-10
@@ -87,10 +93,10 @@ def test_quadrature_converges_to_rounding(table1):
     rng = np.random.default_rng(3)
     waypoints = rng.uniform(-2 * np.pi, 2 * np.pi, (16, 3, 2))
     phi_start = np.concatenate([np.zeros((16, 1)), waypoints[:, 0]], axis=-1)
-    fine = np.asarray(sa.integrate_joint_path(table1, phi_start, waypoints, nodes=40, pieces=32))[:, 0]
+    fine = _posture(sa.integrate_joint_path(table1, phi_start, waypoints, nodes=40, pieces=32))[:, 0]
     errors = []
     for nodes, pieces in [(8, 1), (8, 2), (8, 4), (24, 8)]:
-        coarse = np.asarray(sa.integrate_joint_path(table1, phi_start, waypoints, nodes=nodes, pieces=pieces))
+        coarse = _posture(sa.integrate_joint_path(table1, phi_start, waypoints, nodes=nodes, pieces=pieces))
         errors.append(np.max(np.abs(coarse[:, 0] - fine)))
     assert errors[-1] < 1e-12  # the default rule
     assert errors[0] > errors[1] > errors[2] > errors[3]
@@ -103,7 +109,7 @@ def test_history_conserves_angular_momentum_and_ends_where_the_integral_does(tab
     postures, tips = sa.joint_path_history(table1, phi_start, LOOP, samples)
     postures, tips = np.asarray(postures), np.asarray(tips)
     assert postures.shape == (4 * samples + 1, 3) and tips.shape == (4 * samples + 1, 2)
-    np.testing.assert_allclose(postures[-1], sa.integrate_joint_path(table1, phi_start, LOOP), atol=1e-13)
+    np.testing.assert_allclose(postures[-1], _posture(sa.integrate_joint_path(table1, phi_start, LOOP)), atol=1e-13)
     for i in range(0, len(postures), 97):
         np.testing.assert_allclose(tips[i], ref.tip(d, postures[i]), atol=1e-13)
     # segment 1 only: posture derivative in the segment parameter t by finite differences
@@ -344,10 +350,10 @@ def test_default_joint_path_rule_sizes_its_panels_from_the_longest_segment(table
     phi0 = jnp.array([0.0, -1.0, 2.0])
     for span in (0.5, 4 * np.pi):
         waypoints = jnp.concatenate([phi0[None, 1:], phi0[1:] + rng.uniform(-span, span, (3, 2))])
-        converged = sa.integrate_joint_path(table1, phi0, waypoints, nodes=40, pieces=64)
-        default = sa.integrate_joint_path(table1, phi0, waypoints)
+        converged = _posture(sa.integrate_joint_path(table1, phi0, waypoints, nodes=40, pieces=64))
+        default = _posture(sa.integrate_joint_path(table1, phi0, waypoints))
         np.testing.assert_allclose(default, converged, atol=1e-13)
-        traced = jax.jit(lambda w: sa.integrate_joint_path(table1, phi0, w))(waypoints)
+        traced = _posture(jax.jit(lambda w: sa.integrate_joint_path(table1, phi0, w))(waypoints))
         np.testing.assert_allclose(traced, converged, atol=1e-13 if span < 4 else 1e-12)
     assert _default_pieces(np.zeros((2, 2)) + [[0, 0], [1.5, 0]], None) == 1
     assert _default_pieces(np.zeros((2, 2)) + [[0, 0], [4 * np.pi, 0]], None) == 8

@@ -19,6 +19,12 @@ DEG = np.pi / 180.0
 PHI_START = np.array([0.0, -60.0, 120.0]) * DEG  # the initial posture of Fig. 3 and Fig. 5
 
 
+def _posture(end):
+    """[phi0, joints] from `integrate_joint_path`'s (attitude, joints) of a planar robot."""
+    phi0, joints = end
+    return np.concatenate([np.asarray(phi0)[..., None], np.asarray(joints)], axis=-1)
+
+
 def reference_loop_rotation(d, waypoints):
     """Line integral of eq. (5) along the polygon, scipy.integrate.quad over the naive model."""
     total = 0.0
@@ -61,7 +67,7 @@ def test_loop_turns_the_base_by_the_request_independently_integrated(loop30):
     loop = split_loops(details)
     per_loop = reference_loop_rotation(ref.design(robot), loop)
     assert abs(details.loops * per_loop - 30.0 * DEG) < 1e-9
-    phi_end = np.asarray(sa.integrate_joint_path(robot, PHI_START, waypoints))
+    phi_end = _posture(sa.integrate_joint_path(robot, PHI_START, waypoints))
     assert abs(phi_end[0] - PHI_START[0] - 30.0 * DEG) < 1e-10
     np.testing.assert_array_equal(phi_end[1:], q0)
     # the public function returns the same waypoints
@@ -96,7 +102,7 @@ def test_large_rotations_repeat_a_loop_and_stay_exact():
         assert details.loops > 1  # one loop within 1.5 rad of the start cannot turn the base this far
         loop = split_loops(details)
         assert abs(details.loops * reference_loop_rotation(d, loop) - degrees * DEG) < 1e-8
-        phi_end = np.asarray(sa.integrate_joint_path(robot, PHI_START, details.waypoints))
+        phi_end = _posture(sa.integrate_joint_path(robot, PHI_START, details.waypoints))
         assert abs(phi_end[0] - degrees * DEG) < 1e-6
         assert details.excursion <= planning.LoopSettings().max_excursion
 

@@ -181,8 +181,8 @@ def test_batches_of_paths_attitudes_and_designs(ur5):
 def test_dispatch_and_errors(ur5, table1):
     phi = jnp.array([0.1, 0.3, -0.4])
     waypoints = jnp.array([[0.3, -0.4], [1.0, 0.2], [0.3, -0.4]])
-    out = sa.integrate_joint_path(table1, phi, waypoints)  # planar: unchanged
-    assert out.shape == (3,)
+    phi0_end, joints_end = sa.integrate_joint_path(table1, phi, waypoints)  # planar: (phi0, joints)
+    assert phi0_end.shape == () and joints_end.shape == (2,)
     with pytest.raises(TypeError):
         sa.integrate_joint_path(table1, phi, waypoints, base_rotation=np.eye(3))
     with pytest.raises(sa.ConfigError, match="first row"):
@@ -226,7 +226,7 @@ def test_no_retrace_and_gradients(ur5):
 def test_history_ends_where_the_integrator_does(ur5):
     rng = np.random.default_rng(8)
     loop = _loops(rng, 1, 6)[0]
-    R, q = attitude.spatial_joint_path_history(ur5, loop[0], loop, samples_per_segment=8, steps=1)
+    R, q = attitude.so3_joint_path_history(ur5, loop[0], loop, samples_per_segment=8, steps=1)
     assert R.shape == (12 * 8 + 1, 3, 3) and q.shape == (12 * 8 + 1, 6)
     R_end, _ = sa.integrate_joint_path(ur5, loop[0], loop)
     assert float(attitude.geodesic_distance(R[-1], R_end)) < 1e-10

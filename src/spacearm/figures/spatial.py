@@ -28,7 +28,7 @@ import numpy as np
 from ..io import save_figure
 from ..models import load_robot
 from ..models.view_model import view_model, view_pose
-from ..motion.attitude import log, spatial_joint_path_history
+from ..motion.attitude import log, so3_joint_path_history
 from ..motion.spatial_paths import spatial_straight_tip_path
 from ..planning.spatial_reach import PHASE_LOOP, PHASE_STRAIGHT
 from . import figure
@@ -197,7 +197,7 @@ def demo_loop(segments: int = 16) -> np.ndarray:
 
 def loop_history(robot, samples_per_segment: int = 8):
     loop = demo_loop()
-    R, q = spatial_joint_path_history(robot, loop[0], loop, samples_per_segment=samples_per_segment, steps=1)
+    R, q = so3_joint_path_history(robot, loop[0], loop, samples_per_segment=samples_per_segment, steps=1)
     return np.asarray(R), np.asarray(q)
 
 

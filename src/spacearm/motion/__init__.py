@@ -1,10 +1,6 @@
 """Motion of the free-floating arm: the base attitude along joint paths, straight tip paths and pose paths."""
 
-from .attitude import (
-    geodesic_distance as geodesic_distance,
-    integrate_spatial_joint_path as integrate_spatial_joint_path,
-    spatial_joint_path_history as spatial_joint_path_history,
-)
+from .attitude import geodesic_distance as geodesic_distance
 from .joint_paths import (
     integrate_joint_path as integrate_joint_path,
     joint_path_base_increments as joint_path_base_increments,
@@ -48,12 +44,10 @@ __all__ = [
     "geodesic_distance",
     "go_and_back",
     "integrate_joint_path",
-    "integrate_spatial_joint_path",
     "joint_path_base_increments",
     "joint_path_history",
     "pose_on_path",
     "spatial_go_and_back",
-    "spatial_joint_path_history",
     "spatial_straight_tip_path",
     "straight_pose_path",
     "straight_tip_path",

@@ -65,11 +65,11 @@ __all__ = [
     "expm",
     "geodesic_distance",
     "hat",
-    "integrate_spatial_joint_path",
+    "integrate_so3_joint_path",
     "log",
     "path_rotation",
     "path_rotation_history",
-    "spatial_joint_path_history",
+    "so3_joint_path_history",
     "step_generators",
     "step_nodes",
     "vee",
@@ -155,7 +155,7 @@ def _integrate_flat(robot, waypoints, base_rotation, robot_batched, steps, order
     return base_rotation @ rotate(robot, waypoints)  # every node of every path in one batched pass
 
 
-def integrate_spatial_joint_path(
+def integrate_so3_joint_path(
     robot,
     q_start: jax.Array,
     joint_waypoints: jax.Array,
@@ -210,7 +210,7 @@ def _history_flat(robot, waypoints, base_rotation, robot_batched, samples, steps
     return jax.vmap(one, in_axes=(0 if robot_batched else None, 0, 0))(robot, waypoints, base_rotation)
 
 
-def spatial_joint_path_history(
+def so3_joint_path_history(
     robot,
     q_start: jax.Array,
     joint_waypoints: jax.Array,
@@ -227,7 +227,7 @@ def spatial_joint_path_history(
 
     Returns:
         ``(R (..., S, 3, 3), q (..., S, n))`` with S = (k - 1) samples_per_segment + 1;
-        ``R[..., -1, :, :]`` equals `integrate_spatial_joint_path`'s attitude.
+        ``R[..., -1, :, :]`` equals `integrate_so3_joint_path`'s attitude.
     """
     q_start, joint_waypoints, base_rotation = _prepare(robot, q_start, joint_waypoints, base_rotation)
     batch, flat_robot, batched, (wp_flat, R_flat, _) = flatten_batch(

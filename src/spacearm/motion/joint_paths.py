@@ -25,7 +25,7 @@ from .._core.errors import ConfigError
 from .._core.magnus import composite_gauss, line_integral
 from ..kinematics import tip_position
 from ..models.family import family_of, require_family
-from .attitude import DEFAULT_ORDER, integrate_spatial_joint_path
+from .attitude import DEFAULT_ORDER, integrate_so3_joint_path
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = ["integrate_joint_path", "joint_path_base_increments", "joint_path_history"]
@@ -97,12 +97,13 @@ def integrate_joint_path(
     steps: int | None = None,
     order=None,
 ):
-    """Posture at the end of a joint-space polyline, the base attitude following eq. (5).
+    """The base attitude and the joints at the end of a joint-space polyline (eq. 5, zero momentum).
 
-    The integrator follows the family's attitude group. SO(3) (spatial robots):
-    ``R_end, q_end = integrate_joint_path(robot, q_start, joint_waypoints,
+    Every robot gets ``(attitude, joints)``: the attitude as its group holds it (a rotation
+    matrix on SO(3), the angle phi0 on SO(2)) and the joints at the last waypoint. SO(3)
+    (spatial robots): ``R_end, q_end = integrate_joint_path(robot, q_start, joint_waypoints,
     base_rotation=R0)`` integrates the bus attitude by the 6th-order Magnus scheme
-    (`spacearm.motion.attitude.integrate_spatial_joint_path`: ``steps`` Magnus steps
+    (`spacearm.motion.attitude.integrate_so3_joint_path`: ``steps`` Magnus steps
     per segment, by default from the segment lengths; ``order`` the scheme, default 6);
     ``nodes`` and ``pieces`` are refused there. SO(2) is abelian, so the attitude is a
     plain line integral, evaluated exactly by Gauss-Legendre quadrature (planar robots,
@@ -126,7 +127,8 @@ def integrate_joint_path(
         pieces: panels per segment (static; ``None``: from the longest segment, as above).
 
     Returns:
-        ``(..., n+1)`` posture at the last waypoint, base attitude included, rad.
+        ``(phi0_end (...), joints (..., n))`` planar; ``(R_end (..., 3, 3), q_end (..., n))``
+        on SO(3): the attitude and the joints at the last waypoint.
     """
     group = family_of(robot).attitude
     if not group.abelian:
@@ -135,7 +137,7 @@ def integrate_joint_path(
                 f"integrate_joint_path: nodes and pieces set the quadrature of an abelian attitude; the "
                 f"{group.name} attitude is integrated by Magnus steps (use steps=, order=)"
             )
-        return integrate_spatial_joint_path(
+        return integrate_so3_joint_path(
             robot,
             phi_start,
             joint_waypoints,
@@ -153,8 +155,8 @@ def integrate_joint_path(
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     pieces = _default_pieces(joint_waypoints, pieces)
     batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(robot, [(phi_start, 1), (joint_waypoints, 2)])
-    out = _joint_path_flat(flat_robot, phi_flat, wp_flat, batched, nodes, pieces)
-    return out.reshape(batch + (robot.n_links + 1,))
+    out = _joint_path_flat(flat_robot, phi_flat, wp_flat, batched, nodes, pieces).reshape(batch + (robot.n_links + 1,))
+    return out[..., 0], out[..., 1:]
 
 
 @functools.partial(jax.jit, static_argnames=("robot_batched", "nodes", "pieces"))

@@ -35,7 +35,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from ..kinematics import tip_position
-from ..motion.attitude import expm, spatial_joint_path_history
+from ..motion.attitude import expm, so3_joint_path_history
 from ..motion.path_ends import REASON_MAX_LENGTH
 from ..motion.spatial_paths import spatial_straight_tip_path
 from ._reach_steps import (
@@ -258,7 +258,7 @@ def _reorient(job: ReachJob, pick) -> SpatialReachPlan:
     # D^i on the left in bus axes (the attitude ODE does not depend on R).
     R_pass, q_pass = (
         np.asarray(x)
-        for x in spatial_joint_path_history(
+        for x in so3_joint_path_history(
             robot, q0, loop.loop, base_rotation=np.eye(3), samples_per_segment=job.options["loop_samples"], steps=1
         )
     )
