@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from spacearm.models.spatial.urdf import rpy_matrix
+from spacearm._core.groups import rpy_matrix
 
 
 def matrix_rpy(rotation: np.ndarray) -> np.ndarray:

@@ -16,10 +16,10 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 import spacearm as sa
+from spacearm._core.groups import rpy_matrix
 from spacearm.cli import main
 from spacearm.models.family import RobotFamily, family_of
 from spacearm.models.spatial import primitives
-from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.planning import plan_pose_reach
 
 from .conftest import count_compiles

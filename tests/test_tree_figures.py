@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import spacearm as sa
+from spacearm._core.groups import rpy_matrix
 from spacearm.figures import spatial
-from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import primitives
 from spacearm.planning.spatial_reach import PHASE_STRAIGHT
 

@@ -31,6 +31,7 @@ __all__ = [
     "hat",
     "log",
     "polar_rotation",
+    "rpy_matrix",
     "vee",
 ]
 
@@ -127,6 +128,19 @@ def polar_rotation(M: jax.Array) -> jax.Array:
     """The rotation nearest to a ``(..., 3, 3)`` matrix close to one (polar factor by SVD)."""
     u, _, vt = jnp.linalg.svd(M)
     return u @ vt
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """URDF roll-pitch-yaw (fixed axes x, y, z): R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def fibonacci_sphere(count: int) -> np.ndarray:

@@ -14,13 +14,13 @@ move; default all, so the other arms move too), through
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from .._core.errors import ConfigError, RunError
+from .._core.groups import rpy_matrix
 from ..io.folders import check_output_folder, claimed_folder, replacing_folder
 from ._args import check_limits, comma_numbers
 
@@ -320,22 +320,8 @@ def _spatial_start(args: argparse.Namespace, robot) -> tuple[np.ndarray, np.ndar
     R0 = np.eye(3)
     if args.attitude is not None:
         rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
-        R0 = np.asarray(_rpy_matrix(rpy if args.radians else np.radians(rpy)))
+        R0 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
     return q, R0, prismatic
-
-
-def _rpy_matrix(rpy) -> np.ndarray:
-    """The rotation R = Rz(yaw) Ry(pitch) Rx(roll) of URDF roll, pitch, yaw (fixed axes x, y, z), rad:
-    what --attitude-rpy and --to-rpy name (the inverse of `_rpy_of`)."""
-    r, p, y = (float(v) for v in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 def _rpy_of(R: np.ndarray) -> np.ndarray:
@@ -352,7 +338,7 @@ def _run_pose(args: argparse.Namespace, robot, out: Path, several: bool) -> int:
     q, R0, prismatic = _spatial_start(args, robot)
     target = comma_numbers(args.target, 3, "--to")
     rpy = comma_numbers(args.target_rpy, 3, "--to-rpy")
-    T1 = np.asarray(_rpy_matrix(rpy if args.radians else np.radians(rpy)))
+    T1 = np.asarray(rpy_matrix(rpy if args.radians else np.radians(rpy)))
     if args.animate:
         raise ConfigError("--animate: not available for spatial robots yet (reach.png shows the plan)")
     plan = plan_pose_reach(robot, q, target, T1, base_rotation=R0)

@@ -22,7 +22,8 @@ import jax
 import numpy as np
 
 from ..._core.errors import ConfigError
-from .urdf import ArmChain, check_inertia, rpy_matrix
+from ..._core.groups import rpy_matrix
+from .urdf import ArmChain, check_inertia
 
 __all__ = ["Labels", "SpatialRobot", "robot_from_chain", "stack_spatial_robots"]
 

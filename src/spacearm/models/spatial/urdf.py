@@ -47,6 +47,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..._core.errors import ConfigError
+from ..._core.groups import rpy_matrix
 from ..._core.schema import MAX_MAGNITUDE, did_you_mean, quote, read_regular_file
 
 __all__ = [
@@ -67,7 +68,6 @@ __all__ = [
     "read_urdf",
     "read_urdf_text",
     "rigid_closure",
-    "rpy_matrix",
     "side_branches",
     "unlocked_message",
 ]
@@ -133,19 +133,6 @@ class ArmChain:
 
 
 # Small rigid-body helpers (numpy) ------------------------------------------------------
-
-
-def rpy_matrix(rpy) -> np.ndarray:
-    """URDF roll-pitch-yaw (fixed axes x, y, z): R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    r, p, y = (float(v) for v in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._core.groups import rpy_matrix
 from ..view_model import box_corners, chain_owners, check_one_design, joint_limits, unit_axes
-from .urdf import rpy_matrix
 
 __all__ = ["spatial_view_model"]
 

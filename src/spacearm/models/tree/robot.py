@@ -32,8 +32,9 @@ import jax
 import numpy as np
 
 from ..._core.errors import ConfigError
+from ..._core.groups import rpy_matrix
 from ..._core.schema import did_you_mean
-from ..spatial.urdf import ArmChain, check_inertia, rpy_matrix
+from ..spatial.urdf import ArmChain, check_inertia
 
 __all__ = ["TreeLabels", "TreeRobot", "stack_tree_robots", "support_mask", "tree_from_chains", "tree_view"]
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..spatial.urdf import rpy_matrix
+from ..._core.groups import rpy_matrix
 
 __all__ = ["tip_shell", "virtual_link_lengths"]
 

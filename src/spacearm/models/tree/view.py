@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..spatial.urdf import rpy_matrix
+from ..._core.groups import rpy_matrix
 from ..view_model import box_corners, check_one_design, joint_limits, unit_axes
 
 __all__ = ["arm_names", "joint_owners", "tree_view_model"]
