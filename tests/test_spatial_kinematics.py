@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm import kinematics
+from spacearm import inertia, kinematics
 from spacearm.models import spatial
 from spacearm.models.spatial import primitives
 from spacearm.models.tree import primitives as tree_primitives
@@ -123,7 +123,7 @@ def test_zero_momentum_holds_in_pinocchio(ur5):
 
 def test_reaction_null_space_turns_the_bus_not_at_all(ur5):
     q = np.random.default_rng(8).uniform(-3, 3, (8, 6))
-    C_w = np.asarray(spatial.base_twist_map(ur5, q))[0, 3:]
+    C_w = np.asarray(inertia.base_twist_map(ur5, q))[0, 3:]
     _, _, vt = np.linalg.svd(C_w)
     null = vt[3:]  # n - 3 = 3 directions
     np.testing.assert_allclose(C_w @ null.T, 0.0, atol=1e-14)
@@ -174,14 +174,14 @@ def _extra_metrics(robot, q, length):
     """The metrics beyond w* that test_metrics_extras reads, as one program (the jitted public
     kernels inlined unchanged: one compile instead of eight)."""
     return dict(
-        w_rot=spatial.rotational_manipulability(robot, q),
-        w_full=spatial.full_manipulability(robot, q, length),
-        H=spatial.arm_inertia(robot, q),
-        M=spatial.mass_matrix(robot, q),
-        w_dyn=spatial.dynamic_manipulability(robot, q),
+        w_rot=inertia.rotational_manipulability(robot, q),
+        w_full=inertia.full_manipulability(robot, q, length),
+        H=inertia.arm_inertia(robot, q),
+        M=inertia.mass_matrix(robot, q),
+        w_dyn=inertia.dynamic_manipulability(robot, q),
         axes=sa.manipulability_ellipsoid(robot, q)[0],
-        rot_axes=spatial.rotational_ellipsoid(robot, q)[0],
-        fixed_axes=spatial.fixed_base_ellipsoid(robot, q)[0],
+        rot_axes=inertia.rotational_ellipsoid(robot, q)[0],
+        fixed_axes=inertia.fixed_base_ellipsoid(robot, q)[0],
     )
 
 

@@ -37,10 +37,10 @@ import numpy as np
 import pytest
 
 import spacearm as sa
+from spacearm.analysis.reaction import reaction_null_space
 from spacearm.cli import main
 from spacearm.models.spatial import locate_package_file
 from spacearm.models.spatial.urdf import rpy_matrix
-from spacearm.models.tree.metrics import reaction_null_space
 
 pin = pytest.importorskip("pinocchio")
 

@@ -18,6 +18,8 @@ import numpy as np
 import pytest
 
 import spacearm as sa
+from spacearm import inertia
+from spacearm.analysis import reaction
 from spacearm.kinematics import generic_generalized_jacobian, generic_tip_position
 from spacearm.models import tree
 from spacearm.models.spatial import locate_package_file, read_urdf
@@ -109,7 +111,7 @@ def _kernels_in_one_program(robot, q, R, pairs):
     """`_kernels` and the mass matrices H_m and H* at q[0], as one program. The kernels are
     jitted functions, inlined here unchanged: a random tree's new structure then compiles
     once (~10 s CPU) instead of once per kernel (~17 s)."""
-    return _kernels(robot, q, R, pairs), tree.mass_matrix(robot, q[0]), tree.arm_inertia(robot, q[0])
+    return _kernels(robot, q, R, pairs), inertia.mass_matrix(robot, q[0]), inertia.arm_inertia(robot, q[0])
 
 
 def _check_against(robot, reference, q, R, values=None):
@@ -198,10 +200,10 @@ def test_tree_metrics_against_pinocchio(dual, dual_pin, dual_postures):
     """C in inertial axes, the reaction null space, w*_w and w_d per tip from Pinocchio's M and J*."""
     robot, _ = dual
     q, R = dual_postures
-    C = np.asarray(tree.base_twist_map(robot, q, base_rotation=R))
-    N = np.asarray(tree.reaction_null_space(robot, q))
-    w_rot = np.asarray(tree.rotational_manipulability(robot, q))
-    w_d = np.asarray(tree.dynamic_manipulability(robot, q))
+    C = np.asarray(inertia.base_twist_map(robot, q, base_rotation=R))
+    N = np.asarray(reaction.reaction_null_space(robot, q))
+    w_rot = np.asarray(inertia.rotational_manipulability(robot, q))
+    w_d = np.asarray(inertia.dynamic_manipulability(robot, q))
     assert N.shape == (len(q), 12, 9) and w_d.shape == (len(q), 2)
     model, data = dual_pin.model, dual_pin.data
     cols = np.array([j.idx_v for j in dual_pin.joints])
@@ -217,8 +219,8 @@ def test_tree_metrics_against_pinocchio(dual, dual_pin, dual_postures):
         H = M[np.ix_(cols, cols)] - M[cols, :6] @ np.linalg.solve(M[:6, :6], M[:6, cols])
         K = ref["jstar"][:, :3] @ np.linalg.inv(H)
         np.testing.assert_allclose(w_d[b], np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9)
-    with pytest.raises(TypeError, match="tree arms only"):
-        tree.mass_matrix(sa.umetani1990(), np.zeros(2))
+    with pytest.raises(TypeError, match="no rotational rows for a planar robot"):
+        inertia.mass_matrix(sa.umetani1990(), np.zeros(2))
 
 
 def test_posture_quantities_in_one_pass(dual):
@@ -229,7 +231,7 @@ def test_posture_quantities_in_one_pass(dual):
     assert got["jacobian"].shape == (2, 3, 2, 6, 12) and got["arm_inertia"].shape == (2, 3, 12, 12)
     np.testing.assert_allclose(got["jacobian"], sa.generalized_jacobian(robot, q), atol=1e-13)
     np.testing.assert_allclose(got["base_rate"], sa.base_rate_matrix(robot, q), atol=1e-13)
-    np.testing.assert_allclose(got["arm_inertia"], tree.arm_inertia(robot, q), atol=1e-12)
+    np.testing.assert_allclose(got["arm_inertia"], inertia.arm_inertia(robot, q), atol=1e-12)
 
 
 def test_second_mount_moves_first_w_star(dual):

@@ -55,7 +55,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "design coefficients (virtual manipulator), eq. 1, 2, 5, 6, 10 in closed form",
     ),
     ("spacearm.models.planar.family", "Models", "the planar primitives and the closed forms registered as fast paths"),
-    ("spacearm.models.planar.view", "Models", "the planar arm as the view tree: joints about z, the bus turned by phi0"),
+    (
+        "spacearm.models.planar.view",
+        "Models",
+        "the planar arm as the view tree: joints about z, the bus turned by phi0",
+    ),
     (
         "spacearm.models.planar.fields",
         "Models",
@@ -72,11 +76,6 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.models.spatial.primitives", "Models", "the spatial primitives: the tree pass on the arm's one-tip view"),
     ("spacearm.models.spatial.family", "Models", "the spatial family and its fast paths"),
     ("spacearm.models.spatial.view", "Models", "the arm as the view tree of bodies"),
-    (
-        "spacearm.models.spatial.metrics",
-        "Models",
-        "spatial-only kernels: rotational, full and dynamic manipulability, H_m, H*, C(q)",
-    ),
     (
         "spacearm.models.spatial.fields",
         "Models",
@@ -103,11 +102,6 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.models.tree.view", "Models", "the tree as the view tree of bodies"),
     ("spacearm.models.tree.family", "Models", "the tree family and its fast paths"),
     (
-        "spacearm.models.tree.metrics",
-        "Models",
-        "tree-only kernels: C(q), reaction null space, H_m, H*, w_d per tip",
-    ),
-    (
         "spacearm.models.tree.fields",
         "Models",
         "named tree design numbers (each arm's mount, mass and length factors, the bus, link masses and lengths)",
@@ -117,6 +111,7 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Models",
         "the virtual manipulator's shell of one tip of a tree: radii between which it lies",
     ),
+    ("spacearm.inertia", "Kinematics", "H*, H_m, rotational and dynamic manipulability, C(q), ellipsoids: every robot"),
     (
         "spacearm.kinematics",
         "Kinematics",

@@ -11,7 +11,7 @@ the paper stay here under their familiar names; each says "planar arms only" and
 TypeError for another family. The paper's own quantities (the normalized w-bar of
 eq. 12, the workspaces of section 3, the areas of Table 2, the maps) are in
 `spacearm.paper`; family-specific kernels in `spacearm.models.planar` and
-`spacearm.models.spatial` (for example `spacearm.models.spatial.mass_matrix`). The
+`spacearm.models.spatial` (for example `spacearm.models.spatial.as_tree`). The
 kernels of the lower layers are imported at once; the higher layers (analysis, motion,
 planning, design, io, paper) on first use, so ``import spacearm`` stays light.
 """
@@ -22,6 +22,15 @@ from typing import TYPE_CHECKING
 from ._core.errors import ConfigError as ConfigError
 from ._core.numeric import enable_compilation_cache as enable_compilation_cache, enable_x64 as enable_x64
 from ._version import __version__ as __version__
+from .inertia import (
+    arm_inertia as arm_inertia,
+    base_twist_map as base_twist_map,
+    dynamic_manipulability as dynamic_manipulability,
+    fixed_base_ellipsoid as fixed_base_ellipsoid,
+    full_manipulability as full_manipulability,
+    rotational_ellipsoid as rotational_ellipsoid,
+    rotational_manipulability as rotational_manipulability,
+)
 from .kinematics import (
     base_rate as base_rate,
     base_rate_matrix as base_rate_matrix,
@@ -87,17 +96,22 @@ __all__ = [
     "TreeRobot",
     "__version__",
     "angular_momentum",
+    "arm_inertia",
     "arm_jacobian",
     "base_jacobian",
     "base_rate",
     "base_rate_matrix",
+    "base_twist_map",
     "centroid_positions",
     "design_coefficients",
     "enable_compilation_cache",
     "enable_x64",
+    "dynamic_manipulability",
     "family_of",
+    "fixed_base_ellipsoid",
     "fixed_base_jacobian",
     "fixed_base_manipulability",
+    "full_manipulability",
     "generalized_jacobian",
     "load_robot",
     "mass_budget",
@@ -108,6 +122,8 @@ __all__ = [
     "momentum_inertias",
     "relative_jacobian",
     "robot_frame_tip_position",
+    "rotational_ellipsoid",
+    "rotational_manipulability",
     "stack_robots",
     "tip_coefficients",
     "tip_pose",

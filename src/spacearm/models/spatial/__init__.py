@@ -6,22 +6,12 @@
 - `primitives`: per-posture primitives and closed forms (one design, one posture);
 - `family`: `SPATIAL`, the family the generic kernels dispatch on;
 - `fields`: named design numbers (``mount.xyz[0]``, ``arm.length``, ...) that sweeps
-  and design problems set;
-- `metrics`: spatial-only batched kernels (rotational/full/dynamic
-  manipulability, H_m, H*, C(q), rotational and fixed-base ellipsoids).
+  and design problems set.
+
+The kernels over H* and the rotational rows of J* serve every robot: `spacearm.inertia`.
 """
 
 from .family import SPATIAL as SPATIAL, SpatialFamily as SpatialFamily
-from .metrics import (
-    arm_inertia as arm_inertia,
-    base_twist_map as base_twist_map,
-    dynamic_manipulability as dynamic_manipulability,
-    fixed_base_ellipsoid as fixed_base_ellipsoid,
-    full_manipulability as full_manipulability,
-    mass_matrix as mass_matrix,
-    rotational_ellipsoid as rotational_ellipsoid,
-    rotational_manipulability as rotational_manipulability,
-)
 from .robot import Labels as Labels, SpatialRobot as SpatialRobot, stack_spatial_robots as stack_spatial_robots
 from .schema import (
     is_spatial_config as is_spatial_config,

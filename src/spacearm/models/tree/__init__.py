@@ -3,20 +3,12 @@
 - `robot`: the `TreeRobot` pytree (static parents and tip bodies), its validation, and
   `tree_from_chains` (serial arms on their mounts as one tree);
 - `primitives`: the pass over the tree and the per-posture primitives (k tips);
-- `family`: `TREE`, the family the generic kernels dispatch on;
-- `metrics`: tree-only batched kernels (C(q) and the reaction null space over all arms,
-  H_m, H*, rotational and dynamic manipulability per tip).
+- `family`: `TREE`, the family the generic kernels dispatch on.
+
+The kernels over H* and the rotational rows of J* serve every robot: `spacearm.inertia`.
 """
 
 from .family import TREE as TREE, TreeFamily as TreeFamily
-from .metrics import (
-    arm_inertia as arm_inertia,
-    base_twist_map as base_twist_map,
-    dynamic_manipulability as dynamic_manipulability,
-    mass_matrix as mass_matrix,
-    reaction_null_space as reaction_null_space,
-    rotational_manipulability as rotational_manipulability,
-)
 from .robot import (
     TreeLabels as TreeLabels,
     TreeRobot as TreeRobot,
