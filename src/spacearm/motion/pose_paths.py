@@ -400,7 +400,7 @@ def straight_pose_path(
     """
     check_pose_robot(robot)
     family = family_of(robot)
-    if getattr(robot, "batch_shape", ()):
+    if robot.batch_shape:
         raise ConfigError("robot: one design at a time (got a batch of designs)")
     n = family.joint_count(robot)
     q0 = np.asarray(q_start, float)

@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -43,9 +43,6 @@ from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from .._core.groups import SO2, SO3
 from ..models.family import family_of
-from ..models.planar.closed_forms import momentum_inertias
-from ..models.planar.robot import PlanarRobot
-from ..models.spatial.robot import SpatialRobot
 from ..motion import integrate_joint_path
 from ._loop_steps import LoopSteps, plan_loop
 from .spatial_reorientation import plan_spatial_reorientation
@@ -96,14 +93,13 @@ class LoopSettings:
 # Curl of eq. (5) ------------------------------------------------------------------------
 
 
-def _connection(robot: PlanarRobot, q: jax.Array) -> jax.Array:
-    """The one-form of eq. (5): d phi0 = omega(q) . dq with omega = -I_M / I_S, ``(n,)``."""
-    phi = jnp.concatenate([jnp.zeros((1,), q.dtype), q])
-    i_s, i_m = momentum_inertias(robot, phi)
-    return -i_m / i_s
+def _connection(robot, q: jax.Array) -> jax.Array:
+    """The one-form of eq. (5): d phi0 = omega(q) . dq with omega = -I_M / I_S, ``(n,)`` (the
+    family's attitude-rate map of its SO(2) attitude)."""
+    return family_of(robot).attitude_rate_map(robot, q)[0]
 
 
-def rotation_curl(robot: PlanarRobot, joint_angles: jax.Array) -> jax.Array:
+def rotation_curl(robot, joint_angles: jax.Array) -> jax.Array:
     """Curl of the base-rotation one-form of eq. (5) at a joint posture.
 
     A small closed joint loop q0 + x(s) turns the base by sum_{i<j} Omega_ij A_ij, where
@@ -146,7 +142,7 @@ def _path_length(points: jax.Array) -> jax.Array:
     return jnp.sum(jnp.sqrt(jnp.sum(steps * steps, axis=-1) + 1e-30))
 
 
-def _loop_rotation(robot: PlanarRobot, q0: jax.Array, points: jax.Array) -> jax.Array:
+def _loop_rotation(robot, q0: jax.Array, points: jax.Array) -> jax.Array:
     """Base rotation of one pass over the closed polygon ``points`` ``(k+1, n)``, rad."""
 
     phi_start = jnp.concatenate([jnp.zeros((1,), q0.dtype), q0])
@@ -176,7 +172,7 @@ def _split(settings: LoopSettings) -> tuple[_LoopShape, dict]:
 class _LoopProblem(NamedTuple):
     """What every candidate loop of one request shares (traced arrays, `_loop_problem`)."""
 
-    robot: PlanarRobot
+    robot: Any  # one design
     q0: jax.Array  # (n,) start joints, rad
     delta: jax.Array  # the requested base rotation, rad
     magnitude: jax.Array  # |delta|, at least 1e-9, rad
@@ -192,7 +188,7 @@ class _LoopProblem(NamedTuple):
     travel_weight: jax.Array
 
 
-def _curl_plane(robot: PlanarRobot, q0: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+def _curl_plane(robot, q0: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """The plane and strength of the curl at q0 (top singular pair of Omega): ``(sigma, e1, e2)``."""
     omega = rotation_curl(robot, q0)
     u_mat, sig, vt = jnp.linalg.svd(omega)
@@ -200,7 +196,7 @@ def _curl_plane(robot: PlanarRobot, q0: jax.Array) -> tuple[jax.Array, jax.Array
     return sigma, u_mat[:, 0], vt[0]  # Omega e2 = sigma e1; e1 . e2 = 0 (Omega antisymmetric)
 
 
-def _loop_problem(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, opt: dict, settings: _LoopShape) -> _LoopProblem:
+def _loop_problem(robot, q0: jax.Array, delta: jax.Array, opt: dict, settings: _LoopShape) -> _LoopProblem:
     """The curl plane at q0, the loop basis, and the box the loops must stay in."""
     dtype = q0.dtype
     basis = jnp.asarray(_loop_basis(settings), dtype)
@@ -324,7 +320,7 @@ def _solve_candidate(problem: _LoopProblem, optimizer, options: dict, harmonics:
 
 
 @functools.partial(jax.jit, static_argnames=("settings",))
-def _optimize_loops(robot: PlanarRobot, q0: jax.Array, delta: jax.Array, options: dict, settings: _LoopShape):
+def _optimize_loops(robot, q0: jax.Array, delta: jax.Array, options: dict, settings: _LoopShape):
     """Optimize one loop per (repetition count, centre direction) candidate.
 
     ``settings`` holds the shape settings (static); ``options`` the step counts, rate,
@@ -375,7 +371,7 @@ class ReorientationLoop:
     excursion: float
 
 
-def check_posture(robot: PlanarRobot, phi_start) -> np.ndarray:
+def check_posture(robot, phi_start) -> np.ndarray:
     if robot.batch_shape:
         raise ConfigError("robot: plan one design at a time (got a batch of designs)")
     phi = np.asarray(phi_start, dtype=float)
@@ -394,7 +390,7 @@ def check_posture(robot: PlanarRobot, phi_start) -> np.ndarray:
     return phi
 
 
-def compile_loop_optimizer(robot: PlanarRobot, settings: LoopSettings = LoopSettings()) -> None:
+def compile_loop_optimizer(robot, settings: LoopSettings = LoopSettings()) -> None:
     """Compile, without running, the loop optimizer `plan_reorientation_details`
     runs for this design's shapes and ``settings``; a later plan finds the program.
 
@@ -408,7 +404,7 @@ def compile_loop_optimizer(robot: PlanarRobot, settings: LoopSettings = LoopSett
 
 
 def plan_reorientation_details(
-    robot: PlanarRobot,
+    robot,
     phi_start,
     delta_phi0: float,
     *,
@@ -438,7 +434,7 @@ def plan_reorientation_details(
     return plan_loop(_PLANAR_LOOP_STEPS, robot, phi_start, delta_phi0, settings, tolerance=tolerance)
 
 
-def _planar_check(robot: PlanarRobot, phi_start, delta_phi0, settings, tolerance=None) -> dict:
+def _planar_check(robot, phi_start, delta_phi0, settings, tolerance=None) -> dict:
     phi = check_posture(robot, phi_start)
     delta = float(delta_phi0)
     if not math.isfinite(delta):
@@ -517,7 +513,7 @@ _PLANAR_LOOP_STEPS = LoopSteps(
 )
 
 
-def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0, **options) -> np.ndarray:
+def plan_reorientation(robot, phi_start, delta_phi0, **options) -> np.ndarray:
     """Joint waypoints of a closed maneuver that turns the base by ``delta_phi0``.
 
     Spatial robots: ``plan_reorientation(robot, q_start, target_rotation)`` returns a
@@ -547,7 +543,7 @@ def plan_reorientation(robot: PlanarRobot | SpatialRobot, phi_start, delta_phi0,
     return planner(robot, phi_start, delta_phi0, **options)
 
 
-def _plan_planar_reorientation(robot: PlanarRobot, phi_start, delta_phi0, **options) -> np.ndarray:
+def _plan_planar_reorientation(robot, phi_start, delta_phi0, **options) -> np.ndarray:
     return plan_reorientation_details(robot, phi_start, delta_phi0, **options).waypoints
 
 

@@ -48,7 +48,6 @@ import optax
 from .._core.batching import shapes_of
 from .._core.errors import ConfigError
 from ..models.family import family_of
-from ..models.spatial.robot import SpatialRobot
 from ..motion.attitude import DEFAULT_ORDER, DEFAULT_STEPS, bus_rate_map, expm, log, path_rotation
 from ..motion.joint_paths import integrate_joint_path
 from ._loop_steps import LoopSteps, plan_loop
@@ -225,7 +224,7 @@ def _optimize(robot, q0, target, counts, coefficients, lower, upper, options, sh
     return jax.vmap(one)(coefficients, targets)
 
 
-def compile_spatial_loop_optimizer(robot: SpatialRobot, settings: SpatialLoopSettings | None = None) -> None:
+def compile_spatial_loop_optimizer(robot, settings: SpatialLoopSettings | None = None) -> None:
     """Compile, without running, the loop optimizer `plan_spatial_reorientation_details`
     runs for this design's shapes and ``settings``; a later plan finds the program.
 
@@ -264,7 +263,7 @@ def _rotation_errors(target: np.ndarray, reached: np.ndarray) -> np.ndarray:
     return np.arctan2(s, 0.5 * (np.trace(E, axis1=-2, axis2=-1) - 1.0))
 
 
-def _check_inputs(robot: SpatialRobot, q_start, target_rotation):
+def _check_inputs(robot, q_start, target_rotation):
     n = robot.n_joints
     if robot.batch_shape:
         raise ConfigError("plan_reorientation: one design at a time (got a batch of designs)")
@@ -287,7 +286,7 @@ def _check_inputs(robot: SpatialRobot, q_start, target_rotation):
 
 
 def plan_spatial_reorientation_details(
-    robot: SpatialRobot, q_start, target_rotation, settings: SpatialLoopSettings | None = None
+    robot, q_start, target_rotation, settings: SpatialLoopSettings | None = None
 ) -> SpatialReorientation:
     """Plan a closed joint path after which the bus attitude is R0 @ target_rotation.
 
@@ -306,7 +305,7 @@ def plan_spatial_reorientation_details(
     return plan_loop(_SPATIAL_LOOP_STEPS, robot, q_start, target_rotation, settings)
 
 
-def _spatial_check(robot: SpatialRobot, q_start, target_rotation, settings) -> dict:
+def _spatial_check(robot, q_start, target_rotation, settings) -> dict:
     settings = settings or SpatialLoopSettings()
     if not isinstance(settings, SpatialLoopSettings):
         raise ConfigError(f"settings: expected SpatialLoopSettings for a spatial robot, got {type(settings).__name__}")
@@ -394,7 +393,7 @@ _SPATIAL_LOOP_STEPS = LoopSteps(
 )
 
 
-def plan_spatial_reorientation(robot: SpatialRobot, q_start, target_rotation, **options) -> np.ndarray:
+def plan_spatial_reorientation(robot, q_start, target_rotation, **options) -> np.ndarray:
     """``(k, n)`` closed joint path (first and last rows ``q_start``) turning the bus by
     ``target_rotation`` (bus frame): after it the attitude is ``R0 @ target_rotation``
     to 1e-9 rad. Options are `SpatialLoopSettings` fields."""
