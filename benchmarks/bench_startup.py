@@ -51,7 +51,7 @@ COMMANDS: tuple[tuple[str, list[str]], ...] = (
 # library call; the set-up (imports, robot, inputs) is timed apart from the call.
 _UR5 = (
     "import numpy as np, spacearm as sa\n"
-    "from spacearm.analysis import spatial_workspaces\n"
+    "from spacearm.analysis import workspace_search\n"
     "sa.enable_x64(); sa.enable_compilation_cache()\n"
     "robot = sa.load_robot('configs/ur5-smallsat.yaml')\n"
     "rng = np.random.default_rng(0)\n"
@@ -62,7 +62,7 @@ _UR5 = (
     "    try:\n"
     "        return sa.path_independent_radius(robot)\n"
     "    except (TypeError, AttributeError, ValueError):  # planar-only by that name: the spatial kernel\n"
-    "        return spatial_workspaces.singular_radius(robot)[0]\n"
+    "        return workspace_search.singular_radius(robot)[0]\n"
 )
 SPATIAL: tuple[tuple[str, object], ...] = (
     ("UR5 straight path, 64 directions", (_UR5, "sa.straight_tip_path(robot, q0, d).length")),

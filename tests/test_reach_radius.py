@@ -9,7 +9,7 @@ import pytest
 
 from spacearm import design
 from spacearm._core.errors import ConfigError
-from spacearm.analysis.spatial_workspaces import singular_radius
+from spacearm.analysis.workspace_search import singular_radius
 from spacearm.design.hybrid import HybridSettings, hybrid_search
 from spacearm.design.objectives import RADIUS_OPTIONS
 from spacearm.design.problem import load_problem as load_design_problem

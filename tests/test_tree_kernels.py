@@ -21,7 +21,6 @@ import spacearm as sa
 from spacearm import inertia
 from spacearm.analysis import reaction
 from spacearm.kinematics import generic_generalized_jacobian, generic_tip_position
-from spacearm.models import tree
 from spacearm.models.spatial import locate_package_file, read_urdf
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import TREE, stack_tree_robots, tree_from_chains

@@ -429,7 +429,7 @@ def test_replay_frame_slider_in_chromium(robots, pages, tmp_path):
 @pytest.fixture(scope="session")
 def shells_page(tmp_path_factory):
     """shells.html of a 3-design bus-mass sweep of the 3-DOF arm, with made-up radii (the metrics
-    themselves are tested in test_spatial_workspaces.py; here only the page)."""
+    themselves are tested in tests/test_workspace_search.py; here only the page)."""
     from spacearm.figures.views import shells_view
     from spacearm.studies import load_sweep
 

@@ -163,7 +163,7 @@ API_MODULES: list[tuple[str, str, str]] = [
         "averages over the joint box (w*, conditioning, base disturbance, w_d) by randomized QMC, with error estimates",
     ),
     (
-        "spacearm.analysis.spatial_workspaces",
+        "spacearm.analysis.workspace_search",
         "Analysis",
         "spatial reach radii, dynamic singular sets, the path-independent radius, the 3-D straight-path workspace",
     ),

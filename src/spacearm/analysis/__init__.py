@@ -14,7 +14,7 @@ from .reaction import (
     reaction_free_tip_path as reaction_free_tip_path,
     reaction_null_space as reaction_null_space,
 )
-from .spatial_workspaces import (
+from .workspace_search import (
     maximum_reachable_inner_radius as maximum_reachable_inner_radius,
     maximum_reachable_radius as maximum_reachable_radius,
     path_independent_radius as path_independent_radius,

@@ -10,7 +10,7 @@ is of the whole system (C_w over every joint) and ``low_total_mass`` counts ever
 ``reach_radius`` (single-arm robots of either family): the path-independent workspace
 radius (Papadopoulos & Dubowsky 1991; Umetani & Yoshida 1990, sec. 3), the closest
 approach of a dynamic-singular tip position to the system centroid, by
-`spacearm.analysis.spatial_workspaces.singular_radius`. Its gradient is the envelope
+`spacearm.analysis.workspace_search.singular_radius`. Its gradient is the envelope
 theorem's: the search over the singular set runs with the design's gradient stopped, and
 the derivative is taken at the minimizing posture, the set's motion included through its
 Lagrange multipliers.
@@ -27,7 +27,7 @@ import jax.numpy as jnp
 
 from .._core.errors import ConfigError
 from ..analysis.averages import split_metric, tip_metric
-from ..analysis.spatial_workspaces import singular_radius
+from ..analysis.workspace_search import singular_radius
 from ..models.family import RobotFamily, family_of
 from ..paper import PlanarRobot, normalized_wbar, tip_coefficients
 

@@ -22,7 +22,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..analysis.joint_box import joint_box
-from ..analysis.spatial_workspaces import guaranteed_workspace, singular_postures, singularity_measure
+from ..analysis.workspace_search import guaranteed_workspace, singular_postures, singularity_measure
 from ..io import save_figure
 from ..kinematics import manipulability, tip_position
 from ..models import load_robot

@@ -17,7 +17,7 @@ from .._core.errors import ConfigError
 from .._core.schema import check_keys, did_you_mean, integer, is_number
 from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
 from ..analysis.joint_box import check_joint_box
-from ..analysis.spatial_workspaces import reachable_radii, singular_radius
+from ..analysis.workspace_search import reachable_radii, singular_radius
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import Capabilities, known_families
 from ..paper import (

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm.analysis import spatial_workspaces as sw
+from spacearm.analysis import workspace_search as sw
 from spacearm.models.planar import singularities
 from spacearm.paper import workspaces
 
