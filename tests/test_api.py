@@ -33,7 +33,6 @@ PLANAR_ONLY = {
     "straight_path_workspace": lambda q: (q, 4),
     "go_and_back": lambda q: (q, jnp.array([1.0, 0.0, 0.0]), 0.01),
     "straight_tip_path_history": lambda q: (q, jnp.array([1.0, 0.0, 0.0])),
-    "joint_path_history": lambda q: (q, jnp.stack([q, q + 0.1])),
 }
 
 ROTATIONAL_ROWS = [

@@ -106,8 +106,8 @@ def test_history_conserves_angular_momentum_and_ends_where_the_integral_does(tab
     d = ref.design(table1)
     samples = 400
     phi_start = np.r_[0.3, LOOP[0]]
-    postures, tips = sa.joint_path_history(table1, phi_start, LOOP, samples)
-    postures, tips = np.asarray(postures), np.asarray(tips)
+    phi0, joints, tips = sa.joint_path_history(table1, phi_start, LOOP, samples)
+    postures, tips = _posture((phi0, joints)), np.asarray(tips)
     assert postures.shape == (4 * samples + 1, 3) and tips.shape == (4 * samples + 1, 2)
     np.testing.assert_allclose(postures[-1], _posture(sa.integrate_joint_path(table1, phi_start, LOOP)), atol=1e-13)
     for i in range(0, len(postures), 97):

@@ -226,8 +226,10 @@ def test_no_retrace_and_gradients(ur5):
 def test_history_ends_where_the_integrator_does(ur5):
     rng = np.random.default_rng(8)
     loop = _loops(rng, 1, 6)[0]
-    R, q = attitude.so3_joint_path_history(ur5, loop[0], loop, samples_per_segment=8, steps=1)
-    assert R.shape == (12 * 8 + 1, 3, 3) and q.shape == (12 * 8 + 1, 6)
+    R, q, tips = sa.joint_path_history(ur5, loop[0], loop, 8)  # one Magnus step per sample
+    assert R.shape == (12 * 8 + 1, 3, 3) and q.shape == (12 * 8 + 1, 6) and tips.shape == (12 * 8 + 1, 3)
     R_end, _ = sa.integrate_joint_path(ur5, loop[0], loop)
     assert float(attitude.geodesic_distance(R[-1], R_end)) < 1e-10
     np.testing.assert_allclose(q[::8], loop, atol=1e-15)
+    # the tips are the inertial tips of the sampled attitudes and joints
+    np.testing.assert_allclose(tips, np.einsum("sij,sj->si", R, np.asarray(sa.tip_position(ur5, q))), atol=1e-14)

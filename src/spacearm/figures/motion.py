@@ -72,8 +72,8 @@ def fig2_study(robot=None):
     loop = FIG2_LOOP_DEG * DEG
     loops = np.stack([loop, loop[::-1]])
     phi_start = np.r_[0.0, loop[0]]
-    postures, tips = joint_path_history(robot, phi_start, loops, 64)
-    postures, tips = np.asarray(postures), np.asarray(tips)
+    phi0, joints, tips = joint_path_history(robot, phi_start, loops, 64)
+    postures, tips = np.concatenate([np.asarray(phi0)[..., None], np.asarray(joints)], axis=-1), np.asarray(tips)
     out = {"loop": loop, "robot": robot}
     for i, name in enumerate(("forward", "reverse")):
         out[name] = {"phi_end": postures[i, -1], "postures": postures[i], "tips": tips[i]}

@@ -24,8 +24,8 @@ import numpy as np
 from .._core.errors import ConfigError
 from .._core.magnus import composite_gauss, line_integral
 from ..kinematics import tip_position
-from ..models.family import family_of, require_family
-from .attitude import DEFAULT_ORDER, integrate_so3_joint_path
+from ..models.family import family_of
+from .attitude import DEFAULT_ORDER, integrate_so3_joint_path, so3_joint_path_history
 from .batching import check_arm_axis, flatten_batch, is_traced
 
 __all__ = ["integrate_joint_path", "joint_path_base_increments", "joint_path_history"]
@@ -86,6 +86,25 @@ def _prepare_joint_path(robot, phi_start, joint_waypoints):
     return phi_start, joint_waypoints
 
 
+def _check_options(what: str, group, quadrature: dict, base_rotation, steps, order) -> None:
+    """Refuse the options of the other attitude group: a quadrature (``nodes``, ``pieces``) for an
+    abelian attitude, ``base_rotation``, ``steps`` and ``order`` (Magnus steps) for SO(3)."""
+    if not group.abelian:
+        if any(value is not None for value in quadrature.values()):
+            raise TypeError(
+                f"{what}: {' and '.join(quadrature)} set the quadrature of an abelian attitude; the "
+                f"{group.name} attitude is integrated by Magnus steps (use steps=, order=)"
+            )
+        return
+    for name, value in (("base_rotation", base_rotation), ("steps", steps), ("order", order)):
+        if value is not None:
+            raise TypeError(
+                f"{what}: {name} applies to a non-abelian attitude (spatial robots); the "
+                f"{group.name} attitude is a line integral (use {', '.join(f'{k}=' for k in quadrature)}; "
+                "a planar posture carries phi0)"
+            )
+
+
 def integrate_joint_path(
     robot,
     phi_start: jax.Array,
@@ -131,12 +150,8 @@ def integrate_joint_path(
         on SO(3): the attitude and the joints at the last waypoint.
     """
     group = family_of(robot).attitude
+    _check_options("integrate_joint_path", group, {"nodes": nodes, "pieces": pieces}, base_rotation, steps, order)
     if not group.abelian:
-        if nodes is not None or pieces is not None:
-            raise TypeError(
-                f"integrate_joint_path: nodes and pieces set the quadrature of an abelian attitude; the "
-                f"{group.name} attitude is integrated by Magnus steps (use steps=, order=)"
-            )
         return integrate_so3_joint_path(
             robot,
             phi_start,
@@ -145,12 +160,6 @@ def integrate_joint_path(
             steps=steps,
             order=DEFAULT_ORDER if order is None else order,
         )
-    for name, value in (("base_rotation", base_rotation), ("steps", steps), ("order", order)):
-        if value is not None:
-            raise TypeError(
-                f"integrate_joint_path: {name} applies to a non-abelian attitude (spatial robots); the "
-                f"{group.name} attitude is a line integral (use nodes=, pieces=; a planar posture carries phi0)"
-            )
     nodes = 24 if nodes is None else nodes
     phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
     pieces = _default_pieces(joint_waypoints, pieces)
@@ -216,34 +225,44 @@ def _joint_history_flat(robot, phi_start, waypoints, robot_batched, samples, nod
 
 def joint_path_history(
     robot,
-    phi_start: jax.Array,
+    start: jax.Array,
     joint_waypoints: jax.Array,
     samples_per_segment: int = 32,
     *,
-    nodes: int = 16,
-) -> tuple[jax.Array, jax.Array]:
-    """Postures and inertial tip positions along a joint-space polyline (eq. 1, 5).
+    nodes: int | None = None,
+    base_rotation: jax.Array | None = None,
+    steps: int | None = None,
+    order=None,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """The base attitude, the joints and the inertial tip sampled along a joint-space polyline (eq. 1, 5).
 
-    Each segment is sampled at ``samples_per_segment`` equally spaced points (the
-    segment's end is the next segment's start); the base attitude between samples is
-    integrated with ``nodes`` Gauss-Legendre points. Planar arms only (another family
-    raises TypeError; `integrate_joint_path` serves every family).
-
-    Args:
-        phi_start: ``(..., n+1)`` initial posture, rad.
-        joint_waypoints: ``(..., k, n)`` waypoints, first row = ``phi_start[..., 1:]``, rad.
+    Each segment is sampled at ``samples_per_segment`` equally spaced points (the segment's
+    end is the next segment's start; the last sample is the last waypoint). The attitude
+    follows the family's group, as in `integrate_joint_path`: on SO(2) a Gauss-Legendre
+    line integral between samples (``nodes`` points, default 16; ``start`` is the posture
+    [phi0, joints]), on SO(3) ``steps`` Magnus steps per sample (default 1, ``order``
+    default 6; ``start`` is the joints, ``base_rotation`` the bus attitude there).
 
     Returns:
-        ``postures (..., S, n+1)`` rad and ``tips (..., S, 2)`` inertial, m, with
-        S = (k - 1) * samples_per_segment + 1; the last posture equals
-        `integrate_joint_path`'s result.
+        ``(attitudes, joints (..., S, n), tips)`` with S = (k - 1) * samples_per_segment + 1:
+        planar ``phi0 (..., S)`` and tips ``(..., S, 2)``; on SO(3) ``R (..., S, 3, 3)`` and
+        tips ``(..., S, 3)`` (``(..., S, k, 3)`` for k tips), inertial, m. The last attitude
+        equals `integrate_joint_path`'s.
     """
-    require_family(robot, "planar", "joint_path_history")
-    phi_start, joint_waypoints = _prepare_joint_path(robot, phi_start, joint_waypoints)
-    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(robot, [(phi_start, 1), (joint_waypoints, 2)])
-    postures, tips = _joint_history_flat(flat_robot, phi_flat, wp_flat, batched, int(samples_per_segment), nodes)
-    count = postures.shape[1]
-    return (
-        postures.reshape(batch + (count, robot.n_links + 1)),
-        tips.reshape(batch + (count, 2)),
+    group = family_of(robot).attitude
+    _check_options("joint_path_history", group, {"nodes": nodes}, base_rotation, steps, order)
+    samples = int(samples_per_segment)
+    if not group.abelian:
+        order = DEFAULT_ORDER if order is None else order
+        R, q = so3_joint_path_history(
+            robot, start, joint_waypoints, base_rotation, samples, steps=steps or 1, order=order
+        )
+        return R, q, tip_position(robot, q, R)
+    start, joint_waypoints = _prepare_joint_path(robot, start, joint_waypoints)
+    batch, flat_robot, batched, (phi_flat, wp_flat) = flatten_batch(robot, [(start, 1), (joint_waypoints, 2)])
+    postures, tips = _joint_history_flat(
+        flat_robot, phi_flat, wp_flat, batched, samples, 16 if nodes is None else nodes
     )
+    count = postures.shape[1]
+    postures = postures.reshape(batch + (count, robot.n_links + 1))
+    return postures[..., 0], postures[..., 1:], tips.reshape(batch + (count, 2))

@@ -176,8 +176,8 @@ def _loop_history(robot, phi_from: np.ndarray, loop: ReorientationLoop, samples:
 
     if loop.loops == 0:
         return np.asarray(phi_from)[None], np.asarray(tip_position(robot, jnp.asarray(phi_from)))[None]
-    postures, tips = joint_path_history(robot, jnp.asarray(phi_from), jnp.asarray(loop.loop), samples)
-    postures, tips = np.asarray(postures), np.asarray(tips)
+    phi0, joints, tips = joint_path_history(robot, jnp.asarray(phi_from), jnp.asarray(loop.loop), samples)
+    postures, tips = np.concatenate([np.asarray(phi0)[..., None], np.asarray(joints)], axis=-1), np.asarray(tips)
     per_pass = postures[-1, 0] - postures[0, 0]
     turns = per_pass * np.arange(loop.loops)
     all_postures = np.concatenate(
@@ -540,7 +540,8 @@ def _planar_reposition(job: ReachJob) -> ReachPlan:
     q0 = phi[1:]
     q1 = _reposition_joints(robot, q0, float(np.linalg.norm(target)))
     segment = np.stack([q0, q1])
-    move_postures, move_tips = (np.asarray(x) for x in joint_path_history(robot, phi, segment, 16))
+    phi0, joints, move_tips = (np.asarray(x) for x in joint_path_history(robot, phi, segment, 16))
+    move_postures = np.concatenate([np.asarray(phi0)[..., None], np.asarray(joints)], axis=-1)
     phi_mid = move_postures[-1]
     tip_mid = move_tips[-1]
     delta = float(_wrap(np.arctan2(target[1], target[0]) - np.arctan2(tip_mid[1], tip_mid[0])))
