@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 
 from ._core.linalg import gram_root_determinant
-from .kinematics import base_rate_matrix, fixed_base_jacobian, generalized_jacobian
+from .kinematics import base_rate_matrix, fixed_base_jacobian, generalized_jacobian, rotate_twist_rows
 from .models.family import family_of
 
 __all__ = [
@@ -46,15 +46,6 @@ def _spatial_rows(robot, what: str) -> None:
     family = family_of(robot)
     if family.task_rows != 6:
         raise TypeError(f"{what}: the tip twist has no rotational rows for a {family.name} robot (J* is 2 x n)")
-
-
-def _rotate_rows(J, base_rotation):
-    """blkdiag(R, R) J for twist rows [v; w]."""
-    if base_rotation is None:
-        return J
-    R = jnp.asarray(base_rotation)
-    turn = lambda rows: jnp.einsum("...ij,...jk->...ik", R, rows)
-    return jnp.concatenate([turn(J[..., :3, :]), turn(J[..., 3:, :])], axis=-2)
 
 
 def _axes(J):
@@ -123,7 +114,8 @@ def base_twist_map(robot, q: jax.Array, base_rotation: jax.Array | None = None) 
     map of Dubowsky & Torres (1991); its kernel is the reaction null space.
     """
     _spatial_rows(robot, "base_twist_map")
-    return _rotate_rows(base_rate_matrix(robot, q), base_rotation)
+    C = base_rate_matrix(robot, q)
+    return C if base_rotation is None else rotate_twist_rows(C, jnp.asarray(base_rotation))
 
 
 @jax.jit

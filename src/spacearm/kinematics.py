@@ -40,6 +40,7 @@ __all__ = [
     "manipulability",
     "manipulability_ellipsoid",
     "relative_jacobian",
+    "rotate_twist_rows",
     "square_determinant",
     "straight_path_rates",
     "tip_pose",
@@ -108,14 +109,18 @@ def _rotate_vector(family: RobotFamily, robot, value, base_rotation):
     return jnp.einsum("...ij,...j->...i", _attitude(family, robot, base_rotation), value)
 
 
-def _rotate_twist_rows(family: RobotFamily, robot, J, base_rotation):
-    """blkdiag(R, R) J for spatial twists [v; w] (J*_inertial = blkdiag(R, R) J*_bus)."""
-    if base_rotation is None:
-        return J
-    R = _attitude(family, robot, base_rotation)
+def rotate_twist_rows(J: jax.Array, R: jax.Array) -> jax.Array:
+    """blkdiag(R, R) J for twist rows [v; w] ``(..., 6, n)``: bus axes to inertial axes."""
     top = jnp.einsum("...ij,...jk->...ik", R, J[..., :3, :])
     bottom = jnp.einsum("...ij,...jk->...ik", R, J[..., 3:, :])
     return jnp.concatenate([top, bottom], axis=-2)
+
+
+def _rotate_twist_rows(family: RobotFamily, robot, J, base_rotation):
+    """J*_inertial = blkdiag(R, R) J*_bus (R with a tip axis for a family with several tips)."""
+    if base_rotation is None:
+        return J
+    return rotate_twist_rows(J, _attitude(family, robot, base_rotation))
 
 
 def generic_tip_position(robot, posture: jax.Array) -> jax.Array:

@@ -63,8 +63,6 @@ def as_tree(robot: SpatialRobot) -> TreeRobot:
     last body. The leaves are the arm's (a root and a tip axis added), so this is free under
     ``jit`` and exact: every kernel of the tree pass gives the arm's quantities."""
     n = robot.n_joints
-    leaves = {field: getattr(robot, field) for field in SpatialRobot.__dataclass_fields__ if field in _LEAF_NAMES}
-    leaves |= {field: _insert_axis(leaves[field], rank) for field, rank in _ONE_OF.items()}
     labels = robot.labels
     tree_labels = TreeLabels(
         name=labels.name,
@@ -77,31 +75,8 @@ def as_tree(robot: SpatialRobot) -> TreeRobot:
         body_links=labels.body_links,
         source=labels.source,
     )
-    return tree_view(leaves, robot.joint_kinds, tuple(range(-1, n - 1)), (n - 1,), tree_labels)
-
-
-_LEAF_NAMES = frozenset(
-    [
-        "base_mass",
-        "base_com",
-        "base_inertia",
-        "mount_xyz",
-        "mount_rpy",
-        "root_mass",
-        "root_com",
-        "root_inertia",
-        "joint_rotation",
-        "joint_translation",
-        "joint_axis",
-        "link_mass",
-        "link_com",
-        "link_inertia",
-        "tip_rotation",
-        "tip_translation",
-        "joint_lower",
-        "joint_upper",
-    ]
-)
+    with_axes = {field: _insert_axis(getattr(robot, field), rank) for field, rank in _ONE_OF.items()}
+    return tree_view(robot, robot.joint_kinds, tuple(range(-1, n - 1)), (n - 1,), tree_labels, **with_axes)
 
 
 def tip(robot: SpatialRobot, q: jax.Array) -> jax.Array:

@@ -490,11 +490,12 @@ def _check_rotation(where: str, rotation: np.ndarray) -> None:
         raise ConfigError(f"{where}: must be a rotation matrix (orthonormal, determinant +1)")
 
 
-def tree_view(leaves, joint_kinds, parents, tip_bodies, labels: TreeLabels | None = None) -> TreeRobot:
-    """A `TreeRobot` over ``leaves`` (a mapping of every leaf field) without validation: another
-    robot's design seen as a tree (its leaves already checked, or traced)."""
+def tree_view(design, joint_kinds, parents, tip_bodies, labels: TreeLabels | None = None, **leaves) -> TreeRobot:
+    """A `TreeRobot` over another design's leaves (its attributes of the same names, replaced by
+    ``leaves`` where given), without validation: that design seen as a tree (its leaves already
+    checked, or traced)."""
     structure = _Structure(tuple(joint_kinds), tuple(parents), tuple(tip_bodies), labels or TreeLabels())
-    return _unflatten(structure, [leaves[field] for field in _LEAF_FIELDS])
+    return _unflatten(structure, [leaves[f] if f in leaves else getattr(design, f) for f in _LEAF_FIELDS])
 
 
 def stack_tree_robots(robots: list[TreeRobot]) -> TreeRobot:
