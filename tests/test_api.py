@@ -36,11 +36,9 @@ PLANAR_ONLY = {
 }
 
 ROTATIONAL_ROWS = [
-    "arm_inertia",
     "base_twist_map",
     "dynamic_manipulability",
     "fixed_base_ellipsoid",
-    "mass_matrix",
     "rotational_ellipsoid",
     "rotational_manipulability",
 ]

@@ -176,8 +176,8 @@ def _extra_metrics(robot, q, length):
     return dict(
         w_rot=inertia.rotational_manipulability(robot, q),
         w_full=inertia.full_manipulability(robot, q, length),
-        H=inertia.arm_inertia(robot, q),
-        M=inertia.mass_matrix(robot, q),
+        H=sa.arm_inertia(robot, q),
+        M=sa.joint_mass_matrix(robot, q),
         w_dyn=inertia.dynamic_manipulability(robot, q),
         axes=sa.manipulability_ellipsoid(robot, q)[0],
         rot_axes=inertia.rotational_ellipsoid(robot, q)[0],

@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 import spacearm as sa
-from spacearm import inertia
 from spacearm.models import spatial
 from spacearm.models.spatial import primitives
 from spacearm.models.spatial.robot import robot_from_chain
@@ -56,8 +55,8 @@ def _everything(robot, q):
         "jstar": sa.generalized_jacobian(robot, q),
         "tip": sa.tip_position(robot, q),
         "fixed": sa.fixed_base_jacobian(robot, q),
-        "mass_matrix": inertia.mass_matrix(robot, q),
-        "arm_inertia": inertia.arm_inertia(robot, q),
+        "mass_matrix": sa.joint_mass_matrix(robot, q),
+        "arm_inertia": sa.arm_inertia(robot, q),
         "base_rate": sa.base_rate_matrix(robot, q),
     }
 

@@ -110,7 +110,7 @@ def _kernels_in_one_program(robot, q, R, pairs):
     """`_kernels` and the mass matrices H_m and H* at q[0], as one program. The kernels are
     jitted functions, inlined here unchanged: a random tree's new structure then compiles
     once (~10 s CPU) instead of once per kernel (~17 s)."""
-    return _kernels(robot, q, R, pairs), inertia.mass_matrix(robot, q[0]), inertia.arm_inertia(robot, q[0])
+    return _kernels(robot, q, R, pairs), sa.joint_mass_matrix(robot, q[0]), sa.arm_inertia(robot, q[0])
 
 
 def _check_against(robot, reference, q, R, values=None):
@@ -219,7 +219,7 @@ def test_tree_metrics_against_pinocchio(dual, dual_pin, dual_postures):
         K = ref["jstar"][:, :3] @ np.linalg.inv(H)
         np.testing.assert_allclose(w_d[b], np.sqrt(np.linalg.det(K @ np.swapaxes(K, 1, 2))), rtol=1e-9)
     with pytest.raises(TypeError, match="no rotational rows for a planar robot"):
-        inertia.mass_matrix(sa.umetani1990(), np.zeros(2))
+        inertia.rotational_manipulability(sa.umetani1990(), np.zeros(3))
 
 
 def test_posture_quantities_in_one_pass(dual):
@@ -230,7 +230,7 @@ def test_posture_quantities_in_one_pass(dual):
     assert got["jacobian"].shape == (2, 3, 2, 6, 12) and got["arm_inertia"].shape == (2, 3, 12, 12)
     np.testing.assert_allclose(got["jacobian"], sa.generalized_jacobian(robot, q), atol=1e-13)
     np.testing.assert_allclose(got["base_rate"], sa.base_rate_matrix(robot, q), atol=1e-13)
-    np.testing.assert_allclose(got["arm_inertia"], inertia.arm_inertia(robot, q), atol=1e-12)
+    np.testing.assert_allclose(got["arm_inertia"], sa.arm_inertia(robot, q), atol=1e-12)
 
 
 def test_second_mount_moves_first_w_star(dual):

@@ -143,11 +143,11 @@ def test_focus_locks_the_held_joints_in_the_inertias(dual, right_alone):
     zero); the metrics' posture quantities are the focused kernels'."""
     q = np.random.default_rng(4).uniform(-2.0, 2.0, 12)
     family = family_of(right_alone)
-    full = np.asarray(jax.jit(family.arm_inertia)(dual, q))
+    full = np.asarray(jax.jit(sa.arm_inertia)(dual, q))
     # the focused robot's inertia, posture quantities and public kernels: one program
     held, quantities, J, C = jax.jit(
         lambda r, q: (
-            family.arm_inertia(r, q),
+            sa.arm_inertia(r, q),
             family.fast_paths.posture_quantities(r, q, ("jacobian", "base_rate")),
             sa.generalized_jacobian(r, q),
             sa.base_rate_matrix(r, q),

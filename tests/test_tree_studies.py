@@ -30,7 +30,6 @@ from spacearm.models.spatial.robot import robot_from_chain
 from spacearm.models.spatial.schema import locate_package_file
 from spacearm.models.spatial.urdf import parse_urdf
 from spacearm.models.tree import fields as tree_fields
-from spacearm.models.tree.family import TREE
 from spacearm.models.tree.robot import tree_from_chains
 from spacearm.studies.designs import build_designs
 from spacearm.studies.metrics import design_function, metric_columns
@@ -277,7 +276,7 @@ def _rule_means_kernels(robot, shifts, points: int):
 def _rule_jacobians_and_inertias(robot, shifts, points: int):
     """J* per tip and H* at the rule's postures, from the public kernels (one program)."""
     q = _rule_postures(robot, shifts, points)
-    return sa.generalized_jacobian(robot, q), TREE.arm_inertia(robot, q)
+    return sa.generalized_jacobian(robot, q), sa.arm_inertia(robot, q)
 
 
 def _direct_means(robot, samples: int, randomizations: int, seed: int):

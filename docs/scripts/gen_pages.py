@@ -46,6 +46,11 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.models.family", "Models", "the seam: the per-posture primitives every family implements"),
     ("spacearm.models.budget", "Models", "the mass budget: the bus, each root body, the moving links, the total"),
     ("spacearm.models.view_model", "Models", "a robot as one family-free tree of bodies on a free bus, for drawing"),
+    (
+        "spacearm.models.dynamics",
+        "Models",
+        "the one model's dynamics: the system mass matrix, bias forces and tip maps on the tree pass",
+    ),
     ("spacearm.models.planar", "Models", "the planar family of the paper"),
     ("spacearm.models.planar.robot", "Models", "the `PlanarRobot` pytree and its validation"),
     ("spacearm.models.planar.schema", "Models", "the planar robot file, the Table 1 preset"),
@@ -53,6 +58,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "spacearm.models.planar.closed_forms",
         "Models",
         "design coefficients (virtual manipulator), eq. 1, 2, 5, 6, 10 in closed form",
+    ),
+    (
+        "spacearm.models.planar.embedding",
+        "Models",
+        "the planar arm as the one-tip tree in the bus's x-y plane (its dynamics)",
     ),
     ("spacearm.models.planar.family", "Models", "the planar primitives and the closed forms registered as fast paths"),
     (
@@ -111,7 +121,12 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Models",
         "the virtual manipulator's shell of one tip of a tree: radii between which it lies",
     ),
-    ("spacearm.inertia", "Kinematics", "H*, H_m, rotational and dynamic manipulability, C(q), ellipsoids: every robot"),
+    ("spacearm.inertia", "Kinematics", "rotational and dynamic manipulability, C(q), ellipsoids: every robot"),
+    (
+        "spacearm.dynamics",
+        "Dynamics",
+        "free-floating dynamics with any momentum: H, bias, forward and inverse dynamics, G, impulses",
+    ),
     (
         "spacearm.kinematics",
         "Kinematics",

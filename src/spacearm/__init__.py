@@ -22,8 +22,20 @@ from typing import TYPE_CHECKING
 from ._core.errors import ConfigError as ConfigError
 from ._core.numeric import enable_compilation_cache as enable_compilation_cache, enable_x64 as enable_x64
 from ._version import __version__ as __version__
-from .inertia import (
+from .dynamics import (
     arm_inertia as arm_inertia,
+    base_velocity as base_velocity,
+    bias_forces as bias_forces,
+    forward_dynamics as forward_dynamics,
+    impulse_response as impulse_response,
+    inverse_dynamics as inverse_dynamics,
+    joint_mass_matrix as joint_mass_matrix,
+    mass_matrix as mass_matrix,
+    reduced_bias as reduced_bias,
+    tip_inverse_inertia as tip_inverse_inertia,
+    tip_velocity as tip_velocity,
+)
+from .inertia import (
     base_twist_map as base_twist_map,
     dynamic_manipulability as dynamic_manipulability,
     fixed_base_ellipsoid as fixed_base_ellipsoid,
@@ -97,6 +109,16 @@ __all__ = [
     "__version__",
     "angular_momentum",
     "arm_inertia",
+    "base_velocity",
+    "bias_forces",
+    "forward_dynamics",
+    "impulse_response",
+    "inverse_dynamics",
+    "joint_mass_matrix",
+    "mass_matrix",
+    "reduced_bias",
+    "tip_inverse_inertia",
+    "tip_velocity",
     "arm_jacobian",
     "base_jacobian",
     "base_rate",

@@ -3,10 +3,6 @@
 Each takes a robot whose J* has rotational rows (a spatial arm, or a tree of arms: per-tip
 results then carry a tip axis ``k``) and joints ``q (..., n)`` with any leading batch shape:
 
-- `arm_inertia`: H* = H_m - H_bm^T H_b^-1 H_bm, the joint-space inertia at zero momentum
-  (Yoshida's generalized inertia; in system-centroid coordinates H_b = blkdiag(M 1, I~) and
-  H_bm = [P; I~_q], so H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q);
-- `mass_matrix`: H_m, the joint-space inertia with the bus held fixed;
 - `rotational_manipulability`: sqrt det(J*_w J*_w^T), how freely the tip turns;
 - `full_manipulability`: the product of the singular values of [J*_v / L; J*_w];
 - `dynamic_manipulability`: w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T) (Yoshikawa 1985
@@ -16,8 +12,8 @@ results then carry a tip axis ``k``) and joints ``q (..., n)`` with any leading 
 - `rotational_ellipsoid`, `fixed_base_ellipsoid`: the axes of {J*_w qdot} and of the
   fixed-base {J_v qdot} for unit joint rates.
 
-The family gives H_m and H* (`spacearm.models.family.RobotFamily`); everything else is the
-generic J*, C and fixed-base Jacobian of `spacearm.kinematics`.
+H* is the reduced inertia of `spacearm.dynamics`; everything else is the generic J*, C and
+fixed-base Jacobian of `spacearm.kinematics`.
 """
 
 from __future__ import annotations
@@ -26,16 +22,15 @@ import jax
 import jax.numpy as jnp
 
 from ._core.linalg import gram_root_determinant
+from .dynamics import arm_inertia
 from .kinematics import base_rate_matrix, fixed_base_jacobian, generalized_jacobian, rotate_twist_rows
 from .models.family import family_of
 
 __all__ = [
-    "arm_inertia",
     "base_twist_map",
     "dynamic_manipulability",
     "fixed_base_ellipsoid",
     "full_manipulability",
-    "mass_matrix",
     "rotational_ellipsoid",
     "rotational_manipulability",
 ]
@@ -51,20 +46,6 @@ def _spatial_rows(robot, what: str) -> None:
 def _axes(J):
     directions, semi_axes, _ = jnp.linalg.svd(J, full_matrices=False)
     return semi_axes, directions
-
-
-@jax.jit
-def arm_inertia(robot, q: jax.Array) -> jax.Array:
-    """``(..., n, n)`` H*, the joint-space inertia at zero momentum (all arms of a tree)."""
-    _spatial_rows(robot, "arm_inertia")
-    return family_of(robot).arm_inertia(robot, q)
-
-
-@jax.jit
-def mass_matrix(robot, q: jax.Array) -> jax.Array:
-    """``(..., n, n)`` H_m, the joint-space inertia with the bus held fixed."""
-    _spatial_rows(robot, "mass_matrix")
-    return family_of(robot).mass_matrix(robot, q)
 
 
 @jax.jit
@@ -98,7 +79,7 @@ def dynamic_manipulability(robot, q: jax.Array) -> jax.Array:
     _spatial_rows(robot, "dynamic_manipulability")
     family = family_of(robot)
     J = generalized_jacobian(robot, q)[..., :3, :]
-    H = family.arm_inertia(robot, q)
+    H = arm_inertia(robot, q)
     if family.tip_count(robot) is not None:
         H = H[..., None, :, :]
     # J (H^T H)^-1 J^T = (J H^-1)(J H^-1)^T, with H symmetric positive definite.

@@ -165,6 +165,8 @@ class Group:
         coords: length of the flat coordinate vector the integrators carry (1 or 9).
         abelian: whether elements commute (then the attitude along a joint path is a
             plain line integral of the rate, exact by quadrature).
+        angular_axes: the components of a 3-D angular velocity the algebra keeps (SO(2): the
+            z component, the plane's normal; SO(3): all three).
     """
 
     name = "abstract"
@@ -172,6 +174,7 @@ class Group:
     space = 0
     coords = 0
     abelian = False
+    angular_axes: tuple[int, ...] = ()
 
     def identity(self, dtype=None) -> jax.Array:
         raise NotImplementedError
@@ -193,6 +196,10 @@ class Group:
 
     def matrix(self, g: jax.Array) -> jax.Array:
         """``(..., space, space)`` rotation matrix of an element."""
+        raise NotImplementedError
+
+    def rotation(self, g: jax.Array) -> jax.Array:
+        """``(..., 3, 3)`` the element as a rotation of space (SO(2): a turn about z)."""
         raise NotImplementedError
 
     def act(self, g: jax.Array, x: jax.Array) -> jax.Array:
@@ -236,6 +243,7 @@ class _SO2(Group):
     space = 2
     coords = 1
     abelian = True
+    angular_axes = (2,)
 
     def identity(self, dtype=None):
         return jnp.zeros((), dtype or jnp.result_type(float))
@@ -255,6 +263,12 @@ class _SO2(Group):
     def matrix(self, g):
         c, s = jnp.cos(g), jnp.sin(g)
         return jnp.stack([jnp.stack([c, -s], -1), jnp.stack([s, c], -1)], -2)
+
+    def rotation(self, g):
+        c, s = jnp.cos(g), jnp.sin(g)
+        zero, one = jnp.zeros_like(c), jnp.ones_like(c)
+        rows = [[c, -s, zero], [s, c, zero], [zero, zero, one]]
+        return jnp.stack([jnp.stack(row, -1) for row in rows], -2)
 
     def act(self, g, x):
         c, s = jnp.cos(g), jnp.sin(g)
@@ -289,6 +303,7 @@ class _SO3(Group):
     space = 3
     coords = 9
     abelian = False
+    angular_axes = (0, 1, 2)
 
     def identity(self, dtype=None):
         return jnp.eye(3, dtype=dtype or jnp.result_type(float))
@@ -306,6 +321,9 @@ class _SO3(Group):
         return jnp.swapaxes(jnp.asarray(g), -1, -2)
 
     def matrix(self, g):
+        return jnp.asarray(g)
+
+    def rotation(self, g):
         return jnp.asarray(g)
 
     def distance(self, a, b):

@@ -32,7 +32,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._core.errors import ConfigError
 from .._core.groups import Group
 
 __all__ = ["Capabilities", "FastPaths", "RobotFamily", "family_of", "known_families", "require_family"]
@@ -124,6 +123,9 @@ class RobotFamily:
             loop instead of writing them out (a shorter compile for the same speed).
         straight_defaults: the family's defaults of the straight-path options
             (``max_step``, ``tol``, ``rtol``, ``sing_rate``, ``tip_tol``, ``max_steps``).
+        twist_axes: the components of a 6-vector [x, y, z, rx, ry, rz] (a twist, momentum,
+            wrench or impulse) the family's dynamics keep: all six, or the plane's
+            [x, y, rz] for a planar family (its robots move in the bus's x-y plane).
         fields: the family's named design numbers (a module with ``FIELD_HELP``,
             ``canonical_name``, ``check_field``, ``set_field``, ``field_stage``,
             ``conflicting_number``, ``field_unit``, ``field_columns``): what sweep axes
@@ -139,6 +141,7 @@ class RobotFamily:
     attitude: ClassVar[Group]
     straight_field_loops: ClassVar[bool] = True
     straight_defaults: ClassVar[Mapping[str, Any]] = {}
+    twist_axes: ClassVar[tuple[int, ...]] = (0, 1, 2, 3, 4, 5)
     fields: ClassVar[Any] = None
     capabilities: ClassVar[Capabilities] = Capabilities()
 
@@ -185,13 +188,19 @@ class RobotFamily:
         """Static names of the tips a per-tip result indexes (``tip_count``), ``()`` without a tip axis."""
         return ()
 
-    def arm_inertia(self, robot, posture: jax.Array) -> jax.Array:
-        """``(..., n, n)`` H*, the arm inertia at zero momentum, batched over postures.
+    def dynamic_tree(self, robot):
+        """The whole robot (one design, or a batch) as the `spacearm.models.tree.TreeRobot` whose
+        pass gives its dynamics (`spacearm.models.dynamics`): every joint free, every tip kept.
 
-        Raises:
-            ConfigError: where the family gives none.
+        A planar robot is the tree in the bus's x-y plane whose joints turn about z; its
+        dynamics are that tree's rows and columns in `twist_axes` and the joints.
         """
-        raise ConfigError(f"metric: the arm inertia H* is not available for {self.name} robots")
+        raise NotImplementedError(f"the {self.name} family gives no tree for its dynamics")
+
+    def dynamic_tips(self, robot):
+        """``(k,)`` weights choosing one tip of `dynamic_tree` (a per-tip result then has no tip
+        axis), or ``None``: every tip, on a tip axis (a tree's k tips)."""
+        return np.ones(1) if self.tip_count(robot) is None else None
 
     def moving_joints(self, robot):
         """``(n,)`` 1 for the joints a planner may move and 0 for held ones (all move, unless the

@@ -34,6 +34,7 @@ from .closed_forms import (
     tip_coefficients,
     tip_position,
 )
+from .embedding import as_tree
 from .robot import PlanarRobot
 from .schema import robot_to_mapping
 from .singularities import two_link_path_independent_radius
@@ -65,6 +66,7 @@ class PlanarFamily(RobotFamily):
     capabilities = Capabilities(virtual_manipulator=True, tip_radius_search=True)
 
     attitude = SO2
+    twist_axes = (0, 1, 5)
     straight_field_loops = False  # the closed-form field: stages written out run faster
     straight_defaults: ClassVar[Mapping[str, Any]] = {
         "max_step": 0.25,
@@ -84,6 +86,10 @@ class PlanarFamily(RobotFamily):
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links
+
+    def dynamic_tree(self, robot: PlanarRobot):
+        """The arm in the bus's x-y plane (`spacearm.models.planar.embedding.as_tree`)."""
+        return as_tree(robot)
 
     def attitude_rate_map(self, robot: PlanarRobot, joints: jax.Array) -> jax.Array:
         """``(..., 1, n)`` -I_M / I_S (eq. 5), for ``joints (..., n)`` with any leading batch."""

@@ -30,13 +30,11 @@ from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import Capabilities, FastPaths, RobotFamily
 from ..tree.shell import tip_shell
 from .primitives import (
-    arm_inertia,
     as_tree,
     base_twist_map,
     fixed_base_jacobian,
     generalized_jacobian,
     jacobians,
-    mass_matrix,
     momentum_map,
     posture_quantities,
     straight_maps_and_ends,
@@ -141,19 +139,15 @@ class SpatialFamily(RobotFamily):
     def fixed_base_jacobian(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         return fixed_base_jacobian(robot, joints)
 
-    def mass_matrix(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H_m, the arm inertia with the bus held fixed."""
-        return mass_matrix(robot, joints)
+    def dynamic_tree(self, robot: SpatialRobot):
+        """The arm as its one-tip tree (`spacearm.models.spatial.primitives.as_tree`)."""
+        return as_tree(robot)
 
     def joint_kinds(self, robot: SpatialRobot) -> tuple[str, ...]:
         return tuple(robot.joint_kinds)
 
     def joint_names(self, robot: SpatialRobot) -> tuple[str, ...]:
         return tuple(robot.labels.joint_names)
-
-    def arm_inertia(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H*, the arm inertia at zero momentum."""
-        return arm_inertia(robot, joints)
 
     # Planning hooks (spacearm.planning) ---------------------------------------------------
 

@@ -27,13 +27,11 @@ from .robot import SpatialRobot
 
 __all__ = [
     "POSTURE_QUANTITIES",
-    "arm_inertia",
     "as_tree",
     "base_twist_map",
     "fixed_base_jacobian",
     "generalized_jacobian",
     "jacobians",
-    "mass_matrix",
     "momentum_map",
     "posture_quantities",
     "rpy_to_matrix",
@@ -126,19 +124,6 @@ def tip_and_fixed_base_jacobian(robot: SpatialRobot, q: jax.Array) -> tuple[jax.
     from one pass per posture (equal to `fixed_base_jacobian` and `tip`)."""
     J, tips = tree.tip_and_fixed_base_jacobian(as_tree(robot), q)
     return J[..., 0, :, :], tips[..., 0, :]
-
-
-def mass_matrix(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """``(..., n, n)`` H_m: the arm's joint-space inertia with the bus held fixed."""
-    return tree.mass_matrix(as_tree(robot), q)
-
-
-def arm_inertia(robot: SpatialRobot, q: jax.Array) -> jax.Array:
-    """``(..., n, n)`` H* = H_m - H_bm^T H_b^-1 H_bm: the arm inertia at zero momentum.
-
-    In system-centroid coordinates H_b = blkdiag(M 1, I~) and H_bm = [P; I~_q], so
-    H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q (Yoshida's generalized inertia)."""
-    return tree.arm_inertia(as_tree(robot), q)
 
 
 def tip_pose(robot: SpatialRobot, q: jax.Array) -> tuple[jax.Array, jax.Array]:

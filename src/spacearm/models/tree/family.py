@@ -32,21 +32,19 @@ from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import Capabilities, FastPaths, RobotFamily
 from .primitives import (
-    arm_inertia,
     base_twist_map,
     fixed_base_jacobian,
     fixed_base_jacobian_and_tips,
     generalized_jacobian,
     jacobians,
     manipulability,
-    mass_matrix,
     momentum_map,
     posture_quantities,
     straight_path_maps,
     tip,
     tip_frames,
 )
-from .robot import TreeRobot
+from .robot import TreeRobot, tree_view
 from .shell import tip_shell
 from .view import tree_view_model
 
@@ -261,9 +259,15 @@ class TreeFamily(RobotFamily):
         """``(k, 6, n)`` fixed-base Jacobians of the tips, bus axes (``(6, n)`` for a focused tree)."""
         return _fixed_base_jacobian(robot, joints)
 
-    def mass_matrix(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H_m, all arms with the bus held fixed (a focused tree: its held joints locked)."""
-        return _locked(robot, mass_matrix(robot, joints))
+    def dynamic_tree(self, robot: TreeRobot) -> TreeRobot:
+        """The tree itself with every joint free and every tip (a focus dropped)."""
+        if robot.focus_tip is None and robot.focus_moving is None:
+            return robot
+        return tree_view(robot, robot.joint_kinds, robot.parents, robot.tip_bodies, robot.labels)
+
+    def dynamic_tips(self, robot: TreeRobot):
+        """Every tip on a tip axis, or the focused tip's one-hot weights."""
+        return robot.focus_tip
 
     def joint_kinds(self, robot: TreeRobot) -> tuple[str, ...]:
         return tuple(robot.joint_kinds)
@@ -273,10 +277,6 @@ class TreeFamily(RobotFamily):
 
     def tip_names(self, robot: TreeRobot) -> tuple[str, ...]:
         return tuple(robot.tip_names)
-
-    def arm_inertia(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
-        """``(n, n)`` H*, the inertia of all arms at zero momentum (a focused tree: its held joints locked)."""
-        return _locked(robot, arm_inertia(robot, joints))
 
 
 TREE = TreeFamily()

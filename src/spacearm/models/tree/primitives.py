@@ -63,7 +63,6 @@ from .robot import TreeRobot
 __all__ = [
     "POSTURE_QUANTITIES",
     "TreeConstants",
-    "arm_inertia",
     "base_twist_map",
     "body_frames",
     "fixed_base_jacobian",
@@ -72,7 +71,6 @@ __all__ = [
     "jacobians",
     "joint_points",
     "manipulability",
-    "mass_matrix",
     "momentum_map",
     "posture_quantities",
     "segments",
@@ -503,16 +501,6 @@ def _mass_from(robot, state):
     return jnp.where(down, upper, jnp.where(np.swapaxes(down, 0, 1), jnp.swapaxes(upper, 0, 1), zero))
 
 
-def _mass_minor(robot, q):
-    return _mass_from(robot, _tree_pass(robot, q))
-
-
-def _arm_inertia_minor(robot, q):
-    state = _tree_pass(robot, q)
-    coupling, solved = _coupling(state)
-    return _mass_from(robot, state) - _outer(state.momentum, state.momentum) / state.mass - _outer(coupling, solved)
-
-
 def _centred_tip_rows(state, shape):
     """``(k, 3, *shape)``: the tips about the system centroid, repeated over the columns."""
     tips = _sub(state.tips, tuple(c[None] for c in state.centroid))  # (k, *batch)
@@ -620,13 +608,6 @@ def joint_points(robot: TreeRobot, q: jax.Array) -> tuple[jax.Array, jax.Array, 
     ``(k, 3)``, bus frame, m, from the kernels' pass (what a drawing of the robot needs)."""
     state = _tree_pass(robot, jnp.asarray(q))
     return jnp.stack(state.centroid), jnp.stack(state.origins, axis=-1), jnp.stack(state.tips, axis=-1)
-
-
-mass_matrix = batched(_mass_minor, 2)
-mass_matrix.__doc__ = """``(..., n, n)`` H_m: the joint-space inertia of all arms with the bus held fixed."""
-
-arm_inertia = batched(_arm_inertia_minor, 2)
-arm_inertia.__doc__ = """``(..., n, n)`` H* = H_m - P^T P / M - I~_q^T I~^-1 I~_q, the inertia at zero momentum."""
 
 
 POSTURE_QUANTITIES = ("jacobian", "base_rate", "arm_inertia")
