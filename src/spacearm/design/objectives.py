@@ -14,6 +14,12 @@ approach of a dynamic-singular tip position to the system centroid, by
 theorem's: the search over the singular set runs with the design's gradient stopped, and
 the derivative is taken at the minimizing posture, the set's motion included through its
 Lagrange multipliers.
+
+Task objectives (every family; `TASK_OBJECTIVES`): minus the peak joint torque, minus the
+peak force and minus the peak torque that hold the bus at rest, along the problem's timed
+task (`spacearm.motion.tasks.task_peaks`, zero momentum). A peak is a maximum over the
+task's samples, differentiable wherever one sample attains it (almost everywhere); its
+gradient is that sample's.
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from .._core.errors import ConfigError
 from ..analysis.averages import split_metric, tip_metric
 from ..analysis.workspace_search import singular_radius
 from ..models.family import RobotFamily, family_of
+from ..motion.tasks import TimedTask, task_peaks
 from ..paper import PlanarRobot, normalized_wbar, tip_coefficients
 
 __all__ = [
@@ -37,6 +44,7 @@ __all__ = [
     "OBJECTIVES",
     "RADIUS_OBJECTIVES",
     "RADIUS_OPTIONS",
+    "TASK_OBJECTIVES",
     "average_objective",
     "guaranteed_area",
     "maximum_reachable_area",
@@ -45,6 +53,7 @@ __all__ = [
     "objectives_for",
     "reach_radius",
     "split_objective",
+    "task_objective",
     "total_mass_objective",
 ]
 
@@ -64,6 +73,13 @@ DESIGN_OBJECTIVES = ("low_total_mass",)  # minus the bus mass plus every arm mas
 # Objectives found by a search over the joint box, differentiable by the envelope theorem.
 RADIUS_OBJECTIVES = ("reach_radius",)  # the path-independent workspace radius, m
 
+# Objectives along the problem's timed task (`TimedTask`), every family: minus a peak of `TaskPeaks`.
+TASK_OBJECTIVES = {
+    "low_peak_joint_torque": "max_joint_torque",  # minus the largest |tau_i| (free bus), N m
+    "low_peak_held_force": "held_force",  # minus the largest force holding the bus at rest, N
+    "low_peak_held_torque": "held_torque",  # minus the largest torque holding the bus at rest, N m
+}
+
 # The options of `reach_radius` (those of `singular_radius`) and their defaults in a design
 # problem: 4x fewer samples, half the kept postures and 80 descent steps instead of the
 # sweep metric's 2^14, 2048 and 150, about half its cost; on 32 UR5 mounts every radius
@@ -77,12 +93,13 @@ def objectives_for(family: RobotFamily) -> tuple[str, ...]:
     family declares (`RobotFamily.capabilities`): the paper's closed forms (`OBJECTIVES`) where it
     has the virtual manipulator's, the joint-box averages and the launch mass where it has those.
     ``reach_radius`` is listed for every family, so that asking for it where the family has no
-    one-tip search gets `objective_name`'s reason, not a guess."""
+    one-tip search gets `objective_name`'s reason, not a guess. The task objectives
+    (`TASK_OBJECTIVES`) serve every family: the dynamics do."""
     capabilities = family.capabilities
     offered = OBJECTIVES if capabilities.virtual_manipulator else ()
     if capabilities.joint_box_averages:
         offered = (*offered, *AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES)
-    return (*offered, *RADIUS_OBJECTIVES)
+    return (*offered, *RADIUS_OBJECTIVES, *TASK_OBJECTIVES)
 
 
 def guaranteed_area(robot: PlanarRobot, *, clamp: bool = True) -> jax.Array:
@@ -139,6 +156,14 @@ def reach_radius(robot, **options) -> jax.Array:
     central differences of the radius recomputed from scratch).
     """
     return singular_radius(robot, "generalized", **{**RADIUS_OPTIONS, **options}, polish=True)[0]
+
+
+def task_objective(name: str, robot, task: TimedTask) -> jax.Array:
+    """``()`` the task objective ``name`` (`TASK_OBJECTIVES`) of one design: minus a peak along
+    ``task`` (`task_peaks`: joint torques with the bus free, the wrench holding it at rest)."""
+    field = TASK_OBJECTIVES[name]
+    peaks = task_peaks(robot, task, base="held" if field != "max_joint_torque" else "free")
+    return -getattr(peaks, field)
 
 
 _TIP_OBJECTIVE = re.compile(r"^(\w+)\[(.+)\]$")
@@ -198,6 +223,7 @@ def objective(
     wbar_options: Mapping[str, Any] | None = None,
     clamp_guaranteed: bool = True,
     radius_options: Mapping[str, Any] | None = None,
+    task: TimedTask | None = None,
 ) -> Callable[[PlanarRobot], jax.Array]:
     """The objective ``name`` as ``f(robot) -> scalar`` (options checked by the problem's loader).
 
@@ -206,6 +232,7 @@ def objective(
         wbar_options: keyword arguments of `spacearm.paper.normalized_wbar`.
         clamp_guaranteed: see `guaranteed_area`.
         radius_options: keyword arguments of `reach_radius` (objective ``reach_radius``).
+        task: the timed task of a `TASK_OBJECTIVES` objective.
     """
     if name == "wbar":
         options = dict(wbar_options or {})
@@ -219,6 +246,11 @@ def objective(
     if name == "reach_radius":
         options = dict(radius_options or {})
         return lambda robot: reach_radius(robot, **options)
+    if name in TASK_OBJECTIVES:
+        if task is None:
+            raise ValueError(f"objective {name!r} is taken along a timed task: pass task=")
+        return lambda robot: task_objective(name, robot, task)
     raise ValueError(
-        f"unknown objective {name!r}; known: {', '.join((*OBJECTIVES, *DESIGN_OBJECTIVES, *RADIUS_OBJECTIVES))}"
+        f"unknown objective {name!r}; known: "
+        f"{', '.join((*OBJECTIVES, *DESIGN_OBJECTIVES, *RADIUS_OBJECTIVES, *TASK_OBJECTIVES))}"
     )

@@ -24,6 +24,11 @@ robots) takes its search's options from an optional ``radius:`` section
 (`spacearm.design.objectives.RADIUS_OPTIONS`: samples, keep, candidates, descent_steps,
 newton_steps, seed).
 
+The task objectives (`spacearm.design.objectives.TASK_OBJECTIVES`, every family:
+``low_peak_joint_torque``, ``low_peak_held_force``, ``low_peak_held_torque``) are taken
+along the file's timed task, ``task: {waypoints: [[...], ...], duration: 4.0}`` (joints in
+rad, or ``waypoints_deg``; `spacearm.motion.tasks`).
+
 On a robot with several arms (a tree) the variables are its fields
 (``arms.right.mount.xyz[0]``, ``links.left/forearm_link.length``;
 `spacearm.models.tree.fields`) and a per-tip objective names its tip, as
@@ -52,17 +57,29 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from .._core.schema import MAX_OBJECTIVES, check_keys, check_memory, check_name, choice, integer, number, read_yaml
+from .._core.schema import (
+    MAX_OBJECTIVES,
+    check_keys,
+    check_memory,
+    check_name,
+    choice,
+    did_you_mean,
+    integer,
+    number,
+    read_yaml,
+)
 from ..analysis.averages import joint_averages
 from ..analysis.joint_box import check_joint_box
 from ..models import load_robot
 from ..models.family import family_of
+from ..motion.tasks import TimedTask, task_from_mapping, task_peaks
 from ..paper import PlanarRobot, check_average_options, normalized_wbar
 from ..paper.planar_parts import design_field_aliases
 from .objectives import (
     AVERAGE_OBJECTIVES,
     RADIUS_OBJECTIVES,
     RADIUS_OPTIONS,
+    TASK_OBJECTIVES,
     average_objective,
     objective,
     objective_name,
@@ -167,6 +184,7 @@ class DesignProblem(VariableBounds):
         clamp_guaranteed: see `guaranteed_area` (objective ``S_G``).
         samples, randomizations, seed: the fixed QMC rule of the joint-box averages.
         radius_options: options of the ``reach_radius`` search (`RADIUS_OPTIONS`), as given.
+        task: the timed task of the task objectives (`TASK_OBJECTIVES`), or None.
     """
 
     name: str
@@ -187,6 +205,7 @@ class DesignProblem(VariableBounds):
     nsga2: Mapping[str, Any] | None = None
     description: str = ""
     radius_options: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    task: TimedTask | None = None
 
     @property
     def family(self):
@@ -204,7 +223,8 @@ class DesignProblem(VariableBounds):
         (of any tip) and no radius search, so a value costs next to nothing against the
         value program's compile."""
         return not any(
-            split_objective(name)[0] in AVERAGE_OBJECTIVES or name in RADIUS_OBJECTIVES for name in self.objectives
+            split_objective(name)[0] in AVERAGE_OBJECTIVES or name in RADIUS_OBJECTIVES or name in TASK_OBJECTIVES
+            for name in self.objectives
         )
 
     def fixed_summary(self) -> dict:
@@ -234,15 +254,16 @@ class DesignProblem(VariableBounds):
 
         Every joint-box average comes from one `joint_averages` call on the fixed rule
         (one chain pass per posture for all of them)."""
-        program, base, seed = self._program(), self.base, self.seed
-        return lambda x: _evaluate(program, base, jnp.asarray(x), seed)
+        program, base, seed, task = self._program(), self.base, self.seed, self.task
+        return lambda x: _evaluate(program, base, jnp.asarray(x), seed, task)
 
     def batch_function(self) -> Callable[[jax.Array], jax.Array]:
         """``(B, d) -> (B, m)``, jitted once per process for every problem of the same shape:
         the base design and the seed are traced arguments, so the search, the grid and
-        NSGA-II (and other problems differing only in numbers) share one program per batch size."""
-        program, base, seed = self._program(), self.base, self.seed
-        return lambda xs: _evaluate_batch(program, base, jnp.asarray(xs), seed)
+        NSGA-II (and other problems differing only in numbers) share one program per batch size
+        (the task too is a traced argument: its waypoints' shape, not their values, is compiled)."""
+        program, base, seed, task = self._program(), self.base, self.seed, self.task
+        return lambda xs: _evaluate_batch(program, base, jnp.asarray(xs), seed, task)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -267,14 +288,18 @@ def _design(base, fields_set: tuple[str, ...], x: jax.Array):
     return robot
 
 
-def _evaluate(program: _Program, base, x: jax.Array, seed) -> jax.Array:
-    """``(m,)`` objectives of one ``(d,)`` variable vector set on ``base``."""
+def _evaluate(program: _Program, base, x: jax.Array, seed, task: TimedTask | None = None) -> jax.Array:
+    """``(m,)`` objectives of one ``(d,)`` variable vector set on ``base``; the task objectives
+    from one `task_peaks` call."""
     robot = _design(base, program.fields, x)
     values: list[Any] = [None] * len(program.objectives)
     kinds = [average_objective(name, robot) for name in program.objectives]  # per tip: manipulability[1]
     averaged = [(i, *kind) for i, kind in enumerate(kinds) if kind is not None]
+    peaks = task_peaks(robot, task) if any(name in TASK_OBJECTIVES for name in program.objectives) else None
     for i, name in enumerate(program.objectives):
-        if kinds[i] is None:
+        if name in TASK_OBJECTIVES:
+            values[i] = -getattr(peaks, TASK_OBJECTIVES[name])
+        elif kinds[i] is None:
             values[i] = objective(
                 name,
                 wbar_options=dict(program.wbar_options),
@@ -298,8 +323,8 @@ def _evaluate(program: _Program, base, x: jax.Array, seed) -> jax.Array:
 
 
 @functools.partial(jax.jit, static_argnames=("program",))
-def _evaluate_batch(program: _Program, base, xs: jax.Array, seed) -> jax.Array:
-    return jax.vmap(lambda x: _evaluate(program, base, x, seed))(xs)
+def _evaluate_batch(program: _Program, base, xs: jax.Array, seed, task: TimedTask | None = None) -> jax.Array:
+    return jax.vmap(lambda x: _evaluate(program, base, x, seed, task))(xs)
 
 
 # YAML ---------------------------------------------------------------------------------
@@ -319,6 +344,7 @@ _TOP_KEYS = {
     "baselines",
     "hybrid",
     "radius",
+    "task",
 }  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _FIXED_KEYS = {"base_mass", "base_inertia", "arm_mass", "reach", "links"}
 _AVERAGE_KEYS = {"samples", "randomizations", "seed"}
@@ -424,7 +450,8 @@ def problem_from_mapping(
     averaged = any(split_objective(name)[0] in AVERAGE_OBJECTIVES for name in objectives)
     with_radius = any(name in RADIUS_OBJECTIVES for name in objectives)
     radius_options = _radius_options(source, config.get("radius"), with_radius)
-    reference = _reference_point(source, config, objectives, averaged or with_radius)
+    task = _task(source, config.get("task"), objectives, family.joint_kinds(base))
+    reference = _reference_point(source, config, objectives, averaged or with_radius or task is not None)
     wbar = _parse_wbar(source, config, objectives, n)
     guaranteed = choice(f"{source}: guaranteed", config.get("guaranteed", "clamped"), ("clamped", "paper"))
     samples, randomizations, seed = _parse_average(source, config.get("average", {}) or {})
@@ -434,6 +461,8 @@ def problem_from_mapping(
     if with_radius:
         check_joint_box(base)
         fixed_summary.update(radius={**RADIUS_OPTIONS, **radius_options})
+    if task is not None:
+        fixed_summary.update(task=task.to_mapping())
     search = parse_search(source, config.get("search", {}))
     grid_points, grid_chunk, nsga2 = parse_baselines(
         source, config.get("baselines", {}), len(variables), len(objectives)
@@ -457,7 +486,26 @@ def problem_from_mapping(
         nsga2=nsga2,
         description=str(config.get("description", "")),
         radius_options=radius_options,
+        task=task,
     )
+
+
+def _task(source: str, section: Any, objectives: tuple[str, ...], joint_kinds: tuple[str, ...]) -> TimedTask | None:
+    """The ``task:`` section (`task_from_mapping`): required by a task objective, refused without one."""
+    along = [name for name in objectives if name in TASK_OBJECTIVES]
+    if section is None:
+        if along:
+            raise ConfigError(
+                f"{source}: task: missing; {', '.join(along)} is taken along a timed task, e.g. "
+                "task: {waypoints: [[...], [...]], duration: 4.0} (joints in rad, time in s)"
+            )
+        return None
+    if not along:
+        raise ConfigError(
+            f"{source}: task: the timed task of the task objectives ({', '.join(TASK_OBJECTIVES)}), "
+            "which objectives does not list"
+        )
+    return task_from_mapping(source, section, joint_kinds)
 
 
 def _base_design(source: str, config: Mapping[str, Any], base_dir) -> tuple[Any, dict, dict, str]:
@@ -634,7 +682,13 @@ def _objective_entry(where: str, entry: Any, allowed: Sequence[str], base) -> st
         if tip is not None and (isinstance(tip, bool) or not isinstance(tip, (str, int))):
             raise ConfigError(f"{where}.tip: a tip's name or index, got {tip!r}")
     name = split_objective(entry)[0] if isinstance(entry, str) else entry
-    choice(where, name, allowed)
+    if name not in TASK_OBJECTIVES:  # the task objectives listed apart: they need the file's task
+        try:
+            choice(where, name, [a for a in allowed if a not in TASK_OBJECTIVES])
+        except ConfigError as error:
+            along = ", ".join(TASK_OBJECTIVES)
+            hint = did_you_mean(name, TASK_OBJECTIVES) if isinstance(name, str) else ""
+            raise ConfigError(f"{error}; along the file's timed task: {along}{hint}") from None
     return objective_name(where, base, entry, tip)
 
 

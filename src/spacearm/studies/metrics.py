@@ -14,12 +14,14 @@ from typing import Any
 import jax.numpy as jnp
 
 from .._core.errors import ConfigError
-from .._core.schema import check_keys, did_you_mean, integer, is_number
+from .._core.schema import check_keys, choice, did_you_mean, integer, is_number
 from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
 from ..analysis.joint_box import check_joint_box
 from ..analysis.workspace_search import reachable_radii, singular_radius
+from ..dynamics import BASE_MODES
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
-from ..models.family import Capabilities, known_families
+from ..models.family import Capabilities, family_of, known_families
+from ..motion.tasks import TimedTask, task_from_mapping, task_peaks
 from ..paper import (
     PlanarRobot,
     attachment_condition,
@@ -36,6 +38,7 @@ __all__ = [
     "WBAR_OPTIONS",
     "Metric",
     "MetricSpec",
+    "attach_task",
     "design_function",
     "metric_columns",
     "metric_specs",
@@ -68,6 +71,8 @@ class Metric:
     # default). Adaptive loops (the joint-box averages) run a vmapped step until its
     # slowest design is done, so they want small steps.
     designs_per_step: int | None = None
+    # Whether the metric is taken along the sweep's timed task (``task:``, `attach_task`).
+    needs_task: bool = False
 
     @property
     def families(self) -> tuple[str, ...]:
@@ -416,6 +421,85 @@ for _name, (_kind, _column, _text) in _AVERAGES.items():
         + (" (of one tip: option tip, a name or an index, on a robot with several)" if _per_tip else "")
         + f"; options {', '.join(AVERAGE_OPTIONS)} (rtol default {SWEEP_RTOL:g})",
     )
+
+
+# Timed tasks (`spacearm.motion.tasks`): peaks of the joint torques and of the held wrench.
+
+
+def _check_task_metric(allowed: tuple[str, ...]):
+    def check(where: str, options: dict) -> None:
+        check_keys(f"{where}: ", options, allowed)
+        if "base" in options:
+            choice(f"{where}.base", options["base"], BASE_MODES)
+        if "task" in options and not isinstance(options["task"], Mapping):
+            raise ConfigError(f"{where}.task: must be a mapping {{waypoints: [[...], ...], duration: seconds}}")
+
+    return check
+
+
+def _task(options: dict) -> TimedTask:
+    """The metric's task, as `attach_task` wrote it into its options (rad, s)."""
+    return TimedTask(options["task"]["waypoints"], options["task"]["duration"])
+
+
+def _peak_joint_torque(robot, options):
+    peaks = task_peaks(robot, _task(options), base=options.get("base", "free"))
+    return {"peak_joint_torque_Nm": peaks.max_joint_torque}
+
+
+def _peak_held_wrench(robot, options):
+    peaks = task_peaks(robot, _task(options), base="held")
+    return {"peak_held_force_N": peaks.held_force, "peak_held_torque_Nm": peaks.held_torque}
+
+
+METRICS["peak_joint_torque"] = Metric(
+    _peak_joint_torque,
+    lambda o: ["peak_joint_torque_Nm"],
+    check=_check_task_metric(("task", "base")),
+    offered=lambda capabilities: True,  # the dynamics serve every family
+    needs_task=True,
+    description="the largest |tau_i| of any joint along the sweep's task (N m; N for a prismatic joint), "
+    "at zero momentum; option base: free (default), held or attitude",
+)
+METRICS["peak_held_wrench"] = Metric(
+    _peak_held_wrench,
+    lambda o: ["peak_held_force_N", "peak_held_torque_Nm"],
+    check=_check_task_metric(("task",)),
+    offered=lambda capabilities: True,
+    needs_task=True,
+    description="the largest force (N) and torque (N m) the bus's thrusters and wheels apply to hold the bus "
+    "at rest along the sweep's task (at the bus centroid)",
+)
+
+
+def attach_task(where: str, metrics: Sequence[MetricSpec], task: TimedTask | None, robot) -> tuple[MetricSpec, ...]:
+    """The metrics with their timed task written into their options (rad, s): a metric's own
+    ``task`` option, else the sweep's ``task:``.
+
+    Raises:
+        ConfigError: a task metric without a task, a task no metric uses, or a task that does
+            not fit the robot's joints (naming ``where`` and the field).
+    """
+    kinds = family_of(robot).joint_kinds(robot)
+    users = [name for name, entry in METRICS.items() if entry.needs_task]
+    if task is not None and not any(METRICS[m.name].needs_task for m in metrics):
+        raise ConfigError(f"{where}: task: no metric listed uses it (the task metrics: {', '.join(users)})")
+    attached = []
+    for i, metric in enumerate(metrics):
+        if METRICS[metric.name].needs_task:
+            own = metric.options.get("task")
+            if own is not None:
+                task_of = task_from_mapping(f"{where}: metrics[{i}]", own, kinds)
+            elif task is None:
+                raise ConfigError(
+                    f"{where}: metrics[{i}]: {metric.name} is taken along a timed task; give one in the sweep "
+                    "file, e.g. task: {waypoints: [[...], [...]], duration: 4.0} (joints in rad, time in s)"
+                )
+            else:
+                task_of = task
+            metric = MetricSpec(metric.name, {**metric.options, "task": task_of.to_mapping()})
+        attached.append(metric)
+    return tuple(attached)
 
 
 def metric_columns(metrics: Sequence[MetricSpec]) -> list[str]:

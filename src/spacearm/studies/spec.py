@@ -9,6 +9,10 @@ design axes to vary, how to combine them, and the metrics to compute::
       b0_over_B0: {field: base.attach, relative: true, values: [0, 0.5, 1.0, 1.5, 2.0]}
     metrics: [wbar, S_M, S_G]
 
+Metrics taken along a timed task (``peak_joint_torque``, ``peak_held_wrench``) read the
+file's ``task: {waypoints: [[...], ...], duration: 4.0}`` (joints in rad, or
+``waypoints_deg``; `spacearm.motion.tasks`).
+
 `load_sweep` checks everything a run uses, down to every sweep point's design, so
 an invalid sweep fails before anything is written.
 """
@@ -41,8 +45,9 @@ from .._core.schema import (
 )
 from ..models import load_robot, robot_from_file_mapping
 from ..models.family import family_of
+from ..motion.tasks import task_from_mapping
 from .designs import Axis, axis_points, build_designs, check_axes_compatible, check_field, field_axis_unit
-from .metrics import METRICS, MetricSpec, metric_specs, resolve_tips
+from .metrics import METRICS, MetricSpec, attach_task, metric_specs, resolve_tips
 from .table2 import REPORT_CHECKS, REPORTS
 
 __all__ = ["Axis", "MetricSpec", "SweepSpec", "apply_overrides", "axis_points", "load_sweep"]
@@ -57,6 +62,7 @@ _TOP_KEYS = {
     "output",
     "chunk_size",
     "report",
+    "task",
 }
 _AXIS_KEYS = {"field", "values", "range", "relative"}
 _RANGE_KEYS = {"start", "stop", "num", "step"}
@@ -205,13 +211,17 @@ def load_sweep(source: str | os.PathLike | Mapping, overrides: Sequence[str] = (
     metrics = metric_specs(f"{where}: metrics", config.get("metrics"))
     chunk_size, output, report = _run_settings(where, config, name)
     metrics = _check_metrics(where, metrics, robot)
+    task = config.get("task")
+    task = None if task is None else task_from_mapping(where, task, family_of(robot).joint_kinds(robot))
+    written, metrics = metrics, attach_task(where, metrics, task, robot)
     resolved = {
         "name": name,
         "description": config.get("description", ""),
         "robot": robot_mapping,  # inline, so the resolved config is itself a sweep file
         "axes": {a.name: {"field": a.field, "relative": a.relative, "values": a.values.tolist()} for a in axes},
         "combine": combine,
-        "metrics": [{"name": m.name, **m.options} for m in metrics],
+        "metrics": [{"name": m.name, **m.options} for m in written],
+        **({} if task is None else {"task": task.to_mapping()}),
         "chunk_size": chunk_size,
         "output": output,
         "report": report,
