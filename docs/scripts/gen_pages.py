@@ -158,6 +158,11 @@ API_MODULES: list[tuple[str, str, str]] = [
     ),
     ("spacearm.motion.dop853", "Motion", "the DOP853 tableau, one step, the error norm"),
     ("spacearm.motion.batching", "Motion", "designs and paths flattened to one batch axis"),
+    (
+        "spacearm.motion.tasks",
+        "Motion",
+        "timed tasks (waypoints, duration, quintic time law) and the peak torques and held wrench",
+    ),
     ("spacearm.analysis", "Analysis", "workspaces, singular sets, areas, averaged metrics, maps"),
     (
         "spacearm.paper.workspaces",
