@@ -45,6 +45,9 @@ COLUMN_LABELS: dict[str, str] = {
     "gci": "global conditioning index, mean 1/κ(J*_v)",
     "C_w_avg": "base disturbance, mean ‖C_w‖_F, rad/rad",
     "w_d_avg": "mean dynamic manipulability w_d",
+    "peak_joint_torque_Nm": "peak joint torque along the task, N m",
+    "peak_held_force_N": "peak force holding the bus along the task, N",
+    "peak_held_torque_Nm": "peak torque holding the bus along the task, N m",
 }
 
 
