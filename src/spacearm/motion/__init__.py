@@ -1,4 +1,5 @@
-"""Motion of the free-floating arm: the base attitude along joint paths, straight tip paths and pose paths."""
+"""Motion of the free-floating arm: the base attitude along joint paths, straight tip paths and pose paths,
+and the simulation under joint torques."""
 
 from .attitude import geodesic_distance as geodesic_distance
 from .joint_paths import (
@@ -18,6 +19,7 @@ from .pose_paths import (
     pose_on_path as pose_on_path,
     straight_pose_path as straight_pose_path,
 )
+from .simulation import SimulationStop as SimulationStop, simulate as simulate
 from .spatial_paths import (
     SpatialStraightPath as SpatialStraightPath,
     spatial_go_and_back as spatial_go_and_back,
@@ -38,6 +40,7 @@ __all__ = [
     "REASON_STEP_BUDGET",
     "PoseHistory",
     "PosePath",
+    "SimulationStop",
     "SpatialStraightPath",
     "StraightPath",
     "compile_straight_tip_path_history",
@@ -47,6 +50,7 @@ __all__ = [
     "joint_path_base_increments",
     "joint_path_history",
     "pose_on_path",
+    "simulate",
     "spatial_go_and_back",
     "spatial_straight_tip_path",
     "straight_pose_path",
