@@ -17,7 +17,7 @@ import yaml
 import spacearm as sa
 from spacearm._core.errors import ConfigError
 from spacearm.design.problem import load_problem
-from spacearm.motion.tasks import TimedTask, task_from_mapping, task_peaks, task_states
+from spacearm.motion.tasks import TimedTask, peak_norm, task_from_mapping, task_peaks, task_states
 from spacearm.studies import build_designs, load_sweep, run_sweep
 
 UR5 = str(Path("configs/ur5-smallsat.yaml").resolve())
@@ -62,6 +62,25 @@ def test_states_follow_the_quintic_and_stop_at_every_waypoint():
     h, size = T / (samples - 1), np.abs(step).max()
     np.testing.assert_allclose((q[:, 2:] - q[:, :-2]) / (2 * h), qd[:, 1:-1], rtol=0, atol=h**2 * 10 * size / T**3)
     np.testing.assert_allclose((qd[:, 2:] - qd[:, :-2]) / (2 * h), qdd[:, 1:-1], rtol=0, atol=h**2 * 60 * size / T**4)
+
+
+def test_peak_norm_has_a_finite_gradient_at_rest_samples():
+    vectors = jnp.array([[0.0, 0.0, 0.0], [3.0, 4.0, 0.0], [1.0, 0.0, 0.0]])
+    np.testing.assert_allclose(peak_norm(vectors), 5.0, rtol=1e-15)
+    np.testing.assert_allclose(jax.grad(peak_norm)(vectors), [[0, 0, 0], [0.6, 0.8, 0], [0, 0, 0]], atol=1e-15)
+    assert peak_norm(jnp.zeros((4, 3))) == 0 and not np.any(jax.grad(peak_norm)(jnp.zeros((4, 3))))
+
+
+def test_a_task_is_validated_and_passes_through_jit_as_data():
+    with pytest.raises(ConfigError, match=r"task.waypoints: must be a \(k, n\) array"):
+        TimedTask(np.zeros((1, 3)), 1.0)
+    with pytest.raises(ConfigError, match=r"task\.duration: must be a positive number"):
+        TimedTask(np.zeros((2, 3)), -1.0)
+    task = TimedTask([[0, 0], [1, 2]], 2)
+    assert task.waypoints.dtype == np.float64 and task.segment_duration == 2.0
+    through = jax.jit(lambda task: task)(task)  # leaves traced, rebuilt without validation
+    assert isinstance(through, TimedTask) and float(through.duration) == 2.0
+    np.testing.assert_array_equal(through.waypoints, task.waypoints)
 
 
 def test_peaks_are_the_largest_inverse_dynamics_over_the_samples(ur5, ur5_task):

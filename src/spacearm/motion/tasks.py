@@ -50,6 +50,7 @@ __all__ = [
     "SEGMENT_SAMPLES",
     "TaskPeaks",
     "TimedTask",
+    "peak_norm",
     "quintic_time_law",
     "task_from_mapping",
     "task_peaks",
@@ -182,6 +183,8 @@ def task_states(waypoints: jax.Array, duration, samples: int = SEGMENT_SAMPLES):
     if samples < 2:
         raise ValueError(f"samples: at least 2 per segment (both ends), got {samples}")
     waypoints = jnp.asarray(waypoints)
+    if not jnp.issubdtype(waypoints.dtype, jnp.floating):
+        waypoints = waypoints.astype(float)
     k, n = waypoints.shape[-2:]
     T = jnp.asarray(duration, waypoints.dtype) / (k - 1)
     u = jnp.linspace(0.0, 1.0, samples, dtype=waypoints.dtype)
@@ -218,9 +221,11 @@ class TaskPeaks(NamedTuple):
         return jnp.max(self.joint_torque, axis=-1)
 
 
-def _peak_norm(vectors: jax.Array) -> jax.Array:
-    """``max_s ||vectors[s]||`` as the square root of the peak squared norm (finite gradient
-    where the peak is attained; zero, with a zero gradient, when every vector is zero)."""
+def peak_norm(vectors: jax.Array) -> jax.Array:
+    """``(...)`` the largest norm of ``(..., S, d)`` vectors over their samples S, as the square
+    root of the peak squared norm: its gradient is finite wherever the peak is attained (a
+    norm's is not at a zero vector, which every rest sample of a task has), and zero when
+    every vector is zero."""
     peak = jnp.max(jnp.sum(vectors**2, axis=-1), axis=-1)
     positive = peak > 0
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, peak, 1.0)), 0.0)
@@ -233,8 +238,8 @@ def _peaks(tau: jax.Array, wrench: jax.Array, linear: tuple[bool, ...]) -> TaskP
     linear = np.asarray(linear)
     return TaskPeaks(
         joint_torque=jnp.max(jnp.abs(tau), axis=-2),
-        held_force=_peak_norm(wrench[..., linear]),
-        held_torque=_peak_norm(wrench[..., ~linear]),
+        held_force=peak_norm(wrench[..., linear]),
+        held_torque=peak_norm(wrench[..., ~linear]),
     )
 
 
