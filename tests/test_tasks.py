@@ -94,6 +94,16 @@ def test_peaks_are_the_largest_inverse_dynamics_over_the_samples(ur5, ur5_task):
     np.testing.assert_allclose(peaks.max_joint_torque, np.abs(tau_free).max(), rtol=1e-12)
     np.testing.assert_allclose(peaks.held_force, np.linalg.norm(wrench[:, :3], axis=1).max(), rtol=1e-12)
     np.testing.assert_allclose(peaks.held_torque, np.linalg.norm(wrench[:, 3:], axis=1).max(), rtol=1e-12)
+    # the held wrench is the rate of the system's momentum with the bus at rest: [P; L about the
+    # bus centroid] = H[:6, 6:] qd (bus axes, fixed in space), by central differences in time
+    dense = 2001  # every 20th dense sample is one of the 101
+    _, q_dense, qd_dense, _ = task_states(ur5_task.waypoints, ur5_task.duration, dense)
+    H = np.asarray(sa.mass_matrix(ur5, q_dense))
+    momentum = np.einsum("sij,sj->si", H[:, :6, 6:], np.asarray(qd_dense)).reshape(2, dense, 6)
+    rate = (momentum[:, 2:] - momentum[:, :-2]) / (2 * 2.0 / (dense - 1))  # at dense samples 1 .. dense - 2
+    np.testing.assert_allclose(
+        rate[:, 20 * np.arange(1, 100) - 1], wrench.reshape(2, 101, 6)[:, 1:100], rtol=0, atol=1e-5 * wrench.max()
+    )
     # the bus at rest at every waypoint (both ends of each segment): no effort there
     ends = np.r_[0, 100, 101, 201]
     assert np.abs(tau_free[ends]).max() < 1e-12 and np.abs(wrench[ends]).max() < 1e-12
