@@ -163,6 +163,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Motion",
         "timed tasks (waypoints, duration, quintic time law) and the peak torques and held wrench",
     ),
+    (
+        "spacearm.motion.simulation",
+        "Motion",
+        "the free-floating robot under joint torques: RKMK-DOP853 on the attitude group, events",
+    ),
     ("spacearm.analysis", "Analysis", "workspaces, singular sets, areas, averaged metrics, maps"),
     (
         "spacearm.paper.workspaces",
@@ -244,6 +249,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.figures.spatial_analysis", "Figures", "workspace shells and w* maps on joint slices of spatial arms"),
     ("spacearm.figures.sweep", "Figures", "a sweep's heat maps and metric plots"),
     ("spacearm.figures.design", "Figures", "Pareto fronts, convergence, the best designs"),
+    ("spacearm.figures.dynamics", "Figures", "a simulated run: joints, bus attitude and bus rate"),
     ("spacearm.figures.views", "Figures", "interactive offline HTML views (the `view` extra)"),
     ("spacearm.figures.views.model", "Figures", "the kinematic model as JSON for the browser's forward kinematics"),
     ("spacearm.figures.views.page", "Figures", "one self-contained page: plotly.js, fk.js and the data inlined"),
@@ -263,6 +269,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.cli.reach", "Command line", "`spacearm reach`"),
     ("spacearm.cli.optimize", "Command line", "`spacearm optimize`"),
     ("spacearm.cli.view", "Command line", "`spacearm view`"),
+    ("spacearm.cli.simulate", "Command line", "`spacearm simulate`"),
 ]
 
 CLI_WIDTH = "88"  # columns of the rendered --help text

@@ -36,6 +36,7 @@ COMMANDS: tuple[tuple[str, str], ...] = (
     ("reach", "spacearm.cli.reach"),
     ("optimize", "spacearm.cli.optimize"),
     ("view", "spacearm.cli.view"),
+    ("simulate", "spacearm.cli.simulate"),
 )
 
 _FLOAT32_HELP = "compute in float32 (faster, less exact); default float64"
