@@ -31,6 +31,7 @@ from spacearm.models.spatial import locate_package_file
 from spacearm.motion.simulation import DEFAULT_SUBSTEPS, STOP_BUS_RATE, STOP_JOINT_LIMIT, STOP_NONE
 
 from . import reference
+from .conftest import count_compiles
 from .spatial_references import combined_urdf
 
 pin = pytest.importorskip("pinocchio")
@@ -179,14 +180,16 @@ def test_ur5_energy(ur5_case, ur5_runs, pinocchio):
     np.testing.assert_allclose(driven[1] - driven[0], work, rtol=1e-9)
 
 
-def test_default_substeps_converged(ur5, ur5_case, ur5_runs):
-    """The default number of steps per interval is converged: 4x as many steps change the
-    state after 2 s by less than 1e-9 rad."""
-    R, q, qd = _ur5_runs(ur5, ur5_case, ur5_case["torques"], substeps=4 * DEFAULT_SUBSTEPS)
-    R0, q0, qd0 = ur5_runs
-    assert float(jnp.max(geodesic_distance(R[:, -1], R0[:, -1]))) < 1e-9
-    np.testing.assert_allclose(q[:, -1], q0[:, -1], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(qd[:, -1], qd0[:, -1], rtol=0, atol=1e-8)
+def test_default_substeps_converged(ur5, ur5_case):
+    """The default number of steps per interval is converged: under torques that drive the
+    joints to 10 rad/s, 4x as many steps change the state after 2 s by less than 1e-9 rad."""
+    torques = 6.0 * ur5_case["torques"]
+    R, q, qd = _ur5_runs(ur5, ur5_case, torques)
+    assert np.abs(qd).max() > 5.0
+    R4, q4, qd4 = _ur5_runs(ur5, ur5_case, torques, substeps=4 * DEFAULT_SUBSTEPS)
+    assert float(jnp.max(geodesic_distance(R4[:, -1], R[:, -1]))) < 1e-9
+    np.testing.assert_allclose(q4[:, -1], q[:, -1], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(qd4[:, -1], qd[:, -1], rtol=0, atol=1e-8)
 
 
 def test_batch_axes(ur5, ur5_case, ur5_runs):
@@ -291,7 +294,9 @@ def test_events(planar, planar_case, planar_runs, planar_base):
     bound = 0.5 * (speed[0, 0] + speed[0].max())
     expected = np.argmax(speed > bound, axis=1)
     expected = np.where(np.any(speed > bound, axis=1), expected, SAMPLES)
-    got_phi, got_qd, stop = _planar_runs(planar, planar_case, max_bus_rate=bound)
+    with count_compiles() as compiled:
+        got_phi, got_qd, stop = _planar_runs(planar, planar_case, max_bus_rate=bound)
+    assert compiled["_simulate_flat"] == 0  # a new bound (and below, new limits) is a new value, not a new program
     np.testing.assert_array_equal(np.asarray(stop.step), expected)
     assert np.asarray(stop.reason)[0] == STOP_BUS_RATE
     k = expected[0]
@@ -302,7 +307,9 @@ def test_events(planar, planar_case, planar_runs, planar_base):
     joint = phi[0, :, 2]  # joint 2 of the driven run
     upper = 0.5 * (joint[0] + joint.max())
     limited = planar.replace(joint_upper=np.array([np.inf, upper]))
-    _, _, stop = _planar_runs(limited, planar_case)
+    with count_compiles() as compiled:
+        _, _, stop = _planar_runs(limited, planar_case)
+    assert compiled["_simulate_flat"] == 0
     assert np.asarray(stop.reason)[0] == STOP_JOINT_LIMIT
     assert np.asarray(stop.step)[0] == np.argmax(joint >= upper)
 

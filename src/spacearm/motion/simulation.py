@@ -53,11 +53,11 @@ __all__ = [
 ]
 
 # Equal DOP853 steps per sample interval, by measurement on the UR5 on its smallsat, 2 s at
-# dt = 0.01 s with random torques and nonzero momentum (the end state against a run with 4x
-# the steps): with joint rates up to 7 rad/s one step per interval already ends within 5e-14
-# rad; with torques that drive the wrist to 116 rad/s, 2 steps end within 1e-8 rad and 4
-# within 4e-11 (the error falls as (rate * dt / substeps)^8); by that law two steps keep
-# 1e-9 rad over 2 s up to about 80 rad/s at dt = 0.01 s.
+# dt = 0.01 s with random torques and nonzero momentum, the end state against a run with 4x
+# the steps: with joint rates up to 10 rad/s two steps end within 2e-13 rad (one within
+# 5e-14 at 7 rad/s); torques that drive the wrist to 48 rad/s leave 1.7e-9 rad, and to 116
+# rad/s 1e-8 (4 steps: 4e-11). The error falls as substeps^-8. Two steps keep 1e-9 rad over
+# 2 s up to about 40 rad/s at dt = 0.01 s, ten times the UR5's rated joint speed.
 DEFAULT_SUBSTEPS = 2
 
 STOP_NONE = 0  # the run went to the last sample
@@ -228,10 +228,11 @@ def simulate(
     instant is `spacearm.dynamics.base_velocity`'s for it. The joints follow
     `spacearm.dynamics.forward_dynamics`, the attitude R' = R [w]x on its group, by
     ``substeps`` Runge-Kutta-Munthe-Kaas steps of the DOP853 tableau per interval (see the
-    module docstring; the default reaches about 1e-13 rad over 2 s of the UR5 on its smallsat
-    at dt = 0.01 s). Every leading axis of the inputs (and of a batch of designs) is a batch
-    of runs; the whole run is one ``lax.scan`` in one jitted program per structure and T
-    (``dt``, the torques, the states and the design numbers are traced), differentiable.
+    module docstring; the default is converged to about 1e-13 rad over 2 s of the UR5 on its
+    smallsat at dt = 0.01 s with joint rates up to 10 rad/s). Every leading axis of the inputs
+    (and of a batch of designs) is a batch of runs; the whole run is one ``lax.scan`` in one
+    jitted program per structure and T (``dt``, the torques, the states and the design numbers
+    are traced), differentiable.
 
     Spatial robots and trees::
 
