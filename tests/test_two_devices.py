@@ -17,6 +17,8 @@ import sys
 import pytest
 import yaml
 
+import spacearm as sa
+from spacearm.models.family import family_of
 from spacearm.studies import load_sweep
 from spacearm.studies.metrics import METRICS, metric_columns
 
@@ -54,6 +56,13 @@ def _metrics(family: str) -> list[dict]:
     ]
 
 
+def _task(path: str) -> dict:
+    """Two segments through every joint of the robot (rad, s)."""
+    robot = sa.load_robot(path)
+    n = family_of(robot).joint_count(robot)
+    return {"waypoints": [[0.0] * n, [0.3] * n, [0.1] * n], "duration": 2.0}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("family", sorted(ROBOTS))
 def test_every_metric_finishes_on_two_devices(tmp_path, family):
@@ -64,6 +73,7 @@ def test_every_metric_finishes_on_two_devices(tmp_path, family):
         "axes": {"m": {"field": "base.mass", "relative": True, "values": [0.8, 1.2]}},
         "metrics": _metrics(family),
         "chunk_size": 2,
+        "task": _task(os.path.join(root, ROBOTS[family])),  # for the metrics along a timed task
     }
     path = tmp_path / "sweep.yaml"
     path.write_text(yaml.safe_dump(sweep))
