@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -128,9 +129,9 @@ def test_stops_at_the_bus_rate_bound(torques_file, tmp_path, capsys):
 @pytest.mark.parametrize(
     "text, dt, field",
     [
-        ("1,2,3\n", "0.01", "row 1 has 3 columns"),
-        ("tau1,tau2\n1,2\n3,nan\n", "0.01", "row 2, joint 2"),
-        ("1,2\n4,x\n", "0.01", "row 2, joint 2"),
+        ("1,2,3\n", "0.01", "line 1 has 3 columns"),
+        ("tau1,tau2\n1,2\n3,nan\n", "0.01", "line 3, joint 2"),
+        ("1,2\n\n4,x\n", "0.01", "line 3, joint 2"),
         ("tau1,tau2\n", "0.01", "no rows"),
         ("1,2\n", "0", "--dt"),
         ("1,2\n", "-0.01", "--dt"),
@@ -164,3 +165,15 @@ def test_a_non_finite_run_writes_nothing(torques_file, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "non-finite" in err and "nothing was written" in err
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_without_plotly_the_replay_is_left_out(torques_file, tmp_path, capsys, monkeypatch):
+    """Without the 'view' extra the run still writes its other files and names the extra."""
+    for module in [m for m in sys.modules if m == "plotly" or m.startswith("plotly.")]:
+        monkeypatch.delitem(sys.modules, module)
+    monkeypatch.setitem(sys.modules, "plotly", None)
+    path, _ = torques_file
+    out = tmp_path / "run"
+    assert _run(path, out, "--max-bus-rate", "1000") == 0
+    assert "'view' extra" in capsys.readouterr().out
+    assert {p.name for p in out.iterdir()} == {"simulation.npz", "simulation.csv", "simulation.png", "manifest.json"}

@@ -101,24 +101,27 @@ def register(subparsers) -> None:
 
 
 def read_torques(path: str, n: int) -> np.ndarray:
-    """``(T, n)`` finite torques from a CSV file; ConfigError naming the file, the row and the column."""
+    """``(T, n)`` finite torques from a CSV file; ConfigError naming the file, the line and the joint."""
     try:
         with open(path, encoding="utf-8", newline="") as handle:
-            rows = [row for row in csv.reader(handle) if any(cell.strip() for cell in row)]
-    except (OSError, UnicodeDecodeError) as error:
+            reader = csv.reader(handle)
+            rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
+    except (OSError, UnicodeDecodeError, csv.Error) as error:
         raise ConfigError(f"--torques {path}: cannot read it ({getattr(error, 'strerror', None) or error})") from None
-    if rows and not _numeric(rows[0][0]):
+    if rows and not _numeric(rows[0][1][0]):
         rows = rows[1:]  # a header
     if not rows:
         raise ConfigError(f"--torques {path}: no rows of torques (one row per sample interval, {n} columns)")
     values = np.empty((len(rows), n))
-    for i, row in enumerate(rows, start=1):
+    for i, (line, row) in enumerate(rows):
         if len(row) != n:
-            raise ConfigError(f"--torques {path}: row {i} has {len(row)} columns; the robot has {n} joints")
+            raise ConfigError(f"--torques {path}: line {line} has {len(row)} columns; the robot has {n} joints")
         for j, cell in enumerate(row):
             if not _numeric(cell) or not math.isfinite(float(cell)):
-                raise ConfigError(f"--torques {path}: row {i}, joint {j + 1}: expected a finite number, got {cell!r}")
-            values[i - 1, j] = float(cell)
+                raise ConfigError(
+                    f"--torques {path}: line {line}, joint {j + 1}: expected a finite number, got {cell!r}"
+                )
+            values[i, j] = float(cell)
     return values
 
 
@@ -141,7 +144,9 @@ def _start(args: argparse.Namespace, robot, family):
     if not args.radians:
         posture = np.where(prismatic, posture, np.radians(posture))
         rates = np.where(kinds, rates, np.radians(rates))
-    check_limits("--posture", posture[offset:], robot.joint_lower, robot.joint_upper, degrees=not args.radians)
+    names = family.joint_names(robot) or None
+    lower, upper = robot.joint_lower, robot.joint_upper
+    check_limits("--posture", posture[offset:], lower, upper, degrees=not args.radians, prismatic=kinds, names=names)
     rotation = None
     if args.attitude is not None:
         if offset:
