@@ -245,7 +245,8 @@ def simulate(
     With events (``stop_at_limits`` or ``max_bus_rate``) a `SimulationStop` is appended to
     the tuple: ``R, q, qd, stop = simulate(..., max_bus_rate=0.2)``. The run stops at the first
     sample where a joint is at or past its limit, or where the bus angular speed |w| is above
-    ``max_bus_rate``: that sample's state repeats in every later row.
+    ``max_bus_rate``: that sample's state repeats in every later row (a start that is already
+    there stops at sample 0).
 
     Args:
         robot: the design (or a batch of designs).
