@@ -9,8 +9,8 @@ phi = [phi0, q] instead of (q, R), and every 6-vector shrinks to its in-plane pa
 
 Coordinates: nu = [v; w; qd], v the velocity of the bus centroid and w the bus angular
 velocity, both in bus axes. With H the system mass matrix in these coordinates and c the
-bias forces (`spacearm.models.dynamics`, one pass over the robot's tree and its
-derivatives), the free-floating system under joint torques tau and a bus wrench
+bias forces (`spacearm.models.dynamics`: one pass over the robot's tree, c by Newton-Euler
+on it), the free-floating system under joint torques tau and a bus wrench
 [f; n] (force at the bus centroid, torque about it, bus axes) is
 
     H nu' + c(q, nu) = [f; n; tau].

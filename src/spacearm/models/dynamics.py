@@ -22,8 +22,9 @@ H nu' + c(q, nu) = [f; n; tau] with
 
     c = (dH/dq . qdot) nu + [w x P; w x L_c + v x P; -1/2 nu^T (dH/dq) nu].
 
-dH/dq . qdot is a forward derivative and dT/dq a reverse one, both of the pass that
-builds H, so c is exact to rounding and written once for every tree.
+c is the generalized force of the motion nu at nu' = 0, so it is computed as that inverse
+dynamics, by Newton-Euler on the same pass's frames (`_bias_from`; it equals the form
+above, the derivatives of the pass that builds H, to rounding).
 """
 
 from __future__ import annotations
@@ -31,19 +32,41 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from .tree.algebra import _add, _bus_momentum_matrix, _cross, _rows, _sub, _vec, batched
-from .tree.primitives import _fixed_columns, _mass_from, _tip_rows, _tree_pass
+from .tree.algebra import (
+    _add,
+    _bus_momentum_matrix,
+    _cross,
+    _dot,
+    _force_cross,
+    _mat,
+    _matvec,
+    _motion_cross,
+    _rows,
+    _scale,
+    _sub,
+    _sym_matvec,
+    _vec,
+    batched,
+)
+from .tree.primitives import (
+    _backward_pass,
+    _fixed_columns,
+    _forward_pass,
+    _mass_from,
+    _tip_rows,
+    _tree_pass,
+    descendants,
+    tree_constants,
+)
 from .tree.robot import TreeRobot
 
 __all__ = ["mass_and_bias", "system_mass_matrix", "tip_maps"]
 
 
-def _system_mass_minor(robot: TreeRobot, q):
-    """``(6 + n, 6 + n, *batch)`` H for ``q (n, *batch)``, from one pass."""
-    state = _tree_pass(robot, q)
+def _mass_from_pass(robot: TreeRobot, state, batch):
+    """``(6 + n, 6 + n, *batch)`` H from a pass's momenta, centroid and inertia."""
     base_com = _vec(jnp.asarray(robot.base_com))
     angular = _sub(state.angular, _cross(base_com, state.momentum))
-    batch = q.shape[1:]
     h_b = jnp.broadcast_to(_bus_momentum_matrix(state, base_com), (6, 6) + batch)
     h_bm = _rows(state.momentum, angular)
     top = jnp.concatenate([h_b, h_bm], axis=1)
@@ -51,18 +74,69 @@ def _system_mass_minor(robot: TreeRobot, q):
     return jnp.concatenate([top, bottom], axis=0)
 
 
+def _system_mass_minor(robot: TreeRobot, q):
+    """``(6 + n, 6 + n, *batch)`` H for ``q (n, *batch)``, from one pass."""
+    return _mass_from_pass(robot, _tree_pass(robot, q), q.shape[1:])
+
+
+def _bias_from(robot: TreeRobot, cst, state, centroids, inertias, nu):
+    """``(6 + n, *batch)`` c for ``nu (6 + n, *batch)``: Newton-Euler at nu' = 0.
+
+    Twists and wrenches are Plucker pairs (angular; linear) at the bus-frame origin in bus
+    axes, the frame frozen at this instant. nu' = 0 holds the bus's body-fixed twist, so
+    its spatial acceleration is zero; body j moves with V_j = V_bus + sum of S_i qd_i over
+    the joints i on its path, and accelerates with A_j = sum of V_i x S_i qd_i (qdd = 0;
+    Featherstone 2008, sec. 5.3). Its force is I_j A_j + V_j x* I_j V_j; joint j takes
+    S_j . (forces of its subtree), the bus the total force, moved to the bus centroid.
+    Path and subtree sums are one product each with the tree's descendant mask."""
+    revolute = 1.0 - state.prismatic
+    qd, base_com = nu[6:], _vec(jnp.asarray(robot.base_com))
+    v, w = _vec(nu[:3]), _vec(nu[3:6])
+    bus = (w, _sub(v, _cross(w, base_com)))  # the bus twist at the bus-frame origin
+    motion = (
+        _scale(revolute, state.axes),
+        _add(_scale(revolute, _cross(state.origins, state.axes)), _scale(state.prismatic, state.axes)),
+    )
+    joint = tuple(_scale(qd, part) for part in motion)
+    down = jnp.asarray(descendants(robot.parents), qd.dtype)  # down[i, j]: body j in joint i's subtree
+    along_path = lambda x: tuple(tuple(jnp.tensordot(down, c, axes=(0, 0)) for c in part) for part in x)
+    twist = tuple(_add(b, s) for b, s in zip(bus, along_path(joint), strict=True))
+    accel = along_path(_motion_cross(twist, joint))
+    mass = cst.link_mass.reshape((-1,) + (1,) * (qd.ndim - 1))
+    linear = _scale(mass, _add(twist[1], _cross(twist[0], centroids)))
+    momentum = (_add(_sym_matvec(inertias, twist[0]), _cross(centroids, linear)), linear)
+    push = _scale(mass, _add(accel[1], _cross(accel[0], centroids)))
+    rate = (_add(_sym_matvec(inertias, accel[0]), _cross(centroids, push)), push)
+    body = tuple(_add(r, f) for r, f in zip(rate, _force_cross(twist, momentum), strict=True))
+    subtree = tuple(tuple(jnp.tensordot(down, c, axes=(1, 0)) for c in part) for part in body)
+    torque = _dot(motion[0], subtree[0]) + _dot(motion[1], subtree[1])
+    # The bus and the roots fixed to it: first mass moment h and inertia K about the origin.
+    fixed_mass = cst.total_mass - jnp.sum(cst.link_mass)
+    moment, about = _vec(cst.fixed_moment), _mat(cst.fixed_inertia)
+    fixed_linear = _add(_scale(fixed_mass, bus[1]), _cross(w, moment))
+    fixed_momentum = (_add(_matvec(about, w), _cross(moment, bus[1])), fixed_linear)
+    fixed = _force_cross(bus, fixed_momentum)
+    total = tuple(_add(f, tuple(jnp.sum(c, axis=0) for c in part)) for f, part in zip(fixed, body, strict=True))
+    wrench = _rows(total[1], _sub(total[0], _cross(base_com, total[1])))
+    return jnp.concatenate([wrench, torque], axis=0)
+
+
+def _bodies_pass(robot: TreeRobot, q):
+    """`_tree_pass` keeping what Newton-Euler needs: (constants, the pass, the body centroids
+    and the body inertias about them, bus axes)."""
+    cst = tree_constants(robot)
+    state, centroids, inertias = _forward_pass(robot, cst, q)
+    _backward_pass(robot, cst, state, centroids, inertias)
+    return cst, state, centroids, inertias
+
+
 def _mass_and_bias_minor(robot: TreeRobot, x):
-    """``(6 + n, 7 + n, *batch)``: [H | c] for ``x = [q; nu] (2 n + 6, *batch)``."""
+    """``(6 + n, 7 + n, *batch)``: [H | c] for ``x = [q; nu] (2 n + 6, *batch)``, from one pass."""
     n = robot.n_joints
     q, nu = x[:n], x[n:]
-    mass = lambda joints: _system_mass_minor(robot, joints)
-    H, H_dot = jax.jvp(mass, (q,), (nu[6:],))
-    _, pullback = jax.vjp(mass, q)
-    (energy_slope,) = pullback(0.5 * nu[:, None] * nu[None, :])
-    p = jnp.einsum("ij...,j...->i...", H, nu)
-    v, w, P, L = _vec(nu[:3]), _vec(nu[3:6]), _vec(p[:3]), _vec(p[3:6])
-    gyroscopic = _rows(_cross(w, P), _add(_cross(w, L), _cross(v, P)))
-    bias = jnp.einsum("ij...,j...->i...", H_dot, nu) + jnp.concatenate([gyroscopic, -energy_slope], axis=0)
+    cst, state, centroids, inertias = _bodies_pass(robot, q)
+    H = _mass_from_pass(robot, state, q.shape[1:])
+    bias = _bias_from(robot, cst, state, centroids, inertias, nu)
     return jnp.concatenate([H, bias[:, None]], axis=1)
 
 
@@ -87,7 +161,7 @@ _mass_and_bias = batched(_mass_and_bias_minor, 2)
 
 def mass_and_bias(robot: TreeRobot, q: jax.Array, nu: jax.Array) -> tuple[jax.Array, jax.Array]:
     """``(H (..., 6 + n, 6 + n), c (..., 6 + n))`` at joints ``q (..., n)`` and velocity
-    ``nu (..., 6 + n)`` (the module docstring's coordinates), from one pass and its derivatives."""
+    ``nu (..., 6 + n)`` (the module docstring's coordinates), from one pass (c by Newton-Euler)."""
     q, nu = jnp.asarray(q), jnp.asarray(nu)
     batch = jnp.broadcast_shapes(q.shape[:-1], nu.shape[:-1])
     q, nu = jnp.broadcast_to(q, batch + q.shape[-1:]), jnp.broadcast_to(nu, batch + nu.shape[-1:])

@@ -112,6 +112,19 @@ def _sym_solve(s, columns):
     return [_scale(inv_det, _matvec(adj, b)) for b in columns]
 
 
+def _motion_cross(twist, other):
+    """Spatial motion cross product (Featherstone): [w; v] x [w'; v'] = [w x w'; w x v' + v x w'],
+    twists as pairs of 3-tuples (angular; linear at one origin)."""
+    (w, v), (w2, v2) = twist, other
+    return (_cross(w, w2), _add(_cross(w, v2), _cross(v, w2)))
+
+
+def _force_cross(twist, force):
+    """Spatial force cross product (Featherstone): [w; v] x* [n; f] = [w x n + v x f; w x f]."""
+    (w, v), (n, f) = twist, force
+    return (_add(_cross(w, n), _cross(v, f)), _cross(w, f))
+
+
 def _pack(nested):
     """Stack nested lists of scalars along new LEADING axes (batch axes stay last)."""
     if isinstance(nested, (list, tuple)):
