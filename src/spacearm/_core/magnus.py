@@ -37,6 +37,7 @@ __all__ = [
     "DEFAULT_STEPS",
     "check_order",
     "composite_gauss",
+    "dexpinv",
     "line_integral",
     "path_rotation",
     "path_rotation_history",
@@ -105,7 +106,7 @@ def _magnus6(a):
     return alpha1 + alpha3 / 12.0 + (1.0 / 240.0) * jnp.cross(-20.0 * alpha1 - alpha3 + c1, alpha2 + c2)
 
 
-def _dexpinv(u, b):
+def dexpinv(u, b):
     """dexp^-1_u(b) on so(3) in vectors: b - u x b / 2 + (1 - (t/2) cot(t/2)) / t^2 u x (u x b)."""
     theta, sq = safe_norm(u)
     small = theta < 1e-2
@@ -118,9 +119,9 @@ def _dexpinv(u, b):
 def _rkmk4(a):
     """Classical RK4 in the Lie algebra (Munthe-Kaas 1998); ``a (..., 3, 3)`` = h * generator at t, t + h/2, t + h."""
     k1 = a[..., 0, :]
-    k2 = _dexpinv(0.5 * k1, a[..., 1, :])
-    k3 = _dexpinv(0.5 * k2, a[..., 1, :])
-    k4 = _dexpinv(k3, a[..., 2, :])
+    k2 = dexpinv(0.5 * k1, a[..., 1, :])
+    k3 = dexpinv(0.5 * k2, a[..., 1, :])
+    k4 = dexpinv(k3, a[..., 2, :])
     return (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
 
 

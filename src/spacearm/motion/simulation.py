@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
-from .._core.magnus import _dexpinv
+from .._core.magnus import dexpinv
 from ..dynamics import base_velocity, forward_dynamics
 from ..models.family import family_of
 from .batching import flatten_batch, is_traced, unpad
@@ -118,7 +118,7 @@ def _interval(robot, state, tau, momentum, h, substeps: int):
         def field(y):
             theta, joints, rates = y[:dim], y[dim : dim + n], y[dim + n :]
             w, qdd = _rates(robot, group.compose(attitude, group.exp(theta)), joints, rates, tau, momentum)
-            theta_rate = w if group.abelian else _dexpinv(-theta, w)
+            theta_rate = w if group.abelian else dexpinv(-theta, w)
             return jnp.concatenate([theta_rate, rates, qdd])
 
         y = rk_step(field, jnp.concatenate([jnp.zeros(dim, q.dtype), q, qd]), h, "dop853", rolled=True)
