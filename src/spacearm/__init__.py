@@ -91,6 +91,9 @@ _LAZY = {
     "straight_pose_path": "motion",
     "PosePath": "motion",
     "simulate": "motion",
+    "TimedTask": "motion",
+    "task_peaks": "motion",
+    "task_states": "motion",
     "plan_reorientation": "planning",
     "plan_reach": "planning",
     "loop_settings": "planning",
@@ -166,6 +169,7 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
     from .motion import (
         PosePath as PosePath,
         StraightPath as StraightPath,
+        TimedTask as TimedTask,
         go_and_back as go_and_back,
         integrate_joint_path as integrate_joint_path,
         joint_path_history as joint_path_history,
@@ -173,6 +177,8 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
         straight_pose_path as straight_pose_path,
         straight_tip_path as straight_tip_path,
         straight_tip_path_history as straight_tip_path_history,
+        task_peaks as task_peaks,
+        task_states as task_states,
     )
     from .paper import (
         maximum_reachable_radii as maximum_reachable_radii,

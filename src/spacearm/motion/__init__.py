@@ -32,6 +32,7 @@ from .straight_paths import (
     straight_tip_path as straight_tip_path,
     straight_tip_path_history as straight_tip_path_history,
 )
+from .tasks import TimedTask as TimedTask, task_peaks as task_peaks, task_states as task_states
 
 __all__ = [
     "REASON_JOINT_LIMIT",
@@ -43,6 +44,7 @@ __all__ = [
     "SimulationStop",
     "SpatialStraightPath",
     "StraightPath",
+    "TimedTask",
     "compile_straight_tip_path_history",
     "geodesic_distance",
     "go_and_back",
@@ -56,4 +58,6 @@ __all__ = [
     "straight_pose_path",
     "straight_tip_path",
     "straight_tip_path_history",
+    "task_peaks",
+    "task_states",
 ]
