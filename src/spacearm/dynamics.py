@@ -35,7 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._core.groups import vee
-from .models.dynamics import mass_and_bias, system_mass_matrix, tip_maps
+from .models.dynamics import free_dynamics, mass_and_bias, system_mass_matrix, tip_maps
 from .models.family import family_of
 
 __all__ = [
@@ -203,20 +203,14 @@ def arm_inertia(robot, q: jax.Array) -> jax.Array:
     return _moving_lock(robot, H[..., 6:, 6:] - jnp.swapaxes(H[..., :6, 6:], -1, -2) @ coupling)
 
 
-def _reduced(H, c):
-    """(H*, c*) of the free bus, and H_b^-1 [H_bm, c_b] for the bus's acceleration."""
-    solved = _solve_columns(H[..., :6, :6], jnp.concatenate([H[..., :6, 6:], c[..., :6, None]], axis=-1))
-    coupling = jnp.swapaxes(H[..., :6, 6:], -1, -2)
-    return H[..., 6:, 6:] - coupling @ solved[..., :-1], c[..., 6:] - _apply(coupling, solved[..., -1]), solved
-
-
 @jax.jit
 def reduced_bias(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momentum=None) -> jax.Array:
-    """``(..., n)`` c* = c_m - H_bm^T H_b^-1 c_b: with the bus free, H* qdd + c* = tau."""
+    """``(..., n)`` c* = c_m - H_bm^T H_b^-1 c_b: with the bus free, H* qdd + c* = tau (the free
+    bus's inverse dynamics at qdd = 0)."""
     system = _System(robot, q, base_rotation, (qd, 1), *_momentum_array(momentum))
-    nu = _velocity(system, system.arrays[0], None if momentum is None else system.arrays[1])
-    H, c = mass_and_bias(system.tree, system.q, nu)
-    return _reduced(H, c)[1]
+    qd = system.arrays[0]
+    still = jnp.zeros_like(qd)
+    return free_dynamics(system.tree, system.q, qd, still, _bus_momentum(system, momentum, qd.dtype), forward=False)
 
 
 # Velocities --------------------------------------------------------------------------------
@@ -251,10 +245,15 @@ def forward_dynamics(robot, q: jax.Array, qd: jax.Array, tau: jax.Array, base_ro
     (no external wrench): H* qdd = tau - c*."""
     system = _System(robot, q, base_rotation, (qd, 1), (tau, 1), *_momentum_array(momentum))
     qd, tau = system.arrays[:2]
-    nu = _velocity(system, qd, None if momentum is None else system.arrays[2])
-    H, c = mass_and_bias(system.tree, system.q, nu)
-    inertia, bias, _ = _reduced(H, c)
-    return _solve(inertia, tau - bias)
+    return free_dynamics(system.tree, system.q, qd, tau, _bus_momentum(system, momentum, qd.dtype))
+
+
+def _bus_momentum(system: _System, momentum, dtype):
+    """``(*batch, 6)`` the system momentum [P; L about the system centroid] in BUS axes (zero
+    when ``momentum`` is ``None``; else it is the state's last array)."""
+    if momentum is None:
+        return jnp.zeros(system.batch + (6,), dtype)
+    return system.unrotate(system.embed(system.arrays[-1]))
 
 
 @functools.partial(jax.jit, static_argnames=("base",))
@@ -273,11 +272,12 @@ def inverse_dynamics(robot, q, qd, qdd, base_rotation=None, momentum=None, base:
         raise ValueError(f"base: one of {', '.join(BASE_MODES)}, got {base!r}")
     system = _System(robot, q, base_rotation, (qd, 1), (qdd, 1), *_momentum_array(momentum))
     qd, qdd = system.arrays[:2]
+    if base == "free":
+        tau = free_dynamics(system.tree, system.q, qd, qdd, _bus_momentum(system, momentum, qd.dtype), forward=False)
+        return tau, jnp.zeros(system.batch + (len(system.keep),), tau.dtype)
     momentum = None if momentum is None else system.embed(system.arrays[2])
     H_full = system_mass_matrix(system.tree, system.q)
-    if base == "free":
-        nu = _velocity(system, qd, None if momentum is None else system.reduce(momentum))
-    elif base == "held":
+    if base == "held":
         nu = jnp.concatenate([jnp.zeros(system.batch + (6,), qd.dtype), qd], axis=-1)
     else:
         nu = jnp.concatenate([_held_attitude_velocity(system, H_full, qd, momentum), qd], axis=-1)
@@ -285,9 +285,7 @@ def inverse_dynamics(robot, q, qd, qdd, base_rotation=None, momentum=None, base:
     base_accel = _base_acceleration(H, c, qdd, base)
     forces = _apply(H, jnp.concatenate([base_accel, qdd], axis=-1)) + c
     wrench = forces[..., :6]
-    if base == "free":
-        wrench = jnp.zeros_like(wrench)
-    elif base == "attitude":
+    if base == "attitude":
         wrench = wrench.at[..., :3].set(0.0)
     return forces[..., 6:], system.reduce(wrench)
 
@@ -301,13 +299,11 @@ def _held_attitude_velocity(system: _System, H, qd, momentum):
 
 
 def _base_acceleration(H, c, qdd, base: str):
-    """nu_b' of the bus mode: from the free bus's rows, zero when held, [v'; 0] when only turning is held."""
+    """nu_b' of a held bus mode: zero when held, [v'; 0] when only turning is held."""
     if base == "held":
         return jnp.zeros(qdd.shape[:-1] + (6,), qdd.dtype)
-    if base == "attitude":
-        v_dot = -(_apply(H[..., :3, 6:], qdd) + c[..., :3]) / H[..., 0, 0, None]
-        return jnp.concatenate([v_dot, jnp.zeros_like(v_dot)], axis=-1)
-    return -_solve(H[..., :6, :6], _apply(H[..., :6, 6:], qdd) + c[..., :6])
+    v_dot = -(_apply(H[..., :3, 6:], qdd) + c[..., :3]) / H[..., 0, 0, None]
+    return jnp.concatenate([v_dot, jnp.zeros_like(v_dot)], axis=-1)
 
 
 # Impacts at the tip ------------------------------------------------------------------------

@@ -25,6 +25,8 @@ H nu' + c(q, nu) = [f; n; tau] with
 c is the generalized force of the motion nu at nu' = 0, so it is computed as that inverse
 dynamics, by Newton-Euler on the same pass's frames (`_bias_from`; it equals the form
 above, the derivatives of the pass that builds H, to rounding).
+With the bus free (no wrench) the bus rows are solved through the system centroid, where
+H_b is blkdiag(M, I~) (`free_dynamics`).
 """
 
 from __future__ import annotations
@@ -35,16 +37,20 @@ import jax.numpy as jnp
 from .tree.algebra import (
     _add,
     _bus_momentum_matrix,
+    _cholesky_solve,
+    _coupling,
     _cross,
     _dot,
     _force_cross,
     _mat,
     _matvec,
     _motion_cross,
+    _outer,
     _rows,
     _scale,
     _sub,
     _sym_matvec,
+    _sym_solve,
     _vec,
     batched,
 )
@@ -60,7 +66,7 @@ from .tree.primitives import (
 )
 from .tree.robot import TreeRobot
 
-__all__ = ["mass_and_bias", "system_mass_matrix", "tip_maps"]
+__all__ = ["free_dynamics", "mass_and_bias", "system_mass_matrix", "tip_maps"]
 
 
 def _mass_from_pass(robot: TreeRobot, state, batch):
@@ -140,6 +146,36 @@ def _mass_and_bias_minor(robot: TreeRobot, x):
     return jnp.concatenate([H, bias[:, None]], axis=1)
 
 
+def _free_minor(robot: TreeRobot, x, forward: bool):
+    """``(n, *batch)`` the bus free (no wrench), for ``x = [q; qd; load; P; L] (3 n + 6, *batch)``
+    with the momentum [P; L about the system centroid] in bus axes: qdd for torques ``load``
+    (``forward``), else tau for accelerations ``load``.
+
+    About the system centroid G, H_b is blkdiag(M, I~) and the joints couple to the bus through
+    the momenta p_j and I~_q (columns L_j - G x p_j), so every H_b^-1 is a 3x3 solve
+    (`spacearm.models.tree.primitives`): the bus twist is w = I~^-1 (L - I~_q qd),
+    v = (P - p qd) / M - w x (G - b) (b the bus centroid), and with the bus rows of c moved
+    to G, [f; n_G], the free bus's H* = H_m - p^T p / M - I~_q^T I~^-1 I~_q and
+    c* = c_m - p^T f / M - (I~^-1 I~_q)^T n_G."""
+    n = robot.n_joints
+    q, qd, load, momentum = x[:n], x[n : 2 * n], x[2 * n : 3 * n], x[3 * n :]
+    cst, state, centroids, inertias = _bodies_pass(robot, q)
+    coupling, solved = _coupling(state)
+    mass, p = state.mass, state.momentum
+    rate = lambda columns: tuple(jnp.sum(c * qd, axis=0) for c in columns)
+    w = _sub(_sym_solve(state.inertia_g, [_vec(momentum[3:])])[0], rate(solved))
+    offset = _sub(state.centroid, _vec(jnp.asarray(robot.base_com)))
+    v = _sub(_scale(1.0 / mass, _sub(_vec(momentum[:3]), rate(p))), _cross(w, offset))
+    bias = _bias_from(robot, cst, state, centroids, inertias, jnp.concatenate([_rows(v, w), qd]))
+    force = _vec(bias[:3])
+    torque = _sub(_vec(bias[3:6]), _cross(offset, force))  # about G
+    reduced_bias = bias[6:] - _dot(p, force) / mass - _dot(solved, torque)
+    inertia = _mass_from(robot, state) - _outer(p, p) / mass - _outer(coupling, solved)
+    if forward:
+        return _cholesky_solve(inertia, load - reduced_bias)
+    return sum(inertia[:, j] * load[j] for j in range(n)) + reduced_bias  # elementwise over the batch
+
+
 def _tip_maps_minor(robot: TreeRobot, q):
     """``(k, 6, 6 + n, *batch)``: the twist [v; w] of every tip origin per nu, bus axes."""
     state = _tree_pass(robot, q, with_momentum=False)
@@ -151,6 +187,14 @@ def _tip_maps_minor(robot: TreeRobot, q):
         [jnp.concatenate([eye, lever], axis=1), jnp.concatenate([jnp.zeros_like(eye), eye], axis=1)], axis=0
     )
     return jnp.concatenate([jnp.moveaxis(bus, 2, 0), _tip_rows(*_fixed_columns(robot, state))], axis=2)
+
+
+def _free_forward_minor(robot: TreeRobot, x):
+    return _free_minor(robot, x, forward=True)
+
+
+def _free_inverse_minor(robot: TreeRobot, x):
+    return _free_minor(robot, x, forward=False)
 
 
 system_mass_matrix = batched(_system_mass_minor, 2)
@@ -174,3 +218,20 @@ tip_maps.__doc__ = """``(..., k, 6, 6 + n)`` J: the twist [v; w] of every tip or
 
 The first six columns move the tip with the bus (v + w x (tip - bus centroid), w); the
 others are the fixed-base Jacobian. G = J H^-1 J^T is Yoshida's extended inversed inertia."""
+
+
+_free_forward = batched(_free_forward_minor, 1)
+_free_inverse = batched(_free_inverse_minor, 1)
+
+
+def free_dynamics(robot: TreeRobot, q, qd, load, momentum, forward: bool = True) -> jax.Array:
+    """``(..., n)`` the bus free (no wrench): joint accelerations for torques ``load`` (``forward``)
+    or torques for accelerations ``load``, at joints ``q``, rates ``qd`` (``(..., n)`` each) and
+    the system momentum ``momentum (..., 6)`` [P; L about the system centroid], BUS axes.
+
+    One pass and closed forms per posture: H* qdd + c* = tau with H_b^-1 through the system
+    centroid and H* by an unrolled Cholesky factorization (`_free_minor`)."""
+    arrays = [jnp.asarray(a) for a in (q, qd, load, momentum)]
+    batch = jnp.broadcast_shapes(*[a.shape[:-1] for a in arrays])
+    stacked = jnp.concatenate([jnp.broadcast_to(a, batch + a.shape[-1:]) for a in arrays], axis=-1)
+    return (_free_forward if forward else _free_inverse)(robot, stacked)

@@ -125,6 +125,42 @@ def _force_cross(twist, force):
     return (_add(_cross(w, n), _cross(v, f)), _cross(w, f))
 
 
+def _cholesky_solve(matrix, rhs):
+    """``(n, *batch)`` x with S x = b, for S ``(n, n, *batch)`` symmetric positive definite (its
+    lower triangle is read) and b ``(n, *batch)``.
+
+    Cholesky S = L L^T, then L y = b and L^T x = y, each a scan over the columns whose step is
+    elementwise over the batch: no LAPACK call per posture, and one step to compile (an
+    unrolled factorization's program grows as n^3). The factorization is right-looking: step
+    j scales column j of what is left and subtracts its outer product.
+    """
+    n = matrix.shape[0]
+    rows = jnp.arange(n).reshape((n,) + (1,) * (matrix.ndim - 2))
+    take = lambda x, i: jax.lax.dynamic_index_in_dim(x, i, axis=0, keepdims=False)
+
+    def factor(rest, j):
+        column = jax.lax.dynamic_index_in_dim(rest, j, axis=1, keepdims=False)
+        column = jnp.where(rows >= j, column / jnp.sqrt(take(column, j)), 0.0)
+        return rest - column[:, None] * column[None, :], column
+
+    _, columns = jax.lax.scan(factor, matrix, jnp.arange(n))  # columns[j] = L[:, j]
+
+    def forward(b, j):
+        y = take(b, j) / take(columns[j], j)
+        return jnp.where(rows > j, b - columns[j] * y, b), y
+
+    _, y = jax.lax.scan(forward, rhs, jnp.arange(n))
+
+    def backward(x, item):
+        j, y_j = item
+        column = columns[j]
+        value = (y_j - jnp.sum(jnp.where(rows > j, column * x, 0.0), axis=0)) / take(column, j)
+        return x.at[j].set(value), None
+
+    x, _ = jax.lax.scan(backward, jnp.zeros_like(rhs), (jnp.arange(n)[::-1], y[::-1]))
+    return x
+
+
 def _pack(nested):
     """Stack nested lists of scalars along new LEADING axes (batch axes stay last)."""
     if isinstance(nested, (list, tuple)):
