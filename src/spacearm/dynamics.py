@@ -44,6 +44,7 @@ __all__ = [
     "base_velocity",
     "bias_forces",
     "forward_dynamics",
+    "free_motion",
     "impulse_response",
     "inverse_dynamics",
     "joint_mass_matrix",
@@ -243,9 +244,17 @@ def tip_velocity(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momentu
 def forward_dynamics(robot, q: jax.Array, qd: jax.Array, tau: jax.Array, base_rotation=None, momentum=None):
     """``(..., n)`` joint accelerations of the free-floating system under joint torques ``tau``
     (no external wrench): H* qdd = tau - c*."""
+    return free_motion(robot, q, qd, tau, base_rotation, momentum)[1]
+
+
+@jax.jit
+def free_motion(robot, q: jax.Array, qd: jax.Array, tau: jax.Array, base_rotation=None, momentum=None):
+    """``(base velocity (..., 6), qdd (..., n))``: `base_velocity` and `forward_dynamics` from one
+    pass (what a simulation's every stage needs; planar ``(..., 3)`` [vx, vy, w])."""
     system = _System(robot, q, base_rotation, (qd, 1), (tau, 1), *_momentum_array(momentum))
     qd, tau = system.arrays[:2]
-    return free_dynamics(system.tree, system.q, qd, tau, _bus_momentum(system, momentum, qd.dtype))
+    motion = free_dynamics(system.tree, system.q, qd, tau, _bus_momentum(system, momentum, qd.dtype))
+    return system.reduce(motion[..., :6]), motion[..., 6:]
 
 
 def _bus_momentum(system: _System, momentum, dtype):

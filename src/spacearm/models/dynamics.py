@@ -147,9 +147,10 @@ def _mass_and_bias_minor(robot: TreeRobot, x):
 
 
 def _free_minor(robot: TreeRobot, x, forward: bool):
-    """``(n, *batch)`` the bus free (no wrench), for ``x = [q; qd; load; P; L] (3 n + 6, *batch)``
-    with the momentum [P; L about the system centroid] in bus axes: qdd for torques ``load``
-    (``forward``), else tau for accelerations ``load``.
+    """The bus free (no wrench), for ``x = [q; qd; load; P; L] (3 n + 6, *batch)`` with the
+    momentum [P; L about the system centroid] in bus axes: ``(6 + n, *batch)`` [v; w; qdd] (the
+    bus twist and the joint accelerations) for torques ``load`` (``forward``), else ``(n, *batch)``
+    tau for accelerations ``load``.
 
     About the system centroid G, H_b is blkdiag(M, I~) and the joints couple to the bus through
     the momenta p_j and I~_q (columns L_j - G x p_j), so every H_b^-1 is a 3x3 solve
@@ -172,7 +173,7 @@ def _free_minor(robot: TreeRobot, x, forward: bool):
     reduced_bias = bias[6:] - _dot(p, force) / mass - _dot(solved, torque)
     inertia = _mass_from(robot, state) - _outer(p, p) / mass - _outer(coupling, solved)
     if forward:
-        return _cholesky_solve(inertia, load - reduced_bias)
+        return jnp.concatenate([_rows(v, w), _cholesky_solve(inertia, load - reduced_bias)])
     return sum(inertia[:, j] * load[j] for j in range(n)) + reduced_bias  # elementwise over the batch
 
 
@@ -225,9 +226,10 @@ _free_inverse = batched(_free_inverse_minor, 1)
 
 
 def free_dynamics(robot: TreeRobot, q, qd, load, momentum, forward: bool = True) -> jax.Array:
-    """``(..., n)`` the bus free (no wrench): joint accelerations for torques ``load`` (``forward``)
-    or torques for accelerations ``load``, at joints ``q``, rates ``qd`` (``(..., n)`` each) and
-    the system momentum ``momentum (..., 6)`` [P; L about the system centroid], BUS axes.
+    """The bus free (no wrench), at joints ``q``, rates ``qd`` (``(..., n)`` each) and the system
+    momentum ``momentum (..., 6)`` [P; L about the system centroid], BUS axes: for torques
+    ``load`` (``forward``) ``(..., 6 + n)`` [v; w; qdd], the bus twist (bus axes) and the joint
+    accelerations; else ``(..., n)`` the torques for accelerations ``load``.
 
     One pass and closed forms per posture: H* qdd + c* = tau with H_b^-1 through the system
     centroid and H* by an unrolled Cholesky factorization (`_free_minor`)."""

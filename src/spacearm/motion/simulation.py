@@ -38,7 +38,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.magnus import dexpinv
-from ..dynamics import base_velocity, forward_dynamics
+from ..dynamics import base_velocity, free_motion
 from ..models.family import family_of
 from .batching import flatten_batch, is_traced, unpad
 from .dop853 import rk_step
@@ -92,18 +92,20 @@ def _dynamic_state(robot, attitude, q):
 
 
 def _bus_rate(robot, attitude, q, qd, momentum):
-    """``(dim,)`` the bus angular velocity w, bus axes: the angular rows of the base velocity
-    (its last ``dim`` entries in every family: [v; w], or the plane's [vx, vy, w])."""
+    """``(dim,)`` the bus angular velocity w, bus axes (the last ``dim`` entries of the base velocity
+    in every family: [v; w], or the plane's [vx, vy, w])."""
     posture, R = _dynamic_state(robot, attitude, q)
     nu_base = base_velocity(robot, posture, qd, base_rotation=R, momentum=momentum)
     return nu_base[-family_of(robot).attitude.dim :]
 
 
 def _rates(robot, attitude, q, qd, tau, momentum):
-    """``(w (dim,), qdd (n,))``: the bus angular velocity and the joint accelerations."""
+    """``(w (dim,), qdd (n,))``: the bus angular velocity (bus axes: the last ``dim`` entries of
+    the base velocity in every family, [v; w] or the plane's [vx, vy, w]) and the joint
+    accelerations, from one pass."""
     posture, R = _dynamic_state(robot, attitude, q)
-    qdd = forward_dynamics(robot, posture, qd, tau, base_rotation=R, momentum=momentum)
-    return _bus_rate(robot, attitude, q, qd, momentum), qdd
+    nu_base, qdd = free_motion(robot, posture, qd, tau, base_rotation=R, momentum=momentum)
+    return nu_base[-family_of(robot).attitude.dim :], qdd
 
 
 def _interval(robot, state, tau, momentum, h, substeps: int):
