@@ -344,3 +344,13 @@ def test_bad_input(ur5, planar):
         sa.simulate(ur5, np.zeros(6), np.zeros(6), np.zeros((3, 5)), 0.01)
     with pytest.raises(TypeError, match="base_rotation"):
         sa.simulate(planar, np.zeros(3), np.zeros(2), np.zeros((3, 2)), 0.01, base_rotation=np.eye(3))
+
+
+def test_free_motion_is_base_velocity_and_forward_dynamics(planar):
+    """The simulation's one-pass field equals the two kernels it stands for (planar: [vx, vy, w])."""
+    rng = np.random.default_rng(12)
+    phi, qd, tau = rng.normal(size=(4, 3)), rng.normal(size=(4, 2)), rng.normal(size=(4, 2))
+    momentum = rng.normal(size=(4, 3))
+    base, qdd = sa.free_motion(planar, phi, qd, tau, momentum=momentum)
+    np.testing.assert_allclose(base, sa.base_velocity(planar, phi, qd, momentum=momentum), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(qdd, sa.forward_dynamics(planar, phi, qd, tau, momentum=momentum), rtol=0, atol=1e-14)
