@@ -127,6 +127,10 @@ API_MODULES: list[tuple[str, str, str]] = [
         "Dynamics",
         "free-floating dynamics with any momentum: H, bias, forward and inverse dynamics, G, impulses",
     ),
+    ("spacearm.dynamics.state", "Dynamics", "the state the kernels share: posture, attitude, momentum, axes"),
+    ("spacearm.dynamics.equations", "Dynamics", "H, c, H*, c*, forward dynamics, inverse dynamics with three buses"),
+    ("spacearm.dynamics.velocities", "Dynamics", "the bus's and the tip's velocity for any momentum"),
+    ("spacearm.dynamics.impacts", "Dynamics", "G (extended inversed inertia) and the response to a tip impulse"),
     (
         "spacearm.kinematics",
         "Kinematics",
