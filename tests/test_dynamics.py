@@ -351,6 +351,17 @@ DESIGN_NUMBERS = {"base_mass": (), "link_mass": (1,)}  # leaf: index of a design
 STEP = 1e-6
 
 
+def _design_direction(robot, rng):
+    """A random direction over every design number of the robot pytree, each entry scaled by its
+    size (zero on infinite entries: free joint limits)."""
+
+    def entry(x):
+        x = np.asarray(x, dtype=float)
+        return np.where(np.isfinite(x), rng.normal(size=x.shape) * (np.abs(x) + 0.1), 0.0)
+
+    return jax.tree.map(entry, robot)
+
+
 @pytest.fixture(scope="module")
 def derivatives(system):
     """At the last state: the gradients and accelerations of `_gradients`, and one vmapped
@@ -376,6 +387,14 @@ def derivatives(system):
             moved[index] += sign * STEP * scale
             rows.append((dataclasses.replace(robot, **{leaf: moved}), args, s["R"][i]))
         expected.append(float(np.asarray(getattr(grads[0], leaf))[index]) * scale)
+    # Every design number at once: a random direction over all finite leaves, relative to their size.
+    direction = _design_direction(robot, np.random.default_rng(4))
+    for sign in (1.0, -1.0):
+        rows.append(
+            (jax.tree.map(lambda x, d, sign=sign: np.asarray(x) + sign * STEP * d, robot, direction), args, s["R"][i])
+        )
+    paired = jax.tree.map(lambda g, d: float(np.sum(np.asarray(g) * d)), grads[0], direction)
+    expected.append(sum(jax.tree.leaves(paired)))
     robots = jax.tree.map(lambda *leaves: np.stack(leaves), *[r for r, _, _ in rows])
     stacked = [np.stack([a[k] for _, a, _ in rows]) for k in range(4)]
     R = np.stack([R for _, _, R in rows])
@@ -405,9 +424,9 @@ def test_vmap_over_robots_and_states_is_the_batched_call(system, derivatives):
 
 def test_gradients_match_central_differences(derivatives):
     """jax.grad of a scalar of the forward dynamics with respect to the joints (planar: phi0
-    too), rates, torques, momentum and design numbers (the bus mass, a link mass) of the robot
-    pytree, against central differences of the same function (all perturbations in one
-    vmapped call)."""
+    too), rates, torques, momentum and design numbers of the robot pytree (the bus mass, a link
+    mass, and every design number at once along a random direction), against central
+    differences of the same function (all perturbations in one vmapped call)."""
     expected = derivatives["gradients"]
     scale = np.abs(expected).max()
     np.testing.assert_allclose(derivatives["differences"], expected, rtol=1e-6, atol=1e-6 * scale)
