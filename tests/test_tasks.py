@@ -2,8 +2,9 @@
 of the held wrench, the sweep metrics and the design objectives built on them.
 
 References: the quintic's polynomial (numpy) and finite differences in time; a direct
-evaluation of `sa.inverse_dynamics` at the same samples (at random bus attitudes, which at
-zero momentum change nothing); the library kernels at the sweep's designs; central
+evaluation of `sa.inverse_dynamics` at the same samples (for the planar arm at random bus
+angles phi0, which at zero momentum change nothing; the UR5's at its default attitude), and
+the held wrench as the rate of the system's momentum by central differences; the library kernels at the sweep's designs; central
 differences of the design objectives."""
 
 from pathlib import Path
