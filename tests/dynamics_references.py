@@ -24,6 +24,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .spatial_references import pinocchio_configuration
+
 PLANAR_KEEP = (0, 1, 5)
 SPATIAL_KEEP = (0, 1, 2, 3, 4, 5)
 
@@ -121,15 +123,8 @@ class PinocchioSystem:
         self.Ti = np.linalg.inv(self.T)
 
     def config(self, q, R):
-        pin = self.pin
-        config = pin.neutral(self.model)
-        config[3:7] = pin.Quaternion(np.asarray(R)).coeffs()
-        for joint, value in zip(self.joints, q, strict=True):
-            if joint.nq == 2:  # continuous: (cos, sin)
-                config[joint.idx_q : joint.idx_q + 2] = np.cos(value), np.sin(value)
-            else:
-                config[joint.idx_q] = value
-        return config
+        root = np.r_[np.zeros(3), self.pin.Quaternion(np.asarray(R)).coeffs()]
+        return pinocchio_configuration(self.model, self.joints, q, root)
 
     def _pin(self, x):
         """A vector in our order (6 + n) -> Pinocchio's order."""

@@ -13,10 +13,13 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
+import yaml
 
 from spacearm._core.groups import rpy_matrix
+from spacearm.models.spatial import locate_package_file
 
 
 def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
@@ -115,6 +118,46 @@ def combined_urdf(
             ET.SubElement(j, "origin", xyz=_fmt(xyz), rpy=_fmt(matrix_rpy(rot)))
         robot.append(j)
     return ET.tostring(robot, encoding="unicode")
+
+
+def config_urdf(path) -> tuple[str, np.ndarray]:
+    """The :func:`combined_urdf` of a one-arm robot file (e.g. configs/ur5-smallsat.yaml), its
+    bus and mount read from the file, and the bus centroid ``base.com`` (3,) m, bus frame.
+
+    Only an arm whose ``urdf`` names a package file (``{package, path}``), as the shipped
+    files do."""
+    config = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    base, mount, arm = config["base"], config["mount"], config["arm"]
+    urdf = locate_package_file(str(path), arm["urdf"]["package"], arm["urdf"]["path"])
+    text = combined_urdf(
+        Path(urdf).read_text(encoding="utf-8"),
+        root_link=arm["root_link"],
+        base_mass=base["mass"],
+        base_com=base["com"],
+        base_inertia=base["inertia"],
+        mount_xyz=mount["xyz"],
+        mount_rpy=mount["rpy"],
+        lock_joints=arm.get("lock_joints"),
+    )
+    return text, np.asarray(base["com"], dtype=float)
+
+
+def pinocchio_configuration(model, joints, q, root=None) -> np.ndarray:
+    """Pinocchio's configuration vector (model.nq,) of a free-flyer ``model``: the free-flyer
+    at ``root`` ((7,): position, then quaternion coefficients (x, y, z, w); the identity when
+    None) and each of ``joints`` (Pinocchio joint models) at its entry of ``q`` (rad or m), a
+    continuous joint written as (cos, sin)."""
+    import pinocchio as pin
+
+    config = pin.neutral(model)
+    if root is not None:
+        config[:7] = root
+    for joint, value in zip(joints, q, strict=True):
+        if joint.nq == 2:  # continuous: (cos, sin)
+            config[joint.idx_q : joint.idx_q + 2] = np.cos(value), np.sin(value)
+        else:
+            config[joint.idx_q] = value
+    return config
 
 
 def _jstar(J, M):
@@ -246,7 +289,9 @@ def mujoco_reference(model, joint_names, tip: str, q):
 # Random URDF chains -------------------------------------------------------------------
 
 
-def _random_rotation(rng):
+def random_rotation(rng):
+    """A rotation matrix (3, 3) from a uniform random unit quaternion (w, x, y, z): four normal
+    draws of ``rng``, normalized."""
     q = rng.normal(size=4)
     q /= np.linalg.norm(q)
     w, x, y, z = q
@@ -266,7 +311,7 @@ def _inertial(rng, mass):
         / 12.0
         * np.array([sides[1] ** 2 + sides[2] ** 2, sides[0] ** 2 + sides[2] ** 2, sides[0] ** 2 + sides[1] ** 2])
     )
-    R = _random_rotation(rng)
+    R = random_rotation(rng)
     I = R @ np.diag(principal) @ R.T  # off-diagonal terms; the inertial rpy turns it again
     return (
         f'<inertial><origin xyz="{_fmt(rng.uniform(-0.2, 0.2, 3))}" rpy="{_fmt(rng.uniform(-1, 1, 3))}"/>'

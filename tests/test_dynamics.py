@@ -36,7 +36,7 @@ from spacearm.models.family import family_of
 from spacearm.models.spatial import locate_package_file
 
 from .dynamics_references import PLANAR_KEEP, MujocoSystem, PinocchioSystem, planar_urdf
-from .spatial_references import combined_urdf, mujoco_model, random_chain_urdf
+from .spatial_references import combined_urdf, mujoco_model, random_chain_urdf, random_rotation
 from .tree_references import system_urdf
 
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
@@ -128,18 +128,6 @@ BUILDERS = {"planar": _planar, "ur5": _ur5, "dual_ur5": _dual_ur5, "random7": _r
 # The states and our kernels in one program --------------------------------------------------
 
 
-def _rotation(rng):
-    a = rng.normal(size=4)
-    w, x, y, z = a / np.linalg.norm(a)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def _states(rng, n, planar):
     """STATES states: joints, rates, torques, attitudes, momenta (zero for the first half), impulses."""
     keep = len(PLANAR_KEEP) if planar else 6
@@ -154,7 +142,7 @@ def _states(rng, n, planar):
         )
         posture = np.c_[phi0, q]
     else:
-        R = np.array([_rotation(rng) for _ in range(STATES)])
+        R = np.array([random_rotation(rng) for _ in range(STATES)])
         posture = q
     momentum = rng.normal(size=(STATES, keep)) * 20.0
     momentum[: STATES // 2] = 0.0

@@ -29,12 +29,11 @@ from scipy.integrate import simpson, solve_ivp
 
 import spacearm as sa
 from spacearm._core.groups import geodesic_distance, hat, rpy_matrix
-from spacearm.models.spatial import locate_package_file
 from spacearm.motion.simulation import DEFAULT_SUBSTEPS, STOP_BUS_RATE, STOP_JOINT_LIMIT, STOP_NONE
 
 from . import reference
 from .conftest import count_compiles
-from .spatial_references import combined_urdf
+from .spatial_references import config_urdf
 
 pin = pytest.importorskip("pinocchio")
 
@@ -84,17 +83,7 @@ class _Pinocchio:
     conventions: nu_ours = S nu_pin, S = [[I, -[c]x, 0], [0, I, 0], [0, 0, I]], c the bus centroid)."""
 
     def __init__(self):
-        path = locate_package_file("test", "example-robot-data", "robots/ur_description/urdf/ur5_robot.urdf")
-        com = np.array([-0.2, 0.05, -0.1])
-        text = combined_urdf(
-            Path(path).read_text(),
-            root_link="base_link",
-            base_mass=500.0,
-            base_com=com,
-            base_inertia=[[80, 1, 0], [1, 95, 2], [0, 2, 120]],
-            mount_xyz=[0.6, 0.1, 0.5],
-            mount_rpy=[0.1, -0.2, 0.3],
-        )
+        text, com = config_urdf(CONFIGS / "ur5-smallsat.yaml")
         self.model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
         self.model.gravity.linear[:] = 0.0
         self.data = self.model.createData()

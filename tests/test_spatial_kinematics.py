@@ -15,6 +15,8 @@ from spacearm.models.spatial import primitives
 from spacearm.models.tree import primitives as tree_primitives
 from spacearm.models.tree.algebra import BLOCK
 
+from .spatial_references import config_urdf, random_rotation
+
 CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
 
 
@@ -25,18 +27,6 @@ def _load(name):
 @pytest.fixture(scope="module")
 def ur5():
     return _load("ur5-smallsat")
-
-
-def _rotation(rng):
-    q = rng.normal(size=4)
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 # The planar bridge ----------------------------------------------------------------------
@@ -75,7 +65,7 @@ def test_a_heavy_bus_gives_the_fixed_base_jacobian(ur5):
 def test_bus_attitude_rotates_twists_and_points(ur5):
     rng = np.random.default_rng(2)
     q = rng.uniform(-3, 3, (8, 6))
-    R = np.stack([_rotation(rng) for _ in range(8)])
+    R = np.stack([random_rotation(rng) for _ in range(8)])
     J_bus = np.asarray(sa.generalized_jacobian(ur5, q))
     J_inertial = np.asarray(sa.generalized_jacobian(ur5, q, base_rotation=R))
     expected = np.concatenate([R @ J_bus[:, :3], R @ J_bus[:, 3:]], axis=1)
@@ -93,21 +83,7 @@ def test_bus_attitude_rotates_twists_and_points(ur5):
 def test_zero_momentum_holds_in_pinocchio(ur5):
     """Joint rates plus the bus twist from C(q) carry no centroidal momentum (Pinocchio)."""
     pin = pytest.importorskip("pinocchio")
-    from .spatial_references import combined_urdf
-
-    urdf = spatial.locate_package_file("t", "example-robot-data", "robots/ur_description/urdf/ur5_robot.urdf")
-    with open(urdf, encoding="utf-8") as handle:
-        text = handle.read()
-    com = np.array([-0.2, 0.05, -0.1])
-    combined = combined_urdf(
-        text,
-        root_link="base_link",
-        base_mass=500.0,
-        base_com=com,
-        base_inertia=[[80, 1, 0], [1, 95, 2], [0, 2, 120]],
-        mount_xyz=[0.6, 0.1, 0.5],
-        mount_rpy=[0.1, -0.2, 0.3],
-    )
+    combined, com = config_urdf(os.path.join(CONFIGS, "ur5-smallsat.yaml"))
     model = pin.buildModelFromXML(combined, pin.JointModelFreeFlyer())
     data = model.createData()
     rng = np.random.default_rng(3)

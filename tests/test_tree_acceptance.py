@@ -42,6 +42,8 @@ from spacearm.cli import main
 from spacearm.models.spatial import locate_package_file
 from spacearm.models.spatial.urdf import rpy_matrix
 
+from .spatial_references import pinocchio_configuration
+
 pin = pytest.importorskip("pinocchio")
 
 SPART_STYLE = """<!-- A two-arm spacecraft written the way SPART / SpaceDyn-derived URDFs are:
@@ -408,15 +410,8 @@ class FreeFlyer:
 
     def config(self, q, R=None):
         R = np.eye(3) if R is None else R
-        config = pin.neutral(self.model)
         root = pin.SE3(R, np.zeros(3)) * self.bus_in_root.inverse()  # puts the bus at (R, 0)
-        config[:7] = pin.SE3ToXYZQUAT(root)
-        for joint, value in zip(self.joints, q, strict=True):
-            if joint.nq == 2:  # continuous: (cos, sin)
-                config[joint.idx_q : joint.idx_q + 2] = np.cos(value), np.sin(value)
-            else:
-                config[joint.idx_q] = value
-        return config
+        return pinocchio_configuration(self.model, self.joints, q, pin.SE3ToXYZQUAT(root))
 
     def evaluate(self, q, R=None):
         """Tips about the centroid (k, 3), J* and fixed-base J (k, 6, n), C (6, n), inertial axes."""

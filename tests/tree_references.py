@@ -18,6 +18,8 @@ import numpy as np
 from spacearm.models.spatial.urdf import rpy_matrix
 from spacearm.models.tree import TreeLabels, TreeRobot
 
+from .spatial_references import pinocchio_configuration
+
 
 def _fmt(values) -> str:
     return " ".join(repr(float(v)) for v in np.ravel(values))
@@ -80,18 +82,6 @@ def system_urdf(*, base_mass, base_com, base_inertia, arms) -> str:
 
 
 # A random tree ----------------------------------------------------------------------------
-
-
-def _random_rotation(rng):
-    q = rng.normal(size=4)
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def _random_inertia(rng, mass):
@@ -230,13 +220,7 @@ class PinocchioTree:
         self.frames = [self.model.getFrameId(name) for name in tip_frames]
 
     def config(self, q):
-        config = self.pin.neutral(self.model)
-        for joint, value in zip(self.joints, q, strict=True):
-            if joint.nq == 2:  # continuous: (cos, sin)
-                config[joint.idx_q : joint.idx_q + 2] = np.cos(value), np.sin(value)
-            else:
-                config[joint.idx_q] = value
-        return config
+        return pinocchio_configuration(self.model, self.joints, q)
 
     def evaluate(self, q):
         """Tips about the centroid (k, 3), J* (k, 6, n), fixed-base J (k, 6, n), C (6, n) [v of bus origin; w]."""
