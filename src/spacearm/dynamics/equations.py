@@ -22,8 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from ..models.dynamics import free_dynamics, mass_and_bias, system_mass_matrix
-from ..models.family import family_of
-from .state import DynamicState, apply, bus_momentum, full_velocity, momentum_array, solve_columns
+from .state import DynamicState, apply, full_velocity, solve_columns
 
 __all__ = [
     "BASE_MODES",
@@ -55,24 +54,17 @@ def mass_matrix(robot, q: jax.Array, base_rotation: jax.Array | None = None) -> 
 def bias_forces(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momentum=None) -> jax.Array:
     """``(..., 6 + n)`` c(q, nu) of H nu' + c = [f; n; tau], at the bus velocity the momentum
     gives (bus rows: force at the bus centroid and torque about it, bus axes)."""
-    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
-    nu = full_velocity(system, system.arrays[0], None if momentum is None else system.arrays[1])
-    _, c = mass_and_bias(system.tree, system.q, nu)
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
+    _, c = mass_and_bias(system.tree, system.q, full_velocity(system, system.rates("qd")))
     return c[..., system.coords]
-
-
-def _moving_lock(robot, inertia):
-    """Held joints of a focused robot locked: the moving block, identity on the held joints."""
-    mask = jnp.asarray(family_of(robot).moving_joints(robot), inertia.dtype)
-    return inertia * (mask[..., :, None] * mask[..., None, :]) + jnp.eye(inertia.shape[-1]) * (1.0 - mask)[..., None]
 
 
 @jax.jit
 def joint_mass_matrix(robot, q: jax.Array) -> jax.Array:
     """``(..., n, n)`` H_m, the joint-space inertia with the bus held fixed (a focused tree:
     its held joints locked)."""
-    system = DynamicState(robot, q, None)
-    return _moving_lock(robot, system_mass_matrix(system.tree, system.q)[..., 6:, 6:])
+    system = DynamicState(robot, q)
+    return system.locked(system_mass_matrix(system.tree, system.q))[..., 6:, 6:]
 
 
 @jax.jit
@@ -80,20 +72,19 @@ def arm_inertia(robot, q: jax.Array) -> jax.Array:
     """``(..., n, n)`` the reduced inertia H* = H_m - H_bm^T H_b^-1 H_bm: joint torque per joint
     acceleration with the bus free, any momentum (Yoshida's generalized inertia; a focused tree:
     its held joints locked)."""
-    system = DynamicState(robot, q, None)
-    H = system_mass_matrix(system.tree, system.q)
+    system = DynamicState(robot, q)
+    H = system.locked(system_mass_matrix(system.tree, system.q))
     coupling = solve_columns(H[..., :6, :6], H[..., :6, 6:])
-    return _moving_lock(robot, H[..., 6:, 6:] - jnp.swapaxes(H[..., :6, 6:], -1, -2) @ coupling)
+    return H[..., 6:, 6:] - jnp.swapaxes(H[..., :6, 6:], -1, -2) @ coupling
 
 
 @jax.jit
 def reduced_bias(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momentum=None) -> jax.Array:
     """``(..., n)`` c* = c_m - H_bm^T H_b^-1 c_b: with the bus free, H* qdd + c* = tau (the free
     bus's inverse dynamics at qdd = 0)."""
-    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
-    qd = system.arrays[0]
-    still = jnp.zeros_like(qd)
-    return free_dynamics(system.tree, system.q, qd, still, bus_momentum(system, momentum, qd.dtype), forward=False)
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
+    qd = system.rates("qd")
+    return free_dynamics(system.tree, system.q, qd, jnp.zeros_like(qd), system.momentum, system.moving, forward=False)
 
 
 @jax.jit
@@ -107,9 +98,10 @@ def forward_dynamics(robot, q: jax.Array, qd: jax.Array, tau: jax.Array, base_ro
 def free_motion(robot, q: jax.Array, qd: jax.Array, tau: jax.Array, base_rotation=None, momentum=None):
     """``(base velocity (..., 6), qdd (..., n))``: `base_velocity` and `forward_dynamics` from one
     pass (what a simulation's every stage needs; planar ``(..., 3)`` [vx, vy, w])."""
-    system = DynamicState(robot, q, base_rotation, (qd, 1), (tau, 1), *momentum_array(momentum))
-    qd, tau = system.arrays[:2]
-    motion = free_dynamics(system.tree, system.q, qd, tau, bus_momentum(system, momentum, qd.dtype))
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd, "tau": tau}, momentum=momentum)
+    motion = free_dynamics(
+        system.tree, system.q, system.rates("qd"), system.joints["tau"], system.momentum, system.moving
+    )
     return system.reduce(motion[..., :6]), motion[..., 6:]
 
 
@@ -127,31 +119,24 @@ def inverse_dynamics(robot, q, qd, qdd, base_rotation=None, momentum=None, base:
     """
     if base not in BASE_MODES:
         raise ValueError(f"base: one of {', '.join(BASE_MODES)}, got {base!r}")
-    system = DynamicState(robot, q, base_rotation, (qd, 1), (qdd, 1), *momentum_array(momentum))
-    qd, qdd = system.arrays[:2]
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd, "qdd": qdd}, momentum=momentum)
+    qd, qdd = system.rates("qd"), system.rates("qdd")
     if base == "free":
-        tau = free_dynamics(system.tree, system.q, qd, qdd, bus_momentum(system, momentum, qd.dtype), forward=False)
+        tau = free_dynamics(system.tree, system.q, qd, qdd, system.momentum, system.moving, forward=False)
         return tau, jnp.zeros(system.batch + (len(system.keep),), tau.dtype)
-    momentum = None if momentum is None else system.embed(system.arrays[2])
-    H_full = system_mass_matrix(system.tree, system.q)
     if base == "held":
-        nu = jnp.concatenate([jnp.zeros(system.batch + (6,), qd.dtype), qd], axis=-1)
+        bus = jnp.zeros(system.batch + (6,), qd.dtype)
     else:
-        nu = jnp.concatenate([held_attitude_velocity(system, H_full, qd, momentum), qd], axis=-1)
-    H, c = mass_and_bias(system.tree, system.q, nu)
-    base_accel = _base_acceleration(H, c, qdd, base)
-    forces = apply(H, jnp.concatenate([base_accel, qdd], axis=-1)) + c
-    wrench = forces[..., :6]
-    if base == "attitude":
-        wrench = wrench.at[..., :3].set(0.0)
-    return forces[..., 6:], system.reduce(wrench)
+        bus = held_attitude_velocity(system, system_mass_matrix(system.tree, system.q), qd)
+    H, c = mass_and_bias(system.tree, system.q, jnp.concatenate([bus, qd], axis=-1))
+    forces = apply(H, jnp.concatenate([_base_acceleration(H, c, qdd, base), qdd], axis=-1)) + c
+    return forces[..., 6:], system.reduce(forces[..., :6])  # "attitude": the force rows are zero
 
 
-def held_attitude_velocity(system: DynamicState, H, qd, momentum):
-    """[v; 0]: the bus centroid's velocity (bus axes) whose linear momentum is P, bus not turning."""
-    P = jnp.zeros(system.batch + (3,), qd.dtype) if momentum is None else momentum[..., :3]
-    P_bus = apply(jnp.swapaxes(system.R, -1, -2), P)
-    v = (P_bus - apply(H[..., :3, 6:], qd)) / H[..., 0, 0, None]
+def held_attitude_velocity(system: DynamicState, H, qd):
+    """[v; 0]: the bus centroid's velocity (bus axes) whose linear momentum is the state's P, the
+    bus not turning."""
+    v = (system.momentum[..., :3] - apply(H[..., :3, 6:], qd)) / H[..., 0, 0, None]
     return jnp.concatenate([v, jnp.zeros_like(v)], axis=-1)
 
 

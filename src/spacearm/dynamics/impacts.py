@@ -28,7 +28,7 @@ def check_joints(joints: str) -> None:
 def _response_map(system: DynamicState, joints: str):
     """``(J (*batch, [k,] 6, 6 + n), X (*batch, 6 + n, [k,] 6 ...))``: X = H^-1 J^T (``"locked"``:
     only the bus columns, H_b^-1 J_S^T, joint rows zero), bus axes."""
-    H = system_mass_matrix(system.tree, system.q)
+    H = system.locked(system_mass_matrix(system.tree, system.q))
     J = system.tip_maps()
     per_tip = J.ndim == system.R.ndim + 1
     Jt = jnp.swapaxes(J, -1, -2)
@@ -55,18 +55,35 @@ def tip_inverse_inertia(robot, q: jax.Array, base_rotation=None, joints: str = "
     return rotated[..., rows[:, None], rows[None, :]]
 
 
-@functools.partial(jax.jit, static_argnames=("joints",))
+def _chosen_tip(system: DynamicState, per_tip, tip):
+    """The ``tip``-th of a tree's per-tip maps ``(*batch, k, ...)``; a robot without a tip axis
+    (one tip, or a tree focused on one) takes only ``tip=0``. Checked where ``tip`` is concrete."""
+    k = None if system.tips is not None else len(system.tree.tip_bodies)
+    if not isinstance(tip, jax.core.Tracer) and not 0 <= int(tip) < (k or 1):
+        raise ValueError(f"tip: {tip} is not one of the robot's {k or 1} tip(s) (numbered from 0)")
+    if per_tip is None or k is None:
+        return per_tip
+    return jnp.take(per_tip, tip, axis=len(system.batch))
+
+
 def impulse_response(robot, q, impulse, base_rotation=None, tip=0, joints: str = "free"):
     """``(dqd (..., n), dbase (..., 6))``: the jump of the joint rates and of [v of the bus
     centroid; w of the bus] (INERTIAL axes) under an impulse [linear; angular] at the tip
     frame's origin, inertial axes (planar [px, py, angular], dbase [vx, vy, w]).
 
-    ``tip`` indexes a tree's tips; ``joints="locked"`` holds the joint rates (dqd = 0).
+    ``tip`` indexes a tree's tips (checked here when it is a number; a robot without a tip
+    axis takes 0); ``joints="locked"`` holds the joint rates (dqd = 0).
     """
     check_joints(joints)
-    system = DynamicState(robot, q, base_rotation, (impulse, 1))
+    if not isinstance(tip, jax.core.Tracer):
+        _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
+    return _impulse_response(robot, q, impulse, base_rotation, tip, joints)
+
+
+@functools.partial(jax.jit, static_argnames=("joints",))
+def _impulse_response(robot, q, impulse, base_rotation, tip, joints: str):
+    system = DynamicState(robot, q, base_rotation, twists={"impulse": impulse})
     _, X = _response_map(system, joints)
-    if X.ndim == system.R.ndim + 1:  # per tip: (batch, k, 6 + n, 6)
-        X = jnp.take(X, tip, axis=-3)
-    jump = apply(X, system.unrotate(system.embed(system.arrays[0])))
+    X = _chosen_tip(system, X, tip)
+    jump = apply(X, system.unrotate(system.twists["impulse"]))
     return jump[..., 6:], system.reduce(system.rotate(jump[..., :6]))

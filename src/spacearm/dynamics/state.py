@@ -19,47 +19,77 @@ from .._core.groups import vee
 from ..models.dynamics import system_mass_matrix, tip_maps
 from ..models.family import family_of
 
-__all__ = [
-    "DynamicState",
-    "apply",
-    "base_from_momentum",
-    "bus_momentum",
-    "full_velocity",
-    "momentum_array",
-    "solve",
-    "solve_columns",
-]
+__all__ = ["DynamicState", "apply", "full_velocity", "solve", "solve_columns"]
 
 
 class DynamicState:
-    """One state of a robot: its dynamic tree, joints ``(*batch, n)``, attitude ``(*batch, 3, 3)``,
-    the kept twist components and the tip weights, with the other arrays broadcast to the batch."""
+    """One state of one robot design, checked and broadcast to one batch.
 
-    def __init__(self, robot, posture, base_rotation, *arrays):
+    Reads the posture as the family writes it (a planar posture leads with phi0; every other
+    robot passes ``base_rotation``), checks each array's trailing size against the robot and
+    names the argument that does not fit, and broadcasts everything to one batch shape.
+
+    Held joints (a focused tree's, `spacearm.models.family.RobotFamily.moving_joints`) are
+    held by their drives: their rates and accelerations are zero (`moving` masks them), the
+    kernels that solve with H lock them (`locked`), and inverse dynamics gives the torque that
+    holds them.
+
+    Attributes:
+        family, tree: the robot's family record and its dynamic tree (`RobotFamily.dynamic_tree`).
+        keep: the family's ``twist_axes`` (the kept components of every 6-vector).
+        tips: the family's tip weights (`RobotFamily.dynamic_tips`), or ``None``.
+        n, batch: the joint count and the broadcast batch shape.
+        q ``(*batch, n)``, R ``(*batch, 3, 3)``: joints and bus attitude (bus -> inertial).
+        moving ``(n,)``: 1 for the moving joints, 0 for the held ones.
+        joints: the joint arrays by name, ``(*batch, n)``, held joints' entries as given.
+        momentum: the system momentum [P; L about the system centroid] ``(*batch, 6)``, BUS axes.
+        twists: the 6-vectors by name ``(*batch, 6)``, inertial axes (all six components).
+    """
+
+    def __init__(self, robot, posture, base_rotation=None, *, joints=None, momentum=None, twists=None):
         family = family_of(robot)
-        self.family = family
-        self.tree = family.dynamic_tree(robot)
-        self.keep = np.asarray(family.twist_axes)
-        self.tips = family.dynamic_tips(robot)
-        posture = jnp.asarray(posture)
-        offset = family.posture_offset
-        if offset:
+        self.family, self.tree = family, family.dynamic_tree(robot)
+        if jnp.ndim(self.tree.base_mass) != 0:
+            raise ValueError("robot: one design per call; map a batch of designs with jax.vmap")
+        self.keep, self.tips = np.asarray(family.twist_axes), family.dynamic_tips(robot)
+        n = family.joint_count(robot)
+        posture = _trailing("q", posture, (n + family.posture_offset,))
+        if family.posture_offset:
             if base_rotation is not None:
                 raise TypeError(f"base_rotation: a {family.name} posture carries its base attitude (phi0 first)")
-            R = family.attitude.rotation(posture[..., 0])
-            q = posture[..., offset:]
+            R, q = family.attitude.rotation(posture[..., 0]), posture[..., family.posture_offset :]
         else:
             q = posture
-            R = jnp.eye(3, dtype=q.dtype) if base_rotation is None else jnp.asarray(base_rotation)
-        n = q.shape[-1]
-        self.n = n
-        shaped = [(jnp.asarray(a), core) for a, core in arrays]
-        batch = jnp.broadcast_shapes(q.shape[:-1], R.shape[:-2], *[a.shape[: a.ndim - core] for a, core in shaped])
-        self.batch = batch
-        self.q = jnp.broadcast_to(q, batch + (n,))
-        self.R = jnp.broadcast_to(R, batch + (3, 3))
-        self.arrays = [jnp.broadcast_to(a, batch + a.shape[a.ndim - core :]) for a, core in shaped]
+            R = (
+                jnp.eye(3, dtype=q.dtype)
+                if base_rotation is None
+                else _trailing("base_rotation", base_rotation, (3, 3))
+            )
+        named = {name: _trailing(name, value, (n,)) for name, value in (joints or {}).items()}
+        sizes = (len(self.keep),)
+        vectors = {name: _trailing(name, value, sizes) for name, value in (twists or {}).items()}
+        if momentum is not None:
+            vectors["momentum"] = _trailing("momentum", momentum, sizes)
+        shapes = [q.shape[:-1], R.shape[:-2]] + [a.shape[:-1] for a in (*named.values(), *vectors.values())]
+        batch = self.batch = jnp.broadcast_shapes(*shapes)
+        self.n, self.q, self.R = n, jnp.broadcast_to(q, batch + (n,)), jnp.broadcast_to(R, batch + (3, 3))
+        self.moving = jnp.asarray(family.moving_joints(robot), self.q.dtype)
+        self.joints = {name: jnp.broadcast_to(a, batch + (n,)) for name, a in named.items()}
+        full = {name: self.embed(jnp.broadcast_to(a, batch + sizes)) for name, a in vectors.items()}
+        zero = jnp.zeros(batch + (6,), self.q.dtype)
+        self.momentum = self.unrotate(full.pop("momentum")) if momentum is not None else zero
+        self.twists = full
         self.coords = np.concatenate([self.keep, 6 + np.arange(n)])
+
+    def rates(self, name: str):
+        """A joint array with the held joints' entries zero (rates and accelerations)."""
+        return self.joints[name] * self.moving
+
+    def locked(self, H):
+        """H ``(..., 6 + n, 6 + n)`` with the held joints locked: their rows and columns zero and
+        a one on the diagonal (they take no part in a solve)."""
+        mask = jnp.concatenate([jnp.ones(6, H.dtype), self.moving.astype(H.dtype)])
+        return H * (mask[:, None] * mask[None, :]) + jnp.diag(1.0 - mask)
 
     def embed(self, x):
         """A 6-vector's kept components ``(..., len(keep))`` -> ``(..., 6)`` (zeros elsewhere)."""
@@ -83,11 +113,23 @@ class DynamicState:
         return jnp.concatenate([apply(Rt, x[..., :3]), apply(Rt, x[..., 3:])], axis=-1)
 
     def tip_maps(self):
-        """``(*batch, [k,] 6, 6 + n)`` J of every tip, or of the chosen one, bus axes."""
+        """``(*batch, [k,] 6, 6 + n)`` J of every tip, or of the chosen one, bus axes; the held
+        joints' columns zero."""
         J = tip_maps(self.tree, self.q)
+        J = J * jnp.concatenate([jnp.ones(6, J.dtype), self.moving.astype(J.dtype)])
         if self.tips is None:
             return J
         return jnp.einsum("t,...tij->...ij", jnp.asarray(self.tips, J.dtype), J)
+
+
+def _trailing(name: str, value, shape: tuple[int, ...]):
+    """``value`` as an array whose trailing axes are ``shape``, else ValueError naming the argument."""
+    array = jnp.asarray(value)
+    if array.shape[array.ndim - len(shape) :] != shape or array.ndim < len(shape):
+        raise ValueError(f"{name}: expected trailing axes {shape}, got shape {array.shape}")
+    if not jnp.issubdtype(array.dtype, jnp.inexact):
+        array = array.astype(float)
+    return array
 
 
 def apply(matrix, vector):
@@ -105,30 +147,11 @@ def solve_columns(matrix, rhs):
     return jax.scipy.linalg.cho_solve(factor, rhs)
 
 
-def base_from_momentum(H, qd, R, momentum):
-    """``(..., 6)`` [v; w], bus axes, whose system momentum is ``momentum`` [P; L about the
-    system centroid], inertial axes."""
-    Rt = jnp.swapaxes(R, -1, -2)
-    P, L = apply(Rt, momentum[..., :3]), apply(Rt, momentum[..., 3:])
-    offset = vee(H[..., 3:6, 0:3]) / H[..., 0, 0, None]
-    target = jnp.concatenate([P, L + jnp.cross(offset, P)], axis=-1)
-    return solve(H[..., :6, :6], target - apply(H[..., :6, 6:], qd))
-
-
-def full_velocity(system: DynamicState, qd, momentum):
-    """nu = [v; w; qd] ``(..., 6 + n)`` for the momentum (zero when ``None``)."""
+def full_velocity(system: DynamicState, qd):
+    """nu = [v; w; qd] ``(..., 6 + n)``: the bus velocity the state's momentum gives with the
+    joint rates ``qd`` (held joints' rates zero)."""
     H = system_mass_matrix(system.tree, system.q)
-    m = jnp.zeros(system.batch + (6,), qd.dtype) if momentum is None else system.embed(momentum)
-    return jnp.concatenate([base_from_momentum(H, qd, system.R, m), qd], axis=-1)
-
-
-def momentum_array(momentum):
-    return [] if momentum is None else [(momentum, 1)]
-
-
-def bus_momentum(system: DynamicState, momentum, dtype):
-    """``(*batch, 6)`` the system momentum [P; L about the system centroid] in BUS axes (zero
-    when ``momentum`` is ``None``; else it is the state's last array)."""
-    if momentum is None:
-        return jnp.zeros(system.batch + (6,), dtype)
-    return system.unrotate(system.embed(system.arrays[-1]))
+    P, L = system.momentum[..., :3], system.momentum[..., 3:]
+    offset = vee(H[..., 3:6, 0:3]) / H[..., 0, 0, None]  # the system centroid about the bus centroid
+    target = jnp.concatenate([P, L + jnp.cross(offset, P)], axis=-1)
+    return jnp.concatenate([solve(H[..., :6, :6], target - apply(H[..., :6, 6:], qd)), qd], axis=-1)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from .state import DynamicState, full_velocity, momentum_array
+from .state import DynamicState, full_velocity
 
 __all__ = ["base_velocity", "tip_velocity"]
 
@@ -19,8 +19,8 @@ __all__ = ["base_velocity", "tip_velocity"]
 def base_velocity(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momentum=None) -> jax.Array:
     """``(..., 6)`` [v of the bus centroid; w of the bus], BUS axes, at joint rates ``qd`` with
     the system momentum ``momentum`` (planar ``(..., 3)`` [vx, vy, w])."""
-    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
-    nu = full_velocity(system, system.arrays[0], None if momentum is None else system.arrays[1])
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
+    nu = full_velocity(system, system.rates("qd"))
     return system.reduce(nu[..., :6])
 
 
@@ -28,8 +28,8 @@ def base_velocity(robot, q: jax.Array, qd: jax.Array, base_rotation=None, moment
 def tip_velocity(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momentum=None) -> jax.Array:
     """``(..., 6)`` (trees ``(..., k, 6)``) the twist [v; w] of the tip frame's origin, INERTIAL
     axes: J* qd plus the drift the momentum adds (SpaceDyn's calc_gj11)."""
-    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
-    nu = full_velocity(system, system.arrays[0], None if momentum is None else system.arrays[1])
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
+    nu = full_velocity(system, system.rates("qd"))
     J = system.tip_maps()
     twist = jnp.einsum("...ij,...j->...i", J, nu if J.ndim == nu.ndim + 1 else nu[..., None, :])
     return system.reduce(system.rotate(twist))

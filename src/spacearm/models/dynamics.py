@@ -147,8 +147,9 @@ def _mass_and_bias_minor(robot: TreeRobot, x):
 
 
 def _free_minor(robot: TreeRobot, x, forward: bool):
-    """The bus free (no wrench), for ``x = [q; qd; load; P; L] (3 n + 6, *batch)`` with the
-    momentum [P; L about the system centroid] in bus axes: ``(6 + n, *batch)`` [v; w; qdd] (the
+    """The bus free (no wrench), for ``x = [q; qd; load; P; L; moving] (4 n + 6, *batch)`` with
+    the momentum [P; L about the system centroid] in bus axes and ``moving`` 1 for the moving
+    joints, 0 for the held ones (their rates are zero; the forward solve locks them): ``(6 + n, *batch)`` [v; w; qdd] (the
     bus twist and the joint accelerations) for torques ``load`` (``forward``), else ``(n, *batch)``
     tau for accelerations ``load``.
 
@@ -159,7 +160,7 @@ def _free_minor(robot: TreeRobot, x, forward: bool):
     to G, [f; n_G], the free bus's H* = H_m - p^T p / M - I~_q^T I~^-1 I~_q and
     c* = c_m - p^T f / M - (I~^-1 I~_q)^T n_G."""
     n = robot.n_joints
-    q, qd, load, momentum = x[:n], x[n : 2 * n], x[2 * n : 3 * n], x[3 * n :]
+    q, qd, load, momentum, moving = x[:n], x[n : 2 * n], x[2 * n : 3 * n], x[3 * n : 3 * n + 6], x[3 * n + 6 :]
     cst, state, centroids, inertias = _bodies_pass(robot, q)
     coupling, solved = _coupling(state)
     mass, p = state.mass, state.momentum
@@ -172,8 +173,11 @@ def _free_minor(robot: TreeRobot, x, forward: bool):
     torque = _sub(_vec(bias[3:6]), _cross(offset, force))  # about G
     reduced_bias = bias[6:] - _dot(p, force) / mass - _dot(solved, torque)
     inertia = _mass_from(robot, state) - _outer(p, p) / mass - _outer(coupling, solved)
-    if forward:
-        return jnp.concatenate([_rows(v, w), _cholesky_solve(inertia, load - reduced_bias)])
+    if forward:  # held joints (moving 0) locked: qdd = 0 there, the rest solved with them still
+        both = moving[:, None] * moving[None, :]
+        held = jnp.eye(n, dtype=x.dtype).reshape((n, n) + (1,) * (x.ndim - 1)) * (1.0 - moving)[None]
+        qdd = _cholesky_solve(inertia * both + held, moving * (load - reduced_bias))
+        return jnp.concatenate([_rows(v, w), qdd])
     return sum(inertia[:, j] * load[j] for j in range(n)) + reduced_bias  # elementwise over the batch
 
 
@@ -225,15 +229,18 @@ _free_forward = batched(_free_forward_minor, 1)
 _free_inverse = batched(_free_inverse_minor, 1)
 
 
-def free_dynamics(robot: TreeRobot, q, qd, load, momentum, forward: bool = True) -> jax.Array:
+def free_dynamics(robot: TreeRobot, q, qd, load, momentum, moving=None, forward: bool = True) -> jax.Array:
     """The bus free (no wrench), at joints ``q``, rates ``qd`` (``(..., n)`` each) and the system
     momentum ``momentum (..., 6)`` [P; L about the system centroid], BUS axes: for torques
     ``load`` (``forward``) ``(..., 6 + n)`` [v; w; qdd], the bus twist (bus axes) and the joint
-    accelerations; else ``(..., n)`` the torques for accelerations ``load``.
+    accelerations; else ``(..., n)`` the torques for accelerations ``load``. ``moving`` ``(n,)``
+    (default all ones) marks the joints that move; the held ones' rates must be zero, and the
+    forward solve keeps them still (their torques are what holds them).
 
     One pass and closed forms per posture: H* qdd + c* = tau with H_b^-1 through the system
     centroid and H* by an unrolled Cholesky factorization (`_free_minor`)."""
-    arrays = [jnp.asarray(a) for a in (q, qd, load, momentum)]
+    moving = jnp.ones(jnp.shape(q)[-1:], jnp.result_type(q)) if moving is None else moving
+    arrays = [jnp.asarray(a) for a in (q, qd, load, momentum, moving)]
     batch = jnp.broadcast_shapes(*[a.shape[:-1] for a in arrays])
     stacked = jnp.concatenate([jnp.broadcast_to(a, batch + a.shape[-1:]) for a in arrays], axis=-1)
     return (_free_forward if forward else _free_inverse)(robot, stacked)
