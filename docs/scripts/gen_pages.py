@@ -130,7 +130,8 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.dynamics.state", "Dynamics", "the state the kernels share: posture, attitude, momentum, axes"),
     ("spacearm.dynamics.equations", "Dynamics", "H, c, H*, c*, forward dynamics, inverse dynamics with three buses"),
     ("spacearm.dynamics.velocities", "Dynamics", "the bus's and the tip's velocity for any momentum"),
-    ("spacearm.dynamics.impacts", "Dynamics", "G (extended inversed inertia) and the response to a tip impulse"),
+    ("spacearm.dynamics.impacts", "Dynamics", "G (extended inversed inertia), the impulse response, capture"),
+    ("spacearm.dynamics.wheels", "Dynamics", "the reaction-wheel momentum that holds the bus attitude"),
     (
         "spacearm.kinematics",
         "Kinematics",

@@ -26,6 +26,7 @@ from .dynamics import (
     arm_inertia as arm_inertia,
     base_velocity as base_velocity,
     bias_forces as bias_forces,
+    capture as capture,
     forward_dynamics as forward_dynamics,
     free_motion as free_motion,
     impulse_response as impulse_response,
@@ -35,6 +36,7 @@ from .dynamics import (
     reduced_bias as reduced_bias,
     tip_inverse_inertia as tip_inverse_inertia,
     tip_velocity as tip_velocity,
+    wheel_momentum as wheel_momentum,
 )
 from .inertia import (
     base_twist_map as base_twist_map,
@@ -116,6 +118,7 @@ __all__ = [
     "arm_inertia",
     "base_velocity",
     "bias_forces",
+    "capture",
     "forward_dynamics",
     "free_motion",
     "impulse_response",
@@ -125,6 +128,7 @@ __all__ = [
     "reduced_bias",
     "tip_inverse_inertia",
     "tip_velocity",
+    "wheel_momentum",
     "arm_jacobian",
     "base_jacobian",
     "base_rate",

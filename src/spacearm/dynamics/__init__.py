@@ -39,11 +39,13 @@ from .equations import (
 )
 from .impacts import (
     JOINT_MODES as JOINT_MODES,
+    capture as capture,
     impulse_response as impulse_response,
     tip_inverse_inertia as tip_inverse_inertia,
 )
 from .state import DynamicState as DynamicState
 from .velocities import base_velocity as base_velocity, tip_velocity as tip_velocity
+from .wheels import wheel_momentum as wheel_momentum
 
 __all__ = [
     "BASE_MODES",
@@ -52,6 +54,7 @@ __all__ = [
     "arm_inertia",
     "base_velocity",
     "bias_forces",
+    "capture",
     "forward_dynamics",
     "free_motion",
     "impulse_response",
@@ -61,4 +64,5 @@ __all__ = [
     "reduced_bias",
     "tip_inverse_inertia",
     "tip_velocity",
+    "wheel_momentum",
 ]

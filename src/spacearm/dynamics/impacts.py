@@ -12,8 +12,9 @@ import functools
 import jax
 import jax.numpy as jnp
 
+from .._core.groups import hat
 from ..models.dynamics import system_mass_matrix
-from .state import DynamicState, apply, solve_columns
+from .state import DynamicState, apply, full_velocity, momentum_array, solve, solve_columns
 
 __all__ = ["JOINT_MODES", "check_joints", "impulse_response", "tip_inverse_inertia"]
 
@@ -87,3 +88,79 @@ def _impulse_response(robot, q, impulse, base_rotation, tip, joints: str):
     X = _chosen_tip(system, X, tip)
     jump = apply(X, system.unrotate(system.twists["impulse"]))
     return jump[..., 6:], system.reduce(system.rotate(jump[..., :6]))
+
+
+# Capture ---------------------------------------------------------------------------------
+
+
+def _target_in_bus_axes(system: DynamicState, target, dtype):
+    """The target's spatial inertia at the tip origin ``(*batch, 6, 6)`` and its twist there
+    ``(*batch, 6)`` [v of its point at the tip origin; w], bus axes.
+
+    A planar target gives the in-plane parts: velocity [vx, vy, w], offset (2,) or (3,), and
+    its moment about z (a scalar) or a 3x3 inertia."""
+    mass = jnp.asarray(target["mass"], dtype)
+    inertia = jnp.asarray(target["inertia"], dtype)
+    if inertia.ndim == 0 or inertia.shape[-2:] != (3, 3):
+        inertia = inertia[..., None, None] * jnp.eye(3, dtype=dtype)  # a moment about the plane's normal
+    offset = jnp.asarray(target["offset"], dtype)
+    if offset.shape[-1] == 2:
+        offset = jnp.concatenate([offset, jnp.zeros(offset.shape[:-1] + (1,), dtype)], axis=-1)
+    Rt = jnp.swapaxes(system.R, -1, -2)
+    d = apply(Rt, offset)
+    inertia = Rt @ inertia @ system.R
+    velocity = system.unrotate(system.embed(jnp.asarray(target["velocity"], dtype)))
+    v_origin = velocity[..., :3] - jnp.cross(velocity[..., 3:], d)  # the target's point at the tip origin
+    skew = hat(d)
+    m = mass[..., None, None]
+    top = jnp.concatenate([m * jnp.eye(3, dtype=dtype), -m * skew], axis=-1)
+    bottom = jnp.concatenate([m * skew, inertia - m * skew @ skew], axis=-1)
+    return jnp.concatenate([top, bottom], axis=-2), jnp.concatenate([v_origin, velocity[..., 3:]], axis=-1)
+
+
+@functools.partial(jax.jit, static_argnames=("joints",))
+def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, joints: str = "free"):
+    """``(qd_after (..., n), base_after (..., 6), impulse (..., 6))``: a rigid, perfectly plastic
+    grasp of a target by the tip frame (afterwards the target moves with it).
+
+    With M_t the target's spatial inertia at the tip origin, t_t its twist there and J the tip
+    map, momentum balance of the robot (H dnu = J^T F) and of the target (M_t (J nu+ - t_t) = -F)
+    give (H + J^T M_t J) nu+ = H nu- + J^T M_t t_t; with the joints locked only the bus rows
+    (qd unchanged, impulsive joint torques unknown). Yoshida's G enters as
+    F = -(1 + M_t G)^-1 M_t (J nu- - t_t) in the free case.
+
+    Args:
+        target: a mapping (or small pytree) with ``mass`` (kg), ``inertia`` (3x3 about its
+            centroid, inertial axes), ``offset`` (3,) (its centroid minus the tip frame's
+            origin, inertial axes) and ``velocity`` (6,) [v of its centroid; w], inertial
+            axes. Planar robots: velocity [vx, vy, w], offset (2,) or (3,), inertia Izz.
+        momentum: the robot's own system momentum before the grasp, [P; L about its centroid].
+        tip: which tip of a tree grasps.
+        joints: ``"free"`` (no impulsive joint torque) or ``"locked"`` (joint rates unchanged).
+
+    Returns:
+        the joint rates after; [v of the bus centroid; w of the bus] after, INERTIAL axes; the
+        impulse the target applies to the tip frame [linear; angular about the tip origin],
+        inertial axes (planar robots: the in-plane parts).
+    """
+    check_joints(joints)
+    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
+    qd = system.arrays[0]
+    H = system_mass_matrix(system.tree, system.q)
+    nu = full_velocity(system, qd, None if momentum is None else system.arrays[1])
+    J = system.tip_maps()
+    if J.ndim == system.R.ndim + 1:  # a tree's tips: (batch, k, 6, 6 + n)
+        J = jnp.take(J, tip, axis=-3)
+    M_t, t_t = _target_in_bus_axes(system, target, qd.dtype)
+    coupled = jnp.swapaxes(J, -1, -2) @ M_t
+    if joints == "free":
+        after = solve(H + coupled @ J, apply(H, nu) + apply(coupled, t_t))
+    else:
+        J_S = J[..., :6]
+        bus = solve(
+            H[..., :6, :6] + coupled[..., :6, :] @ J_S,
+            apply(H[..., :6, :6], nu[..., :6]) + apply(coupled[..., :6, :], t_t - apply(J[..., 6:], qd)),
+        )
+        after = jnp.concatenate([bus, qd], axis=-1)
+    impulse = -apply(M_t, apply(J, after) - t_t)
+    return after[..., 6:], system.reduce(system.rotate(after[..., :6])), system.reduce(system.rotate(impulse))
