@@ -14,7 +14,7 @@ import jax.numpy as jnp
 
 from .._core.groups import hat
 from ..models.dynamics import system_mass_matrix
-from .state import DynamicState, apply, full_velocity, momentum_array, solve, solve_columns
+from .state import DynamicState, apply, full_velocity, solve, solve_columns
 
 __all__ = ["JOINT_MODES", "check_joints", "impulse_response", "tip_inverse_inertia"]
 
@@ -144,13 +144,11 @@ def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, join
         inertial axes (planar robots: the in-plane parts).
     """
     check_joints(joints)
-    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
-    qd = system.arrays[0]
-    H = system_mass_matrix(system.tree, system.q)
-    nu = full_velocity(system, qd, None if momentum is None else system.arrays[1])
-    J = system.tip_maps()
-    if J.ndim == system.R.ndim + 1:  # a tree's tips: (batch, k, 6, 6 + n)
-        J = jnp.take(J, tip, axis=-3)
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
+    qd = system.rates("qd")
+    H = system.locked(system_mass_matrix(system.tree, system.q))
+    nu = full_velocity(system, qd)
+    J = _chosen_tip(system, system.tip_maps(), tip)
     M_t, t_t = _target_in_bus_axes(system, target, qd.dtype)
     coupled = jnp.swapaxes(J, -1, -2) @ M_t
     if joints == "free":

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 from .._core.groups import vee
 from ..models.dynamics import system_mass_matrix
 from .equations import held_attitude_velocity
-from .state import DynamicState, apply, momentum_array
+from .state import DynamicState, apply
 
 __all__ = ["wheel_momentum"]
 
@@ -31,15 +31,13 @@ def wheel_momentum(robot, q: jax.Array, qd: jax.Array, base_rotation=None, momen
     not to turn while the arm is at (q, qd), the bus translating with the momentum's P (planar
     ``(...,)``, about z). The system momentum ``momentum`` [P; L] is in inertial axes (zero
     when ``None``)."""
-    system = DynamicState(robot, q, base_rotation, (qd, 1), *momentum_array(momentum))
-    qd = system.arrays[0]
-    full = None if momentum is None else system.embed(system.arrays[1])
+    system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
+    qd = system.rates("qd")
     H = system_mass_matrix(system.tree, system.q)
-    nu = jnp.concatenate([held_attitude_velocity(system, H, qd, full), qd], axis=-1)
+    nu = jnp.concatenate([held_attitude_velocity(system, H, qd), qd], axis=-1)
     p = apply(H, nu)  # [P; L about the bus centroid; joint momenta], bus axes
     offset = vee(H[..., 3:6, 0:3]) / H[..., 0, 0, None]  # system centroid about the bus centroid
     bodies = p[..., 3:6] - jnp.cross(offset, p[..., :3])
-    total = jnp.zeros_like(bodies) if full is None else apply(jnp.swapaxes(system.R, -1, -2), full[..., 3:])
-    h = total - bodies
+    h = system.momentum[..., 3:] - bodies  # the system's L, bus axes, less the bodies'
     axes = system.family.attitude.angular_axes  # the plane's normal alone for a planar robot
     return h[..., axes[0]] if len(axes) == 1 else h
