@@ -26,6 +26,7 @@ from .dynamics import (
     arm_inertia as arm_inertia,
     base_velocity as base_velocity,
     bias_forces as bias_forces,
+    bus_rate_jump as bus_rate_jump,
     capture as capture,
     forward_dynamics as forward_dynamics,
     free_motion as free_motion,
@@ -36,6 +37,7 @@ from .dynamics import (
     reduced_bias as reduced_bias,
     tip_inverse_inertia as tip_inverse_inertia,
     tip_velocity as tip_velocity,
+    virtual_mass as virtual_mass,
     wheel_momentum as wheel_momentum,
 )
 from .inertia import (
@@ -97,6 +99,7 @@ _LAZY = {
     "TimedTask": "motion",
     "task_peaks": "motion",
     "task_states": "motion",
+    "wheel_peaks": "motion",
     "plan_reorientation": "planning",
     "plan_reach": "planning",
     "loop_settings": "planning",
@@ -118,6 +121,7 @@ __all__ = [
     "arm_inertia",
     "base_velocity",
     "bias_forces",
+    "bus_rate_jump",
     "capture",
     "forward_dynamics",
     "free_motion",
@@ -128,6 +132,7 @@ __all__ = [
     "reduced_bias",
     "tip_inverse_inertia",
     "tip_velocity",
+    "virtual_mass",
     "wheel_momentum",
     "arm_jacobian",
     "base_jacobian",
@@ -185,6 +190,7 @@ if TYPE_CHECKING:  # the same names, visible to type checkers and the API refere
         straight_tip_path_history as straight_tip_path_history,
         task_peaks as task_peaks,
         task_states as task_states,
+        wheel_peaks as wheel_peaks,
     )
     from .paper import (
         maximum_reachable_radii as maximum_reachable_radii,

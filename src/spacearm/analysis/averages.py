@@ -11,7 +11,10 @@ box (`joint_box`: limits where given, one turn for a continuous joint):
   C = -I_S^-1 I_M, rad per rad (Dubowsky & Torres 1991's disturbance, as a scalar);
 - `average_dynamic_manipulability`: w_d = sqrt det(J*_v (H*^T H*)^-1 J*_v^T),
   (m / (kg m^2))^3 for revolute joints: tip acceleration per joint torque (Yoshikawa
-  1985 applied to J*, with H* the arm inertia at zero momentum; spatial robots only).
+  1985 applied to J*, with H* the arm inertia at zero momentum; spatial robots only);
+- the impact metrics of `spacearm.analysis.impacts` (every family, given an `ImpactSetup`):
+  the virtual mass of the tip along a direction, the bus angular-rate jump per unit tip
+  impulse, and the bus rate after capturing a reference target.
 
 Why Frobenius for the disturbance: ||C_w||_F^2 = sum of the squared singular values =
 n times the mean of ||C_w u||^2 over unit joint-rate directions u, so it is the RMS
@@ -63,6 +66,7 @@ from .._core.linalg import gram_root_determinant, symmetric_eigenvalues
 from .._core.schema import did_you_mean
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import family_of
+from .impacts import IMPACT_METRICS, ImpactSetup, impact_metric
 from .joint_box import box_postures, check_joint_box, digital_shifts, sobol_direction_numbers, sobol_points
 
 __all__ = [
@@ -181,7 +185,7 @@ _FROM_QUANTITIES = {
 
 # Metrics of one tip: on a robot with several tips (J* of shape (..., k, 6, n)) they are
 # named with the tip's index, ``manipulability[1]``, and read that tip's rows of J*.
-PER_TIP_METRICS = ("manipulability", "conditioning", "dynamic_manipulability")
+PER_TIP_METRICS = ("manipulability", "conditioning", "dynamic_manipulability", *IMPACT_METRICS)
 _TIP_METRIC = re.compile(r"^(\w+)\[(\d+)\]$")
 
 
@@ -245,18 +249,27 @@ def _tip_rows(quantities: dict, tip: int | None) -> dict:
     return {**quantities, "jacobian": quantities["jacobian"][..., tip, :, :]}
 
 
-def posture_metrics(robot, posture: jax.Array, metrics: tuple[str, ...]) -> jax.Array:
-    """``(..., k)`` the metrics named in ``metrics`` (of `METRICS`, per-tip ones with their
-    tip, ``manipulability[1]``) at postures ``(..., p)``.
+def posture_metrics(
+    robot, posture: jax.Array, metrics: tuple[str, ...], impact: ImpactSetup | None = None
+) -> jax.Array:
+    """``(..., k)`` the metrics named in ``metrics`` (of `METRICS` or `IMPACT_METRICS`, per-tip
+    ones with their tip, ``manipulability[1]``) at postures ``(..., p)``.
 
-    Every metric is read off one `posture_quantities` call: J*, C and H* are computed
-    once per posture however many metrics (and tips) use them.
+    Every kinematic metric is read off one `posture_quantities` call: J*, C and H* are
+    computed once per posture however many metrics (and tips) use them. The impact metrics
+    read ``impact`` (`ImpactSetup`).
     """
     family = family_of(robot)
     parsed = [split_metric(name) for name in metrics]
-    needs = tuple(dict.fromkeys(need for name, _ in parsed for need in _NEEDS[name]))
-    quantities = posture_quantities(robot, posture, needs)
-    return jnp.stack([_FROM_QUANTITIES[name](family, _tip_rows(quantities, tip)) for name, tip in parsed], axis=-1)
+    needs = tuple(dict.fromkeys(need for name, _ in parsed if name in _NEEDS for need in _NEEDS[name]))
+    quantities = posture_quantities(robot, posture, needs) if needs else {}
+    values = [
+        impact_metric(name, robot, posture, impact, tip)
+        if name in IMPACT_METRICS
+        else _FROM_QUANTITIES[name](family, _tip_rows(quantities, tip))
+        for name, tip in parsed
+    ]
+    return jnp.stack(values, axis=-1)
 
 
 def manipulability_metric(robot, posture):
@@ -285,6 +298,7 @@ METRICS = {
     "base_disturbance": base_disturbance_metric,
     "dynamic_manipulability": dynamic_manipulability_metric,
 }
+_KNOWN = (*METRICS, *IMPACT_METRICS)  # every name `joint_averages` takes
 
 
 # The estimator ------------------------------------------------------------------------
@@ -309,12 +323,12 @@ class _Budget(NamedTuple):
     max_blocks: jax.Array  # int32, a power of two
 
 
-def _block_sums(plan: _Plan, robot, shifts, block_index):
+def _block_sums(plan: _Plan, robot, shifts, block_index, impact):
     """``(R, k)`` sums of the metrics over block ``block_index`` of each randomization."""
     n = family_of(robot).joint_count(robot)
     directions = jnp.asarray(sobol_direction_numbers(n))
     unit = sobol_points(directions, block_index * plan.block, plan.block, shifts)  # (R, B, n)
-    values = posture_metrics(robot, box_postures(robot, unit), plan.metrics)  # (R, B, k)
+    values = posture_metrics(robot, box_postures(robot, unit), plan.metrics, impact)  # (R, B, k)
     return jnp.sum(values, axis=-2)
 
 
@@ -329,7 +343,7 @@ def _is_power_of_two(k):
     return (k & (k - 1)) == 0
 
 
-def _forward(plan: _Plan, robot, shifts, budget: _Budget):
+def _forward(plan: _Plan, robot, shifts, budget: _Budget, impact):
     dtype = jnp.result_type(float)
 
     def cond(state):
@@ -338,7 +352,7 @@ def _forward(plan: _Plan, robot, shifts, budget: _Budget):
 
     def body(state):
         blocks, sums, _ = state
-        sums = sums + _block_sums(plan, robot, shifts, blocks)
+        sums = sums + _block_sums(plan, robot, shifts, blocks, impact)
         blocks = blocks + 1
         value, error = _summary(plan, sums, blocks)
         checkpoint = _is_power_of_two(blocks) & (blocks >= budget.min_blocks)
@@ -353,67 +367,70 @@ def _forward(plan: _Plan, robot, shifts, budget: _Budget):
 
 
 @functools.partial(jax.custom_vjp, nondiff_argnums=(0,))
-def _estimate(plan: _Plan, robot, shifts, budget: _Budget):
-    return _forward(plan, robot, shifts, budget)
+def _estimate(plan: _Plan, robot, shifts, budget: _Budget, impact):
+    return _forward(plan, robot, shifts, budget, impact)
 
 
-def _estimate_fwd(plan: _Plan, robot, shifts, budget: _Budget):
-    value, error, blocks = _forward(plan, robot, shifts, budget)
-    return (value, error, blocks), (robot, shifts, blocks)
+def _estimate_fwd(plan: _Plan, robot, shifts, budget: _Budget, impact):
+    value, error, blocks = _forward(plan, robot, shifts, budget, impact)
+    return (value, error, blocks), (robot, shifts, blocks, impact)
 
 
 def _estimate_bwd(plan: _Plan, residuals, cotangents):
-    robot, shifts, blocks = residuals
+    robot, shifts, blocks, impact = residuals
     g = cotangents[0]  # (k,); the error estimates and the block count carry no gradient
     scale = g / (plan.randomizations * blocks * plan.block).astype(g.dtype)
 
     def body(state):
         k, accumulated = state
-        _, pullback = jax.vjp(lambda r: jnp.sum(_block_sums(plan, r, shifts, k) * scale), robot)
+        _, pullback = jax.vjp(lambda r: jnp.sum(_block_sums(plan, r, shifts, k, impact) * scale), robot)
         (grad,) = pullback(jnp.ones((), scale.dtype))
         return k + 1, jax.tree_util.tree_map(jnp.add, accumulated, grad)
 
     zeros = jax.tree_util.tree_map(jnp.zeros_like, robot)
     _, gradient = jax.lax.while_loop(lambda s: s[0] < blocks, body, (jnp.asarray(0, jnp.int32), zeros))
-    return gradient, None, None  # the shifts are integers, the budget carries no gradient
+    # The shifts are integers; the budget and the impact settings carry no gradient.
+    return gradient, None, None, jax.tree_util.tree_map(jnp.zeros_like, impact)
 
 
 _estimate.defvjp(_estimate_fwd, _estimate_bwd)
 
 
-def _fixed_rule(plan: _Plan, robot, shifts):
+def _fixed_rule(plan: _Plan, robot, shifts, impact):
     """A fixed QMC rule: one pass over all R x points postures and plain means (ordinary AD)."""
     n = family_of(robot).joint_count(robot)
     unit = sobol_points(jnp.asarray(sobol_direction_numbers(n)), 0, plan.points, shifts)  # (R, P, n)
-    values = posture_metrics(robot, box_postures(robot, unit), plan.metrics)  # (R, P, k)
+    values = posture_metrics(robot, box_postures(robot, unit), plan.metrics, impact)  # (R, P, k)
     means = jnp.mean(values, axis=-2)
     value = jnp.mean(means, axis=0)
     error = jnp.std(means, axis=0, ddof=1) / jnp.sqrt(plan.randomizations)
     return value, error, jnp.asarray(plan.points // plan.block, jnp.int32)
 
 
-def _estimate_one(plan: _Plan, robot, shifts, budget: _Budget):
+def _estimate_one(plan: _Plan, robot, shifts, budget: _Budget, impact):
     if plan.points is not None:
-        value, error, blocks = _fixed_rule(plan, robot, shifts)
+        value, error, blocks = _fixed_rule(plan, robot, shifts, impact)
     else:
-        value, error, blocks = _estimate(plan, robot, shifts, budget)
+        value, error, blocks = _estimate(plan, robot, shifts, budget, impact)
     samples = jnp.broadcast_to(blocks * plan.block * plan.randomizations, value.shape)
     return JointAverage(value, error, samples)
 
 
 @functools.partial(jax.jit, static_argnames=("plan", "designs_per_chunk"))
-def _estimate_batched(robot, shifts, budget: _Budget, plan: _Plan, designs_per_chunk: int):
+def _estimate_batched(robot, shifts, budget: _Budget, impact, plan: _Plan, designs_per_chunk: int):
     """One `JointAverage` per metric of ``plan`` (split inside the program: no eager slicing)."""
     batch = robot.batch_shape
     if not batch:
-        out = _estimate_one(plan, robot, shifts, budget)
+        out = _estimate_one(plan, robot, shifts, budget, impact)
     else:
         size = 1
         for s in batch:
             size *= s
         flat = jax.tree_util.tree_map(lambda x: jnp.reshape(jnp.asarray(x), (size, *jnp.shape(x)[len(batch) :])), robot)
         out = jax.lax.map(
-            lambda design: _estimate_one(plan, design, shifts, budget), flat, batch_size=min(designs_per_chunk, size)
+            lambda design: _estimate_one(plan, design, shifts, budget, impact),
+            flat,
+            batch_size=min(designs_per_chunk, size),
         )
         out = jax.tree_util.tree_map(lambda y: jnp.reshape(y, batch + y.shape[1:]), out)
     return tuple(
@@ -432,6 +449,7 @@ def joint_averages(
     max_samples: int = 2**24,
     seed: int = 0,
     designs_per_chunk: int = 8,
+    impact: ImpactSetup | None = None,
 ) -> dict[str, JointAverage]:
     """Means of several posture metrics over the joint box from ONE set of postures.
 
@@ -450,18 +468,22 @@ def joint_averages(
         rtol: target relative standard error, one for all or one per metric.
         randomizations, block, min_samples, max_samples, seed, designs_per_chunk: as
             in `joint_average`.
+        impact: the settings of the impact metrics (`ImpactSetup`: direction, joints,
+            target); required when one is listed (traced: a new target does not recompile).
 
     Returns:
         ``{metric: JointAverage}`` with ``(...)`` fields (the batch shape).
     """
     metrics = tuple(metrics)
     if not metrics or len(set(metrics)) != len(metrics):
-        raise ConfigError(f"metrics: a non-empty list of distinct names from {', '.join(METRICS)} is required")
+        raise ConfigError(f"metrics: a non-empty list of distinct names from {', '.join(_KNOWN)} is required")
     count = tip_count(robot)
     for metric in metrics:
         name, tip = split_metric(metric)
-        if name not in METRICS:
-            raise ConfigError(f"metric: must be one of {', '.join(METRICS)}, got {metric!r}")
+        if name not in _KNOWN:
+            raise ConfigError(f"metric: must be one of {', '.join(_KNOWN)}, got {metric!r}")
+        if name in IMPACT_METRICS and impact is None:
+            raise ConfigError(f"metric: {name} needs its impact settings: pass impact=ImpactSetup(...)")
         if (tip is None) != (count is None or name not in PER_TIP_METRICS) or (tip is not None and tip >= count):
             tips = f"one of {name}[0] .. {name}[{count - 1}]" if count else name
             raise ConfigError(f"metric: {metric!r} for a robot with {count or 1} tip(s): use {tips}")
@@ -487,7 +509,7 @@ def joint_averages(
         np.asarray(max_blocks, np.int32),
     )
     shifts = digital_shifts(seed, randomizations, family_of(robot).joint_count(robot))
-    out = _estimate_batched(robot, shifts, budget, plan, designs_per_chunk)
+    out = _estimate_batched(robot, shifts, budget, impact, plan, designs_per_chunk)
     return dict(zip(metrics, out, strict=True))
 
 
@@ -502,6 +524,7 @@ def joint_average(
     max_samples: int = 2**24,
     seed: int = 0,
     designs_per_chunk: int = 8,
+    impact: ImpactSetup | None = None,
 ) -> JointAverage:
     """The mean of a posture metric over the joint box, to a relative standard error ``rtol``.
 
@@ -509,7 +532,8 @@ def joint_average(
         robot: a design of either family, or a batch of designs (leading axes on every
             leaf; each design stops at its own sample count).
         metric: one of `METRICS` ("manipulability", "conditioning",
-            "base_disturbance", "dynamic_manipulability").
+            "base_disturbance", "dynamic_manipulability") or of `IMPACT_METRICS`
+            ("virtual_mass", "bus_rate_jump", "capture_bus_rate", with ``impact``).
         rtol: target relative standard error (one sigma) of the mean (traced: a new
             value does not recompile).
         randomizations: R independent digital shifts (>= 2; the error estimate has
@@ -520,6 +544,7 @@ def joint_average(
             Equal bounds give a fixed rule (one pass, no loop).
         seed: seed of the digital shifts (a new seed does not recompile).
         designs_per_chunk: designs evaluated together under ``lax.map`` for batches.
+        impact: the settings of an impact metric (`spacearm.analysis.impacts.ImpactSetup`).
 
     Returns:
         `JointAverage` with ``(...)`` fields. ``value`` is differentiable in the
@@ -535,6 +560,7 @@ def joint_average(
         max_samples=max_samples,
         seed=seed,
         designs_per_chunk=designs_per_chunk,
+        impact=impact,
     )[metric]
 
 

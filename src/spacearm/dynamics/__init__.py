@@ -39,9 +39,11 @@ from .equations import (
 )
 from .impacts import (
     JOINT_MODES as JOINT_MODES,
+    bus_rate_jump as bus_rate_jump,
     capture as capture,
     impulse_response as impulse_response,
     tip_inverse_inertia as tip_inverse_inertia,
+    virtual_mass as virtual_mass,
 )
 from .state import DynamicState as DynamicState
 from .velocities import base_velocity as base_velocity, tip_velocity as tip_velocity
@@ -54,6 +56,7 @@ __all__ = [
     "arm_inertia",
     "base_velocity",
     "bias_forces",
+    "bus_rate_jump",
     "capture",
     "forward_dynamics",
     "free_motion",
@@ -64,5 +67,6 @@ __all__ = [
     "reduced_bias",
     "tip_inverse_inertia",
     "tip_velocity",
+    "virtual_mass",
     "wheel_momentum",
 ]

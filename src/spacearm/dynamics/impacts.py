@@ -3,6 +3,13 @@
 G = J H^-1 J^T (J = [J_S, J_M] the tip map, H the system mass matrix) is the tip's twist jump
 per tip impulse [linear; angular about the tip origin] (Yoshida 1994); with the joints locked
 the robot is one rigid body and G = J_S H_b^-1 J_S^T.
+
+Two design quantities read G along a unit direction u of a linear tip impulse [u; 0]:
+the virtual mass 1 / (u^T G_v u) (G_v the linear block of G), the mass a target hitting the
+hand along u meets (Yoshida & Nenchev 1995: the impulse of a plastic impact is
+m_t m_v / (m_t + m_v) times the approach speed for a point target), and the bus angular-rate
+jump per unit impulse ||dw_bus|| (rad/s per N s), the disturbance the same impact leaves on
+the bus's attitude.
 """
 
 from __future__ import annotations
@@ -11,12 +18,22 @@ import functools
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._core.groups import hat
 from ..models.dynamics import system_mass_matrix
+from ..models.family import family_of
 from .state import DynamicState, apply, full_velocity, solve, solve_columns
 
-__all__ = ["JOINT_MODES", "check_joints", "impulse_response", "tip_inverse_inertia"]
+__all__ = [
+    "JOINT_MODES",
+    "bus_rate_jump",
+    "capture",
+    "check_joints",
+    "impulse_response",
+    "tip_inverse_inertia",
+    "virtual_mass",
+]
 
 JOINT_MODES = ("free", "locked")
 
@@ -90,6 +107,60 @@ def _impulse_response(robot, q, impulse, base_rotation, tip, joints: str):
     return jump[..., 6:], system.reduce(system.rotate(jump[..., :6]))
 
 
+# Virtual mass and bus-rate jump ------------------------------------------------------
+
+
+def _impulse_along(robot, direction) -> jax.Array:
+    """The unit linear impulse [u; 0] along ``direction`` in the family's kept components
+    (planar [ux, uy, 0] from a 2-vector; spatial [u; 0, 0, 0] from a 3-vector)."""
+    keep = np.asarray(family_of(robot).twist_axes)
+    linear = int(np.sum(keep < 3))
+    u = jnp.asarray(direction)
+    if u.shape[-1:] != (linear,):
+        raise ValueError(f"direction: needs {linear} components (the tip's linear axes), got shape {u.shape}")
+    if not jnp.issubdtype(u.dtype, jnp.floating):
+        u = u.astype(float)
+    u = u / jnp.linalg.norm(u, axis=-1, keepdims=True)
+    return jnp.concatenate([u, jnp.zeros(u.shape[:-1] + (len(keep) - linear,), u.dtype)], axis=-1)
+
+
+@functools.partial(jax.jit, static_argnames=("joints",))
+def _unit_response(robot, q, impulse, base_rotation, tip, joints: str):
+    """``(u . tip jump, bus angular-rate jump)`` for the unit impulse ``impulse`` at the tip."""
+    system = DynamicState(robot, q, base_rotation, twists={"impulse": impulse})
+    J, X = _response_map(system, joints)
+    X, J = _chosen_tip(system, X, tip), _chosen_tip(system, J, tip)
+    jump = apply(X, system.unrotate(system.twists["impulse"]))
+    along = jnp.sum(system.rotate(apply(J, jump)) * system.twists["impulse"], axis=-1)
+    angular = system.reduce(system.rotate(jump[..., :6]))[..., int(np.sum(system.keep < 3)) :]
+    return along, jnp.sqrt(jnp.sum(angular**2, axis=-1))
+
+
+def _checked_response(robot, q, direction, base_rotation, tip, joints):
+    check_joints(joints)
+    impulse = _impulse_along(robot, direction)
+    if not isinstance(tip, jax.core.Tracer):
+        _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
+    return _unit_response(robot, q, impulse, base_rotation, tip, joints)
+
+
+def virtual_mass(robot, q, direction, base_rotation=None, tip=0, joints: str = "free") -> jax.Array:
+    """``(...)`` kg: the virtual mass 1 / (u^T G_v u) of the tip along the unit ``direction`` u
+    (inertial axes, normalized here; planar robots a 2-vector in the plane), G_v the linear
+    block of `tip_inverse_inertia`: the mass a point target striking the hand along u meets.
+    ``joints="locked"``: the whole robot as one rigid body."""
+    along, _ = _checked_response(robot, q, direction, base_rotation, tip, joints)
+    return 1.0 / along
+
+
+def bus_rate_jump(robot, q, direction, base_rotation=None, tip=0, joints: str = "free") -> jax.Array:
+    """``(...)`` rad/s per N s: the norm of the bus angular-velocity jump under a unit linear
+    impulse at the tip along ``direction`` (inertial axes, normalized; planar a 2-vector,
+    the jump |dw_z|): how much one newton-second of impact at the hand turns the bus."""
+    _, jump = _checked_response(robot, q, direction, base_rotation, tip, joints)
+    return jump
+
+
 # Capture ---------------------------------------------------------------------------------
 
 
@@ -113,7 +184,8 @@ def _target_in_bus_axes(system: DynamicState, target, dtype):
     v_origin = velocity[..., :3] - jnp.cross(velocity[..., 3:], d)  # the target's point at the tip origin
     skew = hat(d)
     m = mass[..., None, None]
-    top = jnp.concatenate([m * jnp.eye(3, dtype=dtype), -m * skew], axis=-1)
+    eye = jnp.broadcast_to(jnp.eye(3, dtype=dtype), skew.shape)  # the batch of the postures
+    top = jnp.concatenate([m * eye, -m * skew], axis=-1)
     bottom = jnp.concatenate([m * skew, inertia - m * skew @ skew], axis=-1)
     return jnp.concatenate([top, bottom], axis=-2), jnp.concatenate([v_origin, velocity[..., 3:]], axis=-1)
 

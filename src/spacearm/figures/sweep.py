@@ -48,6 +48,11 @@ COLUMN_LABELS: dict[str, str] = {
     "peak_joint_torque_Nm": "peak joint torque along the task, N m",
     "peak_held_force_N": "peak force holding the bus along the task, N",
     "peak_held_torque_Nm": "peak torque holding the bus along the task, N m",
+    "peak_wheel_momentum_Nms": "peak reaction-wheel momentum along the task, N m s",
+    "peak_wheel_torque_Nm": "peak reaction-wheel torque along the task, N m",
+    "virtual_mass_kg": "mean virtual mass of the tip, kg",
+    "bus_rate_jump_radps_per_Ns": "mean bus rate jump per tip impulse, rad/s per N s",
+    "capture_bus_rate_radps": "mean bus rate after the reference capture, rad/s",
 }
 
 

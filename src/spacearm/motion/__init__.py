@@ -32,7 +32,12 @@ from .straight_paths import (
     straight_tip_path as straight_tip_path,
     straight_tip_path_history as straight_tip_path_history,
 )
-from .tasks import TimedTask as TimedTask, task_peaks as task_peaks, task_states as task_states
+from .tasks import (
+    TimedTask as TimedTask,
+    task_peaks as task_peaks,
+    task_states as task_states,
+    wheel_peaks as wheel_peaks,
+)
 
 __all__ = [
     "REASON_JOINT_LIMIT",
@@ -60,4 +65,5 @@ __all__ = [
     "straight_tip_path_history",
     "task_peaks",
     "task_states",
+    "wheel_peaks",
 ]

@@ -19,6 +19,11 @@ about it, bus axes; planar robots [fx, fy, m]). At zero momentum these quantitie
 depend on the bus attitude (every one is in bus axes), so a task needs no attitude: the
 attitude the bus drifts to along the task changes none of them.
 
+`wheel_peaks` takes the same samples through `spacearm.dynamics.wheel_momentum` and the
+``"attitude"`` inverse dynamics: the largest norm of the momentum h that reaction wheels must
+hold for the bus not to turn (bus axes, N m s) and of the torque they apply to the bus
+(-dh/dt, N m), what sizes a wheel assembly for the task.
+
 A peak over samples is a maximum of smooth functions of the design: it is differentiable
 wherever one sample attains it, which is almost everywhere, and its gradient there is the
 gradient of that sample's value (where several samples tie, JAX splits the cotangent among
@@ -42,7 +47,7 @@ import numpy as np
 
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, number
-from ..dynamics import BASE_MODES, inverse_dynamics
+from ..dynamics import BASE_MODES, inverse_dynamics, wheel_momentum
 from ..models.family import family_of
 
 __all__ = [
@@ -50,11 +55,13 @@ __all__ = [
     "SEGMENT_SAMPLES",
     "TaskPeaks",
     "TimedTask",
+    "WheelPeaks",
     "peak_norm",
     "quintic_time_law",
     "task_from_mapping",
     "task_peaks",
     "task_states",
+    "wheel_peaks",
 ]
 
 SEGMENT_SAMPLES = 101  # samples per segment, both ends included
@@ -243,6 +250,14 @@ def _peaks(tau: jax.Array, wrench: jax.Array, linear: tuple[bool, ...]) -> TaskP
     )
 
 
+def _task_postures(family, task: TimedTask, samples: int):
+    """``(q, qd, qdd)`` of the task's samples, q as the family writes a posture (a planar bus
+    angle 0 first: at zero momentum nothing here depends on it)."""
+    _, q, qd, qdd = task_states(task.waypoints, task.duration, samples)
+    posture = jnp.concatenate([jnp.zeros(q.shape[:-1] + (family.posture_offset,), q.dtype), q], axis=-1)
+    return posture, qd, qdd
+
+
 def task_peaks(robot, task: TimedTask, *, base: str = "free", samples: int = SEGMENT_SAMPLES) -> TaskPeaks:
     """The peak joint torques and the peak held wrench of one design along a timed task.
 
@@ -267,10 +282,42 @@ def task_peaks(robot, task: TimedTask, *, base: str = "free", samples: int = SEG
     if base not in BASE_MODES:
         raise ValueError(f"base: one of {', '.join(BASE_MODES)}, got {base!r}")
     family = family_of(robot)
-    _, q, qd, qdd = task_states(task.waypoints, task.duration, samples)
-    # The posture the family takes: the planar bus angle first (0: nothing here depends on it).
-    posture = jnp.concatenate([jnp.zeros(q.shape[:-1] + (family.posture_offset,), q.dtype), q], axis=-1)
+    posture, qd, qdd = _task_postures(family, task, samples)
     tau, wrench = inverse_dynamics(robot, posture, qd, qdd, base="held")
     if base != "held":
         tau, _ = inverse_dynamics(robot, posture, qd, qdd, base=base)
     return _peaks(tau, wrench, tuple(bool(axis < 3) for axis in family.twist_axes))  # [x, y, z]: the force
+
+
+class WheelPeaks(NamedTuple):
+    """The reaction-wheel effort a timed task costs (`wheel_peaks`).
+
+    Attributes:
+        momentum: ``()`` the largest norm of the wheel momentum h over the samples, N m s.
+        torque: ``()`` the largest norm of the torque the wheels apply to the bus, N m.
+    """
+
+    momentum: jax.Array
+    torque: jax.Array
+
+
+def wheel_peaks(robot, task: TimedTask, *, samples: int = SEGMENT_SAMPLES) -> WheelPeaks:
+    """The peak wheel momentum and wheel torque of one design along a timed task.
+
+    The bus attitude is held by reaction wheels alone (the bus translates freely) and the
+    task starts at rest at zero momentum. At each sample the wheels hold
+    h = `spacearm.dynamics.wheel_momentum` (q, qd) and apply the torque of the ``"attitude"``
+    wrench of `spacearm.dynamics.inverse_dynamics` (q, qd, qdd), which is -dh/dt. Planar
+    robots: both about the plane's normal. Peaks as in `task_peaks` (differentiable almost
+    everywhere).
+
+    Returns:
+        `WheelPeaks`: peak ||h||, N m s; peak wheel torque, N m.
+    """
+    family = family_of(robot)
+    posture, qd, qdd = _task_postures(family, task, samples)
+    h = wheel_momentum(robot, posture, qd)
+    _, wrench = inverse_dynamics(robot, posture, qd, qdd, base="attitude")
+    angular = np.asarray(family.twist_axes) >= 3
+    h = h if h.ndim == qd.ndim else h[..., None]  # planar: the one component about z
+    return WheelPeaks(momentum=peak_norm(h), torque=peak_norm(wrench[..., angular]))

@@ -16,12 +16,13 @@ import jax.numpy as jnp
 from .._core.errors import ConfigError
 from .._core.schema import check_keys, choice, did_you_mean, integer, is_number
 from ..analysis.averages import PER_TIP_METRICS, joint_average, joint_averages, split_metric, tip_metric
+from ..analysis.impacts import DEFAULT_DIRECTION, IMPACT_METRICS, impact_setup
 from ..analysis.joint_box import check_joint_box
 from ..analysis.workspace_search import reachable_radii, singular_radius
 from ..dynamics import BASE_MODES
 from ..kinematics import base_rate_matrix, generalized_jacobian, manipulability
 from ..models.family import Capabilities, family_of, known_families
-from ..motion.tasks import TimedTask, task_from_mapping, task_peaks
+from ..motion.tasks import TimedTask, task_from_mapping, task_peaks, wheel_peaks
 from ..paper import (
     PlanarRobot,
     attachment_condition,
@@ -242,6 +243,44 @@ def _check_average_robot(where: str, options: dict, robot) -> None:
         raise ConfigError(f"{where}: {error}") from None
 
 
+# The options of the impact averages besides those of every average: the impulse direction
+# (bus axes), the joints during the impact and, for the capture, the reference target.
+IMPACT_OPTIONS = ("direction", "joints", "target")
+
+
+def _split_options(options: dict) -> tuple[dict, dict]:
+    """``(estimator options, impact options)`` of an average's options (the tip left out)."""
+    average = {key: value for key, value in options.items() if key not in (*IMPACT_OPTIONS, "tip")}
+    return average, {key: value for key, value in options.items() if key in IMPACT_OPTIONS}
+
+
+def _check_impact(name: str):
+    allowed = ("direction", "joints", "target") if name == "capture_bus_rate" else ("direction", "joints")
+
+    def check(where: str, options: dict) -> None:
+        average, impact = _split_options(options)
+        _check_average(where, {**average, **({"tip": options["tip"]} if "tip" in options else {})})
+        check_keys(f"{where}: ", impact, allowed)
+        if name == "capture_bus_rate" and "target" not in options:
+            raise ConfigError(
+                f"{where}.target: missing; the bus rate after a capture needs the reference target "
+                "{mass: kg, inertia: [[...], ...], offset: [...], velocity: [...]}"
+            )
+
+    return check
+
+
+def _check_impact_robot(where: str, options: dict, robot) -> None:
+    _check_average_robot(where, options, robot)
+    impact_setup(where, _split_options(options)[1], robot, need_target="target" in options)
+
+
+def _impact_of(options: dict, robot):
+    """The `ImpactSetup` of an average's options (None for a kinematic average's)."""
+    impact = _split_options(options)[1]
+    return impact_setup("metrics", impact, robot, need_target="target" in impact)
+
+
 def _average_kind(name: str, options: dict, robot, where: str = "metrics") -> str:
     """The `joint_averages` metric of sweep metric ``name`` on ``robot``: a per-tip metric
     of a robot with several tips carries its tip's index (``manipulability[1]``)."""
@@ -269,9 +308,10 @@ def _joint_average(name: str):
     the number of postures it averaged."""
 
     def evaluate(robot, options):
-        settings = {key: value for key, value in options.items() if key != "tip"}
+        settings, _ = _split_options(options)
         kind = _average_kind(name, options, robot)
-        average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **settings}, designs_per_chunk=1)
+        impact = _impact_of(options, robot)
+        average = joint_average(robot, kind, **{"rtol": SWEEP_RTOL, **settings}, designs_per_chunk=1, impact=impact)
         return _average_values(name, options, average)
 
     return evaluate
@@ -340,6 +380,29 @@ _AVERAGES = {
         "mean dynamic manipulability w_d over the joint box",
     ),
 }
+_DIRECTION_TEXT = f"option direction (bus axes, default {list(DEFAULT_DIRECTION)}; planar its first two)"
+_IMPACT_AVERAGES = {
+    "virtual_mass": (
+        "virtual_mass",
+        "virtual_mass_kg",
+        f"mean virtual mass 1/(u^T G_v u) of the tip along u over the joint box (kg); {_DIRECTION_TEXT}, "
+        "joints free (default) or locked",
+    ),
+    "bus_rate_jump": (
+        "bus_rate_jump",
+        "bus_rate_jump_radps_per_Ns",
+        f"mean bus angular-rate jump per unit tip impulse along u over the joint box (rad/s per N s); "
+        f"{_DIRECTION_TEXT}, joints free (default) or locked",
+    ),
+    "capture_bus_rate": (
+        "capture_bus_rate",
+        "capture_bus_rate_radps",
+        "mean bus angular rate right after the resting robot grasps the reference target (option target: "
+        "mass, inertia, offset, velocity), over the joint box (rad/s); joints free (default) or locked",
+    ),
+}
+assert set(_IMPACT_AVERAGES) == set(IMPACT_METRICS)
+_AVERAGES.update(_IMPACT_AVERAGES)
 
 
 METRICS: dict[str, Metric] = {
@@ -410,12 +473,14 @@ METRICS["path_independent_radius"] = Metric(
 )
 for _name, (_kind, _column, _text) in _AVERAGES.items():
     _per_tip = _kind in PER_TIP_METRICS
+    _impact = _name in _IMPACT_AVERAGES
     METRICS[_name] = Metric(
         _joint_average(_name),
         functools.partial(_average_columns, _name),
-        check=_check_average,
-        check_robot=_check_average_robot,
-        offered=lambda capabilities: capabilities.joint_box_averages,
+        check=_check_impact(_name) if _impact else _check_average,
+        check_robot=_check_impact_robot if _impact else _check_average_robot,
+        # The impact quantities come from the dynamics, which serve every family.
+        offered=(lambda capabilities: True) if _impact else (lambda capabilities: capabilities.joint_box_averages),
         designs_per_step=8,
         description=_text
         + (" (of one tip: option tip, a name or an index, on a robot with several)" if _per_tip else "")
@@ -460,6 +525,22 @@ METRICS["peak_joint_torque"] = Metric(
     needs_task=True,
     description="the largest |tau_i| of any joint along the sweep's task (N m; N for a prismatic joint), "
     "at zero momentum; option base: free (default), held or attitude",
+)
+
+
+def _peak_wheel(robot, options):
+    peaks = wheel_peaks(robot, _task(options))
+    return {"peak_wheel_momentum_Nms": peaks.momentum, "peak_wheel_torque_Nm": peaks.torque}
+
+
+METRICS["peak_wheel"] = Metric(
+    _peak_wheel,
+    lambda o: ["peak_wheel_momentum_Nms", "peak_wheel_torque_Nm"],
+    check=_check_task_metric(("task",)),
+    offered=lambda capabilities: True,
+    needs_task=True,
+    description="the largest momentum (N m s) and torque (N m) reaction wheels hold and apply to keep the bus "
+    "from turning along the sweep's task (the bus free to translate), at zero momentum",
 )
 METRICS["peak_held_wrench"] = Metric(
     _peak_held_wrench,
@@ -528,9 +609,12 @@ def design_function(metrics: Sequence[MetricSpec]) -> Callable[[Any], dict]:
         values: dict = {}
         done: set = set()
         for group in groups.values():
-            options = {"rtol": SWEEP_RTOL, **{k: v for k, v in group[0].options.items() if k != "tip"}}
+            settings, _ = _split_options(group[0].options)
             kinds = tuple(_average_kind(m.name, m.options, robot) for m in group)  # several tips: one pass
-            averages = joint_averages(robot, kinds, **options, designs_per_chunk=1)
+            impact = _impact_of(group[0].options, robot)
+            averages = joint_averages(
+                robot, kinds, **{"rtol": SWEEP_RTOL, **settings}, designs_per_chunk=1, impact=impact
+            )
             for metric, kind in zip(group, kinds, strict=False):
                 values.update(_average_values(metric.name, metric.options, averages[kind]))
         for metric in metrics:
