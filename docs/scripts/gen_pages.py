@@ -275,6 +275,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.cli.optimize", "Command line", "`spacearm optimize`"),
     ("spacearm.cli.view", "Command line", "`spacearm view`"),
     ("spacearm.cli.simulate", "Command line", "`spacearm simulate`"),
+    ("spacearm.cli.capture", "Command line", "`spacearm capture`"),
 ]
 
 CLI_WIDTH = "88"  # columns of the rendered --help text

@@ -37,6 +37,7 @@ COMMANDS: tuple[tuple[str, str], ...] = (
     ("optimize", "spacearm.cli.optimize"),
     ("view", "spacearm.cli.view"),
     ("simulate", "spacearm.cli.simulate"),
+    ("capture", "spacearm.cli.capture"),
 )
 
 _FLOAT32_HELP = "compute in float32 (faster, less exact); default float64"

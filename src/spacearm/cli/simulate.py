@@ -22,16 +22,14 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .._core.errors import ConfigError, RunError
-from .._core.groups import rpy_matrix
+from .._core.errors import ConfigError
 from ..io.folders import check_output_folder, claimed_folder, replacing_folder
-from ._args import check_limits, comma_numbers
+from ._args import add_state_options, check_finite, robot_state, write_run_manifest
 
 # The files a simulate run writes; the other entries of --out are kept.
 _FILES = frozenset({"simulation.npz", "simulation.csv", "simulation.png", "simulation.html", "manifest.json"})
@@ -61,32 +59,7 @@ def register(subparsers) -> None:
         "in the robot's joint order; a first row of names is a header",
     )
     parser.add_argument("--dt", required=True, type=float, metavar="SECONDS", help="the sample interval, s")
-    parser.add_argument(
-        "--posture",
-        default=None,
-        metavar="Q1,Q2,..",
-        help="start posture, DEGREES (radians with --radians; m for prismatic joints): planar robots the bus "
-        "attitude then the joints, others the joints; default all zero (--posture=-10,20 for a negative first value)",
-    )
-    parser.add_argument(
-        "--rates", default=None, metavar="QD1,..", help="start joint rates, deg/s (rad/s with --radians); default zero"
-    )
-    parser.add_argument(
-        "--attitude-rpy",
-        dest="attitude",
-        default=None,
-        metavar="R,P,Y",
-        help="the start bus attitude as roll, pitch, yaw (URDF convention), degrees, for robots whose posture "
-        "does not hold it; default the identity",
-    )
-    parser.add_argument(
-        "--momentum",
-        default=None,
-        metavar="PX,PY,..",
-        help="the system momentum [P; L about the system centroid], inertial axes, kg m/s and kg m^2/s: six "
-        "numbers, planar robots three (Px, Py, L); default zero",
-    )
-    parser.add_argument("--radians", action="store_true", help="read --posture, --rates, --attitude-rpy in radians")
+    add_state_options(parser, "at the start")
     parser.add_argument("--substeps", type=int, default=None, help="integrator steps per interval (default 2)")
     parser.add_argument("--stop-at-limits", action="store_true", help="stop where a joint reaches its limit")
     parser.add_argument(
@@ -133,33 +106,6 @@ def _numeric(cell: str) -> bool:
     return True
 
 
-def _start(args: argparse.Namespace, robot, family):
-    """``(posture, rates, base rotation or None, momentum)`` from the options, in SI units."""
-    n = family.joint_count(robot)
-    offset = family.posture_offset
-    kinds = np.array([kind == "prismatic" for kind in family.joint_kinds(robot)])
-    prismatic = np.r_[np.zeros(offset, bool), kinds]
-    posture = np.zeros(n + offset) if args.posture is None else comma_numbers(args.posture, n + offset, "--posture")
-    rates = np.zeros(n) if args.rates is None else comma_numbers(args.rates, n, "--rates")
-    if not args.radians:
-        posture = np.where(prismatic, posture, np.radians(posture))
-        rates = np.where(kinds, rates, np.radians(rates))
-    names = family.joint_names(robot) or None
-    lower, upper = robot.joint_lower, robot.joint_upper
-    check_limits("--posture", posture[offset:], lower, upper, degrees=not args.radians, prismatic=kinds, names=names)
-    rotation = None
-    if args.attitude is not None:
-        if offset:
-            raise ConfigError(
-                "--attitude-rpy: this robot's posture holds its bus attitude; give it as the first --posture value"
-            )
-        rpy = comma_numbers(args.attitude, 3, "--attitude-rpy")
-        rotation = rpy_matrix(rpy if args.radians else np.radians(rpy))
-    axes = len(family.twist_axes)
-    momentum = np.zeros(axes) if args.momentum is None else comma_numbers(args.momentum, axes, "--momentum")
-    return posture, rates, rotation, momentum
-
-
 def _check_options(args: argparse.Namespace) -> None:
     if not (math.isfinite(args.dt) and args.dt > 0.0):
         raise ConfigError(f"--dt {args.dt:g}: expected a positive finite interval in seconds")
@@ -179,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     family = family_of(robot)
     torques = read_torques(args.torques, family.joint_count(robot))
-    start = _start(args, robot, family)
+    start = robot_state(args, robot, family)
     html = not args.no_html and view_extra_available()
     out = Path(args.out)
     check_output_folder(out)
@@ -188,11 +134,11 @@ def run(args: argparse.Namespace) -> int:
         began = time.perf_counter()
         arrays = _simulate(args, robot, family, torques, start)
         seconds = time.perf_counter() - began
-        _check_finite(arrays)
+        check_finite(arrays, "the simulation's")
         with replacing_folder(out, keep=lambda name: name not in _FILES) as staging:
             files = _write(args, robot, family, arrays, staging, html)
             config = _config(args, start, torques)
-            _write_manifest(staging, config, files, git, seconds)
+            write_run_manifest(staging, "simulate", config, files, git, seconds)
     _summary(args, family, arrays, out, files, html)
     return 0
 
@@ -241,19 +187,6 @@ def _simulate(args: argparse.Namespace, robot, family, torques: np.ndarray, star
     )
 
 
-def _check_finite(arrays: dict) -> None:
-    """RunError naming the first quantity of the run that came out non-finite (exit 1)."""
-    for name, value in arrays.items():
-        values = np.asarray(value, dtype=float)
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            where = tuple(int(i) for i in np.unravel_index(bad[0], values.shape))
-            raise RunError(
-                f"the simulation's {name} is {float(values.flat[bad[0]])} at index {where} "
-                f"({bad.size} non-finite of {values.size}); nothing was written"
-            )
-
-
 def _table(robot, family, arrays: dict) -> dict:
     """The CSV's columns: time, the attitude, joints, rates and the bus rate (SI units in the names)."""
     kinds = family.joint_kinds(robot)
@@ -298,11 +231,11 @@ def _write(args: argparse.Namespace, robot, family, arrays: dict, staging: Path,
         )
     )
     if html:
-        files.append(_replay(robot, arrays, staging / "simulation.html"))
+        files.append(write_replay(robot, arrays, staging / "simulation.html"))
     return files
 
 
-def _replay(robot, arrays: dict, path: Path) -> Path:
+def write_replay(robot, arrays: dict, path: Path) -> Path:
     """The replay page of the run, at most `_REPLAY_FRAMES` frames (the last sample kept)."""
     from ..figures.views import write_replay_view
 
@@ -342,16 +275,6 @@ def _config(args: argparse.Namespace, start, torques: np.ndarray) -> dict:
         if args.max_bus_rate is None
         else (args.max_bus_rate if args.radians else math.radians(args.max_bus_rate)),
     }
-
-
-def _write_manifest(staging: Path, config: dict, files: list[Path], git: dict, seconds: float) -> None:
-    from ..io import build_manifest, write_json
-
-    names = [path.name for path in files] + ["manifest.json"]
-    data = build_manifest(
-        config, command=sys.argv, timings={"simulate": seconds}, git=git, extra={"kind": "simulate", "files": names}
-    )
-    write_json(staging / "manifest.json", data)
 
 
 def _summary(args: argparse.Namespace, family, arrays: dict, out: Path, files: list[Path], html: bool) -> None:

@@ -43,7 +43,7 @@ __all__ = [
 ]
 
 # The commands that write result folders (a manifest's ``kind``).
-RESULT_KINDS = ("sweep", "optimize", "reach", "simulate")
+RESULT_KINDS = ("sweep", "optimize", "reach", "simulate", "capture")
 
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
@@ -88,7 +88,7 @@ def check_output_folder(out_dir: str | os.PathLike, *, label: str | None = None,
 
 def folder_owner(folder: str | os.PathLike) -> str | None:
     """Which command's results ``folder`` holds: ``"sweep"``, ``"optimize"``, ``"reach"``, ``"simulate"``,
-    or None (no folder, or no spacearm results in it).
+    ``"capture"``, or None (no folder, or no spacearm results in it).
 
     Read from the ``kind`` of its ``manifest.json`` (older manifests: a sweep's lists its
     ``n_designs``, an optimization's its ``summary.json``), else from a reach run's ``reach.npz``.
