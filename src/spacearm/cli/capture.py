@@ -217,7 +217,7 @@ def grasp(robot, family, state, target: dict, tip: int, joints: str) -> dict:
 
 
 def _split(twist_or_wrench: np.ndarray):
-    """``(linear, angular)``: planar [x, y, rz] gives ((2,), (1,)... as a scalar), spatial ((3,), (3,))."""
+    """``(linear, angular)`` of a twist or wrench: planar [x, y, rz] gives ((2,), a number), spatial ((3,), (3,))."""
     if twist_or_wrench.shape[-1] == 3:
         return twist_or_wrench[:2], twist_or_wrench[2]
     return twist_or_wrench[:3], twist_or_wrench[3:]
