@@ -178,7 +178,9 @@ def test_problem_yaml_errors_name_the_field():
     with pytest.raises(sa.ConfigError, match=r"l1_over_L.*sum below 1"):
         design.problem_from_mapping(reference_config(variables={"b0": [0.0, 3.0], "l1_over_L": [0.5, 1.0]}))
     with pytest.raises(
-        sa.ConfigError, match=r"objectives\[1\]: must be one of wbar, S_G, S_M, reach_radius, got 'area'"
+        sa.ConfigError,
+        match=r"objectives\[1\]: must be one of wbar, S_G, S_M, low_virtual_mass, low_bus_rate_jump, "
+        r"low_capture_bus_rate, reach_radius, got 'area'",
     ):
         design.problem_from_mapping(reference_config(objectives=["wbar", "area"]))
     with pytest.raises(sa.ConfigError, match=r"search.steps: must be an integer >= 1"):

@@ -15,11 +15,17 @@ theorem's: the search over the singular set runs with the design's gradient stop
 the derivative is taken at the minimizing posture, the set's motion included through its
 Lagrange multipliers.
 
+Impact objectives (every family; `IMPACT_OBJECTIVES`, joint-box averages of
+`spacearm.analysis.impacts` on the same rule, per tip on a tree): minus the mean virtual
+mass of the tip along a direction, minus the mean bus angular-rate jump per unit tip
+impulse, minus the mean bus rate after capturing the problem's reference target.
+
 Task objectives (every family; `TASK_OBJECTIVES`): minus the peak joint torque, minus the
-peak force and minus the peak torque that hold the bus at rest, along the problem's timed
-task (`spacearm.motion.tasks.task_peaks`, zero momentum). A peak is a maximum over the
-task's samples, differentiable wherever one sample attains it (almost everywhere); its
-gradient is that sample's.
+peak force and minus the peak torque that hold the bus at rest, minus the peak reaction-wheel
+momentum and torque that keep it from turning, along the problem's timed task
+(`spacearm.motion.tasks.task_peaks` and `~spacearm.motion.tasks.wheel_peaks`, zero momentum).
+A peak is a maximum over the task's samples, differentiable wherever one sample attains it
+(almost everywhere); its gradient is that sample's.
 """
 
 from __future__ import annotations
@@ -35,12 +41,13 @@ from .._core.errors import ConfigError
 from ..analysis.averages import split_metric, tip_metric
 from ..analysis.workspace_search import singular_radius
 from ..models.family import RobotFamily, family_of
-from ..motion.tasks import TimedTask, task_peaks
+from ..motion.tasks import TimedTask, task_peaks, wheel_peaks
 from ..paper import PlanarRobot, normalized_wbar, tip_coefficients
 
 __all__ = [
     "AVERAGE_OBJECTIVES",
     "DESIGN_OBJECTIVES",
+    "IMPACT_OBJECTIVES",
     "OBJECTIVES",
     "RADIUS_OBJECTIVES",
     "RADIUS_OPTIONS",
@@ -54,6 +61,7 @@ __all__ = [
     "reach_radius",
     "split_objective",
     "task_objective",
+    "task_objectives",
     "total_mass_objective",
 ]
 
@@ -66,6 +74,13 @@ AVERAGE_OBJECTIVES = {
     "low_disturbance": ("base_disturbance", -1.0),  # minus the mean ||C_w||_F, rad/rad
     "w_d_avg": ("dynamic_manipulability", 1.0),  # mean dynamic manipulability
 }
+# Joint-box averages of the impact quantities (`spacearm.analysis.impacts`), every family.
+IMPACT_OBJECTIVES = {
+    "low_virtual_mass": ("virtual_mass", -1.0),  # minus the mean virtual mass along u, kg
+    "low_bus_rate_jump": ("bus_rate_jump", -1.0),  # minus the mean bus rate jump per tip impulse, rad/s/(N s)
+    "low_capture_bus_rate": ("capture_bus_rate", -1.0),  # minus the mean bus rate after the capture, rad/s
+}
+AVERAGE_OBJECTIVES.update(IMPACT_OBJECTIVES)
 
 # Objectives of the design itself, not averaged over postures (closed forms of the design numbers).
 DESIGN_OBJECTIVES = ("low_total_mass",)  # minus the bus mass plus every arm mass, kg
@@ -78,7 +93,10 @@ TASK_OBJECTIVES = {
     "low_peak_joint_torque": "max_joint_torque",  # minus the largest |tau_i| (free bus), N m
     "low_peak_held_force": "held_force",  # minus the largest force holding the bus at rest, N
     "low_peak_held_torque": "held_torque",  # minus the largest torque holding the bus at rest, N m
+    "low_peak_wheel_momentum": "wheel_momentum",  # minus the largest reaction-wheel momentum, N m s
+    "low_peak_wheel_torque": "wheel_torque",  # minus the largest reaction-wheel torque, N m
 }
+_WHEEL_FIELDS = {"wheel_momentum": "momentum", "wheel_torque": "torque"}  # of `WheelPeaks`
 
 # The options of `reach_radius` (those of `singular_radius`) and their defaults in a design
 # problem: 4x fewer samples, half the kept postures and 80 descent steps instead of the
@@ -93,13 +111,14 @@ def objectives_for(family: RobotFamily) -> tuple[str, ...]:
     family declares (`RobotFamily.capabilities`): the paper's closed forms (`OBJECTIVES`) where it
     has the virtual manipulator's, the joint-box averages and the launch mass where it has those.
     ``reach_radius`` is listed for every family, so that asking for it where the family has no
-    one-tip search gets `objective_name`'s reason, not a guess. The task objectives
-    (`TASK_OBJECTIVES`) serve every family: the dynamics do."""
+    one-tip search gets `objective_name`'s reason, not a guess. The impact and task objectives
+    (`IMPACT_OBJECTIVES`, `TASK_OBJECTIVES`) serve every family: the dynamics do."""
     capabilities = family.capabilities
     offered = OBJECTIVES if capabilities.virtual_manipulator else ()
     if capabilities.joint_box_averages:
-        offered = (*offered, *AVERAGE_OBJECTIVES, *DESIGN_OBJECTIVES)
-    return (*offered, *RADIUS_OBJECTIVES, *TASK_OBJECTIVES)
+        kinematic = [name for name in AVERAGE_OBJECTIVES if name not in IMPACT_OBJECTIVES]
+        offered = (*offered, *kinematic, *DESIGN_OBJECTIVES)
+    return (*offered, *IMPACT_OBJECTIVES, *RADIUS_OBJECTIVES, *TASK_OBJECTIVES)
 
 
 def guaranteed_area(robot: PlanarRobot, *, clamp: bool = True) -> jax.Array:
@@ -158,12 +177,22 @@ def reach_radius(robot, **options) -> jax.Array:
     return singular_radius(robot, "generalized", **{**RADIUS_OPTIONS, **options}, polish=True)[0]
 
 
+def task_objectives(names, robot, task: TimedTask) -> dict[str, jax.Array]:
+    """``{name: ()}`` the task objectives among ``names`` (`TASK_OBJECTIVES`) of one design:
+    minus peaks along ``task``, from at most one `task_peaks` call (joint torques with the bus
+    free, the wrench holding it at rest) and one `wheel_peaks` call."""
+    fields = {name: TASK_OBJECTIVES[name] for name in names if name in TASK_OBJECTIVES}
+    efforts = task_peaks(robot, task) if any(f not in _WHEEL_FIELDS for f in fields.values()) else None
+    wheels = wheel_peaks(robot, task) if any(f in _WHEEL_FIELDS for f in fields.values()) else None
+    return {
+        name: -(getattr(wheels, _WHEEL_FIELDS[field]) if field in _WHEEL_FIELDS else getattr(efforts, field))
+        for name, field in fields.items()
+    }
+
+
 def task_objective(name: str, robot, task: TimedTask) -> jax.Array:
-    """``()`` the task objective ``name`` (`TASK_OBJECTIVES`) of one design: minus a peak along
-    ``task`` (`task_peaks`: joint torques with the bus free, the wrench holding it at rest)."""
-    field = TASK_OBJECTIVES[name]
-    peaks = task_peaks(robot, task, base="held" if field != "max_joint_torque" else "free")
-    return -getattr(peaks, field)
+    """``()`` the task objective ``name`` (`TASK_OBJECTIVES`) of one design (`task_objectives`)."""
+    return task_objectives((name,), robot, task)[name]
 
 
 _TIP_OBJECTIVE = re.compile(r"^(\w+)\[(.+)\]$")

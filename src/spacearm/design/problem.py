@@ -25,9 +25,21 @@ robots) takes its search's options from an optional ``radius:`` section
 newton_steps, seed).
 
 The task objectives (`spacearm.design.objectives.TASK_OBJECTIVES`, every family:
-``low_peak_joint_torque``, ``low_peak_held_force``, ``low_peak_held_torque``) are taken
-along the file's timed task, ``task: {waypoints: [[...], ...], duration: 4.0}`` (joints in
-rad, or ``waypoints_deg``; `spacearm.motion.tasks`).
+``low_peak_joint_torque``, ``low_peak_held_force``, ``low_peak_held_torque``,
+``low_peak_wheel_momentum``, ``low_peak_wheel_torque``) are taken along the file's timed
+task, ``task: {waypoints: [[...], ...], duration: 4.0}`` (joints in rad, or
+``waypoints_deg``; `spacearm.motion.tasks`).
+
+The impact objectives (`spacearm.design.objectives.IMPACT_OBJECTIVES`, every family:
+``low_virtual_mass``, ``low_bus_rate_jump``, ``low_capture_bus_rate``) are joint-box
+averages on the same rule as the others, set by an optional ``impact:`` section
+(`spacearm.analysis.impacts.impact_setup`)::
+
+    impact:
+      direction: [1, 0, 0]        # the tip impulse's direction, bus axes (default the bus x axis)
+      joints: free                # or locked, during the impact
+      target: {mass: 50, inertia: [[4, 0, 0], [0, 5, 0], [0, 0, 6]], offset: [0, 0, 0.3],
+               velocity: [0.05, 0, 0, 0, 0, 0.1]}   # the reference target (low_capture_bus_rate)
 
 On a robot with several arms (a tree) the variables are its fields
 (``arms.right.mount.xyz[0]``, ``links.left/forearm_link.length``;
@@ -69,14 +81,16 @@ from .._core.schema import (
     read_yaml,
 )
 from ..analysis.averages import joint_averages
+from ..analysis.impacts import ImpactSetup, impact_setup
 from ..analysis.joint_box import check_joint_box
 from ..models import load_robot
 from ..models.family import family_of
-from ..motion.tasks import TimedTask, task_from_mapping, task_peaks
+from ..motion.tasks import TimedTask, task_from_mapping
 from ..paper import PlanarRobot, check_average_options, normalized_wbar
 from ..paper.planar_parts import design_field_aliases
 from .objectives import (
     AVERAGE_OBJECTIVES,
+    IMPACT_OBJECTIVES,
     RADIUS_OBJECTIVES,
     RADIUS_OPTIONS,
     TASK_OBJECTIVES,
@@ -85,6 +99,7 @@ from .objectives import (
     objective_name,
     objectives_for,
     split_objective,
+    task_objectives,
 )
 
 __all__ = [
@@ -185,6 +200,7 @@ class DesignProblem(VariableBounds):
         samples, randomizations, seed: the fixed QMC rule of the joint-box averages.
         radius_options: options of the ``reach_radius`` search (`RADIUS_OPTIONS`), as given.
         task: the timed task of the task objectives (`TASK_OBJECTIVES`), or None.
+        impact: the settings of the impact objectives (`IMPACT_OBJECTIVES`), or None.
     """
 
     name: str
@@ -206,6 +222,7 @@ class DesignProblem(VariableBounds):
     description: str = ""
     radius_options: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     task: TimedTask | None = None
+    impact: ImpactSetup | None = None
 
     @property
     def family(self):
@@ -254,16 +271,17 @@ class DesignProblem(VariableBounds):
 
         Every joint-box average comes from one `joint_averages` call on the fixed rule
         (one chain pass per posture for all of them)."""
-        program, base, seed, task = self._program(), self.base, self.seed, self.task
-        return lambda x: _evaluate(program, base, jnp.asarray(x), seed, task)
+        program, base, seed, task, impact = self._program(), self.base, self.seed, self.task, self.impact
+        return lambda x: _evaluate(program, base, jnp.asarray(x), seed, task, impact)
 
     def batch_function(self) -> Callable[[jax.Array], jax.Array]:
         """``(B, d) -> (B, m)``, jitted once per process for every problem of the same shape:
         the base design and the seed are traced arguments, so the search, the grid and
         NSGA-II (and other problems differing only in numbers) share one program per batch size
-        (the task too is a traced argument: its waypoints' shape, not their values, is compiled)."""
-        program, base, seed, task = self._program(), self.base, self.seed, self.task
-        return lambda xs: _evaluate_batch(program, base, jnp.asarray(xs), seed, task)
+        (the task and the impact target too are traced arguments: their shapes, not their
+        values, are compiled)."""
+        program, base, seed, task, impact = self._program(), self.base, self.seed, self.task, self.impact
+        return lambda xs: _evaluate_batch(program, base, jnp.asarray(xs), seed, task, impact)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -288,17 +306,19 @@ def _design(base, fields_set: tuple[str, ...], x: jax.Array):
     return robot
 
 
-def _evaluate(program: _Program, base, x: jax.Array, seed, task: TimedTask | None = None) -> jax.Array:
+def _evaluate(
+    program: _Program, base, x: jax.Array, seed, task: TimedTask | None = None, impact: ImpactSetup | None = None
+) -> jax.Array:
     """``(m,)`` objectives of one ``(d,)`` variable vector set on ``base``; the task objectives
-    from one `task_peaks` call."""
+    from one `task_objectives` call, the joint-box averages from one `joint_averages` call."""
     robot = _design(base, program.fields, x)
     values: list[Any] = [None] * len(program.objectives)
     kinds = [average_objective(name, robot) for name in program.objectives]  # per tip: manipulability[1]
     averaged = [(i, *kind) for i, kind in enumerate(kinds) if kind is not None]
-    peaks = task_peaks(robot, task) if any(name in TASK_OBJECTIVES for name in program.objectives) else None
+    along = task_objectives(program.objectives, robot, task) if task is not None else {}
     for i, name in enumerate(program.objectives):
         if name in TASK_OBJECTIVES:
-            values[i] = -getattr(peaks, TASK_OBJECTIVES[name])
+            values[i] = along[name]
         elif kinds[i] is None:
             values[i] = objective(
                 name,
@@ -316,6 +336,7 @@ def _evaluate(program: _Program, base, x: jax.Array, seed, task: TimedTask | Non
             max_samples=program.samples,
             seed=seed,
             designs_per_chunk=1,
+            impact=impact,
         )
         for i, metric, sign in averaged:
             values[i] = sign * means[metric].value
@@ -323,8 +344,10 @@ def _evaluate(program: _Program, base, x: jax.Array, seed, task: TimedTask | Non
 
 
 @functools.partial(jax.jit, static_argnames=("program",))
-def _evaluate_batch(program: _Program, base, xs: jax.Array, seed, task: TimedTask | None = None) -> jax.Array:
-    return jax.vmap(lambda x: _evaluate(program, base, x, seed, task))(xs)
+def _evaluate_batch(
+    program: _Program, base, xs: jax.Array, seed, task: TimedTask | None = None, impact: ImpactSetup | None = None
+) -> jax.Array:
+    return jax.vmap(lambda x: _evaluate(program, base, x, seed, task, impact))(xs)
 
 
 # YAML ---------------------------------------------------------------------------------
@@ -345,6 +368,7 @@ _TOP_KEYS = {
     "hybrid",
     "radius",
     "task",
+    "impact",
 }  # hybrid: read by spacearm.design.hybrid.parse_hybrid
 _FIXED_KEYS = {"base_mass", "base_inertia", "arm_mass", "reach", "links"}
 _AVERAGE_KEYS = {"samples", "randomizations", "seed"}
@@ -451,6 +475,7 @@ def problem_from_mapping(
     with_radius = any(name in RADIUS_OBJECTIVES for name in objectives)
     radius_options = _radius_options(source, config.get("radius"), with_radius)
     task = _task(source, config.get("task"), objectives, family.joint_kinds(base))
+    impact = _impact(source, config.get("impact"), objectives, base)
     reference = _reference_point(source, config, objectives, averaged or with_radius or task is not None)
     wbar = _parse_wbar(source, config, objectives, n)
     guaranteed = choice(f"{source}: guaranteed", config.get("guaranteed", "clamped"), ("clamped", "paper"))
@@ -463,6 +488,8 @@ def problem_from_mapping(
         fixed_summary.update(radius={**RADIUS_OPTIONS, **radius_options})
     if task is not None:
         fixed_summary.update(task=task.to_mapping())
+    if impact is not None:
+        fixed_summary.update(impact=_impact_summary(impact))
     search = parse_search(source, config.get("search", {}))
     grid_points, grid_chunk, nsga2 = parse_baselines(
         source, config.get("baselines", {}), len(variables), len(objectives)
@@ -487,6 +514,7 @@ def problem_from_mapping(
         description=str(config.get("description", "")),
         radius_options=radius_options,
         task=task,
+        impact=impact,
     )
 
 
@@ -506,6 +534,29 @@ def _task(source: str, section: Any, objectives: tuple[str, ...], joint_kinds: t
             "which objectives does not list"
         )
     return task_from_mapping(source, section, joint_kinds)
+
+
+def _impact(source: str, section: Any, objectives: tuple[str, ...], base) -> ImpactSetup | None:
+    """The ``impact:`` section (`impact_setup`): the defaults when an impact objective has none,
+    refused without one; the reference target required by ``low_capture_bus_rate``."""
+    used = [name for name in objectives if split_objective(name)[0] in IMPACT_OBJECTIVES]
+    if not used:
+        if section is not None:
+            raise ConfigError(
+                f"{source}: impact: the settings of the impact objectives ({', '.join(IMPACT_OBJECTIVES)}), "
+                "which objectives does not list"
+            )
+        return None
+    capture = any(split_objective(name)[0] == "low_capture_bus_rate" for name in used)
+    return impact_setup(f"{source}: impact", section, base, need_target=capture)
+
+
+def _impact_summary(impact: ImpactSetup) -> dict:
+    """The impact settings as the run's summary writes them (lists of numbers)."""
+    summary: dict[str, Any] = {"direction": np.asarray(impact.direction).tolist(), "joints": impact.joints}
+    if impact.target is not None:
+        summary["target"] = {key: np.asarray(value).tolist() for key, value in impact.target.items()}
+    return summary
 
 
 def _base_design(source: str, config: Mapping[str, Any], base_dir) -> tuple[Any, dict, dict, str]:
