@@ -357,3 +357,10 @@ def test_pareto_run_with_a_capture_objective_reproduces_its_front(tmp_path):
     assert table.shape[0] >= 2 and np.all(nondominated_mask(table[:, 3:]))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["fixed"]["impact"]["target"]["mass"] == TARGET_FILE_MASS
+
+
+def test_a_target_no_rigid_body_could_be_is_refused():
+    """Principal moments (1, 1, 3): the largest exceeds the sum of the other two."""
+    robot = sa.load_robot(UR5)
+    with pytest.raises(ConfigError, match=r"t\.inertia: no rigid body has these principal moments"):
+        impact_setup("t", {"target": {**TARGET, "inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 3]]}}, robot, need_target=True)

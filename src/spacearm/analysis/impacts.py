@@ -88,8 +88,14 @@ def _inertia(where: str, value: Any, planar: bool) -> np.ndarray:
     matrix = np.array([_vector(f"{where}[{i}]", row, (3,)) for i, row in enumerate(value)])
     if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=1e-12 * np.max(np.abs(matrix))):
         raise ConfigError(f"{where}: must be symmetric, got {matrix.tolist()}")
-    if np.min(np.linalg.eigvalsh(matrix)) <= 0:
+    moments = np.linalg.eigvalsh(matrix)
+    if moments[0] <= 0:
         raise ConfigError(f"{where}: must be positive definite (every principal moment > 0)")
+    if moments[2] > moments[0] + moments[1] * (1 + 1e-12):
+        raise ConfigError(
+            f"{where}: no rigid body has these principal moments ({', '.join(f'{m:g}' for m in moments)}): "
+            "the largest must not exceed the sum of the other two"
+        )
     return matrix
 
 
