@@ -20,11 +20,18 @@ in-plane rows [x, y, rz] of the spatial ones (``keep``).
 
 from __future__ import annotations
 
+import os
 import xml.etree.ElementTree as ET
 
 import numpy as np
+import pytest
+import yaml
 
-from .spatial_references import pinocchio_configuration
+import spacearm as sa
+from spacearm.models.spatial import locate_package_file
+
+from .spatial_references import combined_urdf, pinocchio_configuration, random_chain_urdf
+from .tree_references import system_urdf
 
 PLANAR_KEEP = (0, 1, 5)
 SPATIAL_KEEP = (0, 1, 2, 3, 4, 5)
@@ -286,3 +293,88 @@ class MujocoSystem:
         forces = W.T @ np.asarray(data.qfrc_inverse)[self.order]  # F_ours = W^T F_mj
         out["held_tau"], out["held_wrench"] = forces[6:], forces[:6][self.keep]
         return out
+
+
+# The four systems of the dynamics tests: our robot, the URDF the references read, their names ----
+#
+# Each builder takes a folder for the files it writes and returns (robot, system URDF text,
+# the keyword arguments of `PinocchioSystem` but the URDF: bus_com, joint_names, tips[, keep]).
+
+CONFIGS = os.path.join(os.path.dirname(__file__), "..", "configs")
+UR5 = "robots/ur_description/urdf/ur5_robot.urdf"
+
+
+def _config(name):
+    with open(os.path.join(CONFIGS, name), encoding="utf-8") as handle:
+        return yaml.safe_load(handle)
+
+
+def _ur5_text():
+    try:
+        path = locate_package_file("test", "example-robot-data", UR5)
+    except Exception:
+        pytest.skip("example-robot-data is not installed")
+    with open(path, encoding="utf-8") as handle:
+        return handle.read()
+
+
+def _planar(tmp_path):
+    paper = _config("umetani1990.yaml")
+    text, names, tip = planar_urdf(paper)
+    return sa.umetani1990(), text, {"bus_com": np.zeros(3), "joint_names": names, "tips": [tip], "keep": PLANAR_KEEP}
+
+
+def _ur5(tmp_path):
+    config = _config("ur5-smallsat.yaml")
+    base, mount = config["base"], config["mount"]
+    text = combined_urdf(
+        _ur5_text(),
+        root_link="base_link",
+        base_mass=base["mass"],
+        base_com=base["com"],
+        base_inertia=base["inertia"],
+        mount_xyz=mount["xyz"],
+        mount_rpy=mount["rpy"],
+    )
+    robot = sa.load_robot(os.path.join(CONFIGS, "ur5-smallsat.yaml"))
+    return robot, text, {"bus_com": base["com"], "joint_names": list(robot.joint_names), "tips": ["tool0"]}
+
+
+def _dual_ur5(tmp_path):
+    config = _config("dual-ur5-servicer.yaml")
+    base, ur5 = config["base"], _ur5_text()
+    arms = [(arm["name"] + "_", ur5, "base_link", arm["mount"]["xyz"], arm["mount"]["rpy"]) for arm in config["arms"]]
+    text = system_urdf(base_mass=base["mass"], base_com=base["com"], base_inertia=base["inertia"], arms=arms)
+    robot = sa.load_robot(os.path.join(CONFIGS, "dual-ur5-servicer.yaml"))
+    names = [name.replace("/", "_") for name in robot.joint_names]
+    tips = [name.replace("/", "_") for name in robot.tip_names]
+    return robot, text, {"bus_com": base["com"], "joint_names": names, "tips": tips}
+
+
+RANDOM_BUS = {
+    "base_mass": 150.0,
+    "base_com": [0.12, -0.18, 0.07],
+    "base_inertia": [[21.0, 1.4, -2.1], [1.4, 17.5, 0.9], [-2.1, 0.9, 14.2]],  # principal axes rotated
+    "mount_xyz": [0.45, -0.2, 0.35],
+    "mount_rpy": [0.4, -0.6, 1.2],  # tilted
+}
+
+
+def _random7(tmp_path):
+    text, names, lock, tip = random_chain_urdf(np.random.default_rng(7), 7)
+    (tmp_path / "random7.urdf").write_text(text, encoding="utf-8")
+    bus = RANDOM_BUS
+    (tmp_path / "random7.yaml").write_text(
+        "name: random7\n"
+        f"base: {{mass: {bus['base_mass']}, com: {bus['base_com']}, inertia: {bus['base_inertia']}}}\n"
+        f"mount: {{xyz: {bus['mount_xyz']}, rpy: {bus['mount_rpy']}}}\n"
+        f"arm: {{urdf: random7.urdf, root_link: root, tip: {tip}, lock_joints: {lock}}}\n",
+        encoding="utf-8",
+    )
+    robot = sa.load_robot(tmp_path / "random7.yaml")
+    assert list(robot.joint_names) == names
+    combined = combined_urdf(text, root_link="root", lock_joints=lock, **bus)
+    return robot, combined, {"bus_com": bus["base_com"], "joint_names": names, "tips": [tip]}
+
+
+BUILDERS = {"planar": _planar, "ur5": _ur5, "dual_ur5": _dual_ur5, "random7": _random7}
