@@ -330,14 +330,8 @@ def test_capture_refuses_bad_input_naming_the_argument(arguments, message):
 
 
 PLANAR_TARGET = {"mass": 40.0, "inertia": 2.0, "offset": [0.1, 0.2], "velocity": [0.1, 0.0, 0.2]}
-MISSING_CHECK = pytest.mark.xfail(
-    strict=True,
-    raises=(pytest.fail.Exception, AssertionError, KeyError, TypeError, ValueError),
-    reason="sa.capture does not check its target's keys and shapes, nor tip (traced under its jit), yet",
-)
 
 
-@MISSING_CHECK
 @pytest.mark.parametrize(
     ("robot", "change", "message"),
     [
@@ -353,12 +347,13 @@ MISSING_CHECK = pytest.mark.xfail(
         ("ur5-smallsat", {"target": dict(GOOD_TARGET, inertia=np.eye(2))}, r"target.*inertia"),
         ("umetani1990", {"target": dict(PLANAR_TARGET, velocity=np.ones(6))}, r"target.*velocity"),
         ("umetani1990", {"target": dict(PLANAR_TARGET, offset=np.ones(4))}, r"target.*offset"),
+        ("ur5-smallsat", {"target": dict(GOOD_TARGET, mass=-5.0)}, r"^target\.mass: must be positive"),
     ],
 )
 def test_capture_refuses_a_bad_target_or_tip(robot, change, message):
     """A wrong target (a missing or unknown key, a wrong trailing shape) or a tip the robot does
-    not have is refused with a message naming it, not read as something else (now: any tip of
-    a one-tip robot is tip 0, a tree's third tip gives NaN, an unknown key is ignored)."""
+    not have is refused with a message naming it, not read as something else (a tip of a
+    one-tip robot as tip 0, a tree's third tip as NaN, an unknown key ignored)."""
     robot = sa.umetani1990() if robot == "umetani1990" else sa.load_robot(os.path.join(CONFIGS, f"{robot}.yaml"))
     family = family_of(robot)
     n = family.joint_count(robot)

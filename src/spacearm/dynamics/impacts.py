@@ -190,7 +190,44 @@ def _target_in_bus_axes(system: DynamicState, target, dtype):
     return jnp.concatenate([top, bottom], axis=-2), jnp.concatenate([v_origin, velocity[..., 3:]], axis=-1)
 
 
-@functools.partial(jax.jit, static_argnames=("joints",))
+_TARGET_KEYS = ("mass", "inertia", "offset", "velocity")
+
+
+def _check_target(robot, target) -> None:
+    """Refuse a target whose keys or trailing shapes do not fit the robot's family, naming the
+    key: ``mass`` ``(...)``, ``inertia`` ``(..., 3, 3)`` (planar also ``(...)``, Izz),
+    ``offset`` ``(..., 3)`` (planar also 2), ``velocity`` ``(..., 6)`` (planar 3)."""
+    if not hasattr(target, "keys"):
+        raise ValueError(f"target: a mapping with {', '.join(_TARGET_KEYS)}, got {type(target).__name__}")
+    missing = [key for key in _TARGET_KEYS if key not in target]
+    unknown = [str(key) for key in target if key not in _TARGET_KEYS]
+    if missing or unknown:
+        what = "; ".join(
+            part
+            for part in (
+                f"missing {', '.join(missing)}" if missing else "",
+                f"unknown {', '.join(unknown)}" if unknown else "",
+            )
+            if part
+        )
+        raise ValueError(f"target: {what} (the keys: {', '.join(_TARGET_KEYS)})")
+    twist = len(family_of(robot).twist_axes)
+    planar = twist == 3
+    shapes = {
+        "inertia": [()] if planar else [(3, 3)],  # planar: Izz or a 3x3
+        "offset": [(2,), (3,)] if planar else [(3,)],
+        "velocity": [(twist,)],
+    }
+    for key, allowed in shapes.items():
+        shape = np.shape(target[key])
+        if not any(len(shape) >= len(tail) and shape[len(shape) - len(tail) :] == tail for tail in allowed):
+            wanted = " or ".join(str(tail) for tail in allowed)
+            raise ValueError(f"target.{key}: expected trailing axes {wanted}, got shape {shape}")
+    mass = target["mass"]
+    if not isinstance(mass, jax.core.Tracer) and not np.all(np.asarray(mass) > 0):
+        raise ValueError(f"target.mass: must be positive (kg), got {np.asarray(mass).tolist()}")
+
+
 def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, joints: str = "free"):
     """``(qd_after (..., n), base_after (..., 6), impulse (..., 6))``: a rigid, perfectly plastic
     grasp of a target by the tip frame (afterwards the target moves with it).
@@ -216,6 +253,14 @@ def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, join
         inertial axes (planar robots: the in-plane parts).
     """
     check_joints(joints)
+    _check_target(robot, target)
+    if not isinstance(tip, jax.core.Tracer):
+        _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
+    return _capture(robot, q, qd, dict(target), base_rotation, momentum, tip, joints)
+
+
+@functools.partial(jax.jit, static_argnames=("joints",))
+def _capture(robot, q, qd, target, base_rotation, momentum, tip, joints: str):
     system = DynamicState(robot, q, base_rotation, joints={"qd": qd}, momentum=momentum)
     qd = system.rates("qd")
     H = system.locked(system_mass_matrix(system.tree, system.q))
