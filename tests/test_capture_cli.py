@@ -4,7 +4,9 @@ Beyond equality with the kernel (the same inputs in SI units), two physical chec
 use the command's arithmetic: the robot's momentum after the grasp that capture.json reports
 gives, through `spacearm.base_velocity`, the bus velocity `spacearm.capture` reports; and the
 target's velocity after the grasp equals the tip frame's (`spacearm.tip_velocity`) carried to
-the target's centroid, as a rigid grasp requires.
+the target's centroid, as a rigid grasp requires. The replay holds the target: the combined
+system's momentum it starts from equals the robot's and the target's before the grasp (summed
+here about their common centroid), and gives the combined robot capture's bus velocity.
 """
 
 from __future__ import annotations
@@ -18,8 +20,9 @@ import pytest
 import spacearm as sa
 from spacearm._core.groups import rpy_matrix
 from spacearm.cli import main
-from spacearm.cli.capture import REPLAY_NOTE
 from spacearm.figures.views import view_extra_available
+
+from .test_payload import _momentum_before
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANAR = str(ROOT / "configs" / "umetani1990.yaml")
@@ -77,6 +80,28 @@ def _check_rigid_grasp(robot, q, R, after: dict, target: dict, tip: int | None =
     np.testing.assert_allclose(t_after, carried, rtol=0, atol=1e-12)
 
 
+def _check_replay_start(robot, q, R, m, data: dict, target: dict, tip: int = 0) -> None:
+    """The replay's first state: robot and target welded, momentum conserved through the grasp."""
+    after = data["after"]
+    before = _momentum_before(robot, q, R, m, target, tip)
+    np.testing.assert_allclose(
+        after["momentum_with_target"], before, rtol=0, atol=1e-10 * max(1.0, np.abs(before).max())
+    )
+    payload = sa.target_in_tip_frame(robot, q, target, base_rotation=R, tip=tip)
+    for key, value in payload.items():
+        np.testing.assert_allclose(data["inputs"]["replay"]["payload"][key], value, rtol=1e-14, atol=1e-15)
+    carried = sa.grasped_robot(robot, q, target, base_rotation=R, tip=tip)
+    nu = np.asarray(
+        sa.base_velocity(carried, q, after["qd_after"], base_rotation=R, momentum=after["momentum_with_target"])
+    )
+    if R is None:
+        c, s = np.cos(q[0]), np.sin(q[0])
+        nu = np.r_[c * nu[0] - s * nu[1], s * nu[0] + c * nu[1], nu[2]]
+    else:
+        nu = np.r_[R @ nu[:3], R @ nu[3:]]
+    np.testing.assert_allclose(nu, after["base_after"], rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("joints", ["free", "locked"])
 def test_ur5_numbers_are_the_kernels(tmp_path, capsys, joints):
     """capture.json holds sa.capture's result at the same state (rtol 1e-12); the summary prints it."""
@@ -101,6 +126,7 @@ def test_ur5_numbers_are_the_kernels(tmp_path, capsys, joints):
     np.testing.assert_allclose(_printed(printed, "joint rates    "), expected[0], rtol=1e-5)
     np.testing.assert_allclose(_printed(printed, "impulse        "), expected[2][:3], rtol=1e-5)
     _check_rigid_grasp(robot, q, R, after, _client())
+    _check_replay_start(robot, q, R, m, data, _client())
     assert data["inputs"]["joints"] == joints and data["inputs"]["target"]["mass"] == 50.0
     np.testing.assert_allclose(data["inputs"]["base_rotation"], R, rtol=0, atol=1e-15)
     manifest = json.loads((out / "manifest.json").read_text())
@@ -108,8 +134,9 @@ def test_ur5_numbers_are_the_kernels(tmp_path, capsys, joints):
     assert len(manifest["config"]["target"]["sha256"]) == 64
 
 
-def test_planar_robot_and_its_replay(tmp_path, capsys):
-    """The paper's planar system: a scalar moment, a 2-D offset; the replay page when the extra is there."""
+def test_planar_robot_and_no_replay_off_the_link_line(tmp_path, capsys):
+    """The paper's planar system: a scalar moment, a 2-D offset. At this grasp the target's centroid
+    is off the last link's line, where a planar link cannot hold it: no replay, one printed reason."""
     target = _target(tmp_path / "t.yaml", PLANAR_TARGET)
     out = tmp_path / "run"
     assert _run(PLANAR, target, out, "--posture=10,-60,120", "--rates", "5,-3", "--seconds", "0.2", "--dt", "0.02") == 0
@@ -122,10 +149,34 @@ def test_planar_robot_and_its_replay(tmp_path, capsys):
     for name, value in zip(("qd_after", "base_after", "impulse"), expected, strict=True):
         np.testing.assert_allclose(after[name], value, rtol=1e-12, atol=1e-15)
     _check_rigid_grasp(robot, phi, None, after, spec)
+    assert {p.name for p in out.iterdir()} == {"capture.json", "manifest.json"}
+    skipped = [line for line in printed.splitlines() if line.startswith("replay ")]
+    assert len(skipped) == 1 and "not written" in skipped[0] and "across the last link" in skipped[0]
+    data = json.loads((out / "capture.json").read_text())
+    assert "across the last link" in data["inputs"]["replay"]["payload"]["skipped"]
+    assert "momentum_with_target" not in data["after"]
+
+
+def test_planar_replay_holds_a_target_on_the_link_line(tmp_path, capsys):
+    """The target's centroid on the last link's line at the grasp (beyond the tip): welded to the
+    link, the replay is written and starts from the momentum before the grasp."""
+    theta = np.radians(10.0 - 60.0 + 120.0)
+    offset = 0.9 * np.array([np.cos(theta), np.sin(theta)])
+    text = PLANAR_TARGET.replace("offset: [0.4, -0.1]", f"offset: [{float(offset[0])!r}, {float(offset[1])!r}]")
+    target = _target(tmp_path / "t.yaml", text.replace("mass: 80.0", "mass: 200.0"))
+    out = tmp_path / "run"
+    state = ["--posture=10,-60,120", "--rates", "5,-3", "--momentum", "2,-1,0.5"]
+    assert _run(PLANAR, target, out, *state, "--seconds", "0.2", "--dt", "0.02") == 0
+    printed = capsys.readouterr().out
     files = {"capture.json", "manifest.json"} | ({"capture.html"} if view_extra_available() else set())
     assert {p.name for p in out.iterdir()} == files
     if view_extra_available():
-        assert REPLAY_NOTE in printed
+        assert "replay         0.2 s of the robot holding the target" in printed
+    robot = sa.umetani1990()
+    phi = np.radians([10.0, -60.0, 120.0])
+    spec = dict(mass=200.0, inertia=12.5, offset=offset, velocity=np.array([0.05, -0.02, 0.03]))
+    data = json.loads((out / "capture.json").read_text())
+    _check_replay_start(robot, phi, None, np.array([2.0, -1.0, 0.5]), data, spec)
 
 
 def test_a_tree_grasps_with_the_tip_it_is_given(tmp_path, capsys):
@@ -146,6 +197,7 @@ def test_a_tree_grasps_with_the_tip_it_is_given(tmp_path, capsys):
         for name, value in zip(("qd_after", "base_after", "impulse"), expected, strict=True):
             np.testing.assert_allclose(data["after"][name], value, rtol=1e-12, atol=1e-15)
     _check_rigid_grasp(robot, q, np.eye(3), data["after"], _client(), tip=1)
+    _check_replay_start(robot, q, np.eye(3), np.zeros(6), data, _client(), tip=1)
     assert _run(DUAL, CLIENT, tmp_path / "bad", *state, "--tip", "middle/tool0") == 2
     assert "--tip" in capsys.readouterr().err and not (tmp_path / "bad").exists()
 

@@ -30,11 +30,14 @@ from .dynamics import (
     capture as capture,
     forward_dynamics as forward_dynamics,
     free_motion as free_motion,
+    grasped_robot as grasped_robot,
     impulse_response as impulse_response,
     inverse_dynamics as inverse_dynamics,
     joint_mass_matrix as joint_mass_matrix,
     mass_matrix as mass_matrix,
     reduced_bias as reduced_bias,
+    system_momentum as system_momentum,
+    target_in_tip_frame as target_in_tip_frame,
     tip_inverse_inertia as tip_inverse_inertia,
     tip_velocity as tip_velocity,
     virtual_mass as virtual_mass,
@@ -62,6 +65,7 @@ from .kinematics import (
 )
 from .models import family_of as family_of, load_robot as load_robot
 from .models.budget import MassLine as MassLine, mass_budget as mass_budget
+from .models.payload import with_payload as with_payload
 from .models.planar import PlanarRobot as PlanarRobot, stack_robots as stack_robots, umetani1990 as umetani1990
 from .models.planar.closed_forms import (
     angular_momentum as angular_momentum,
@@ -125,11 +129,14 @@ __all__ = [
     "capture",
     "forward_dynamics",
     "free_motion",
+    "grasped_robot",
     "impulse_response",
     "inverse_dynamics",
     "joint_mass_matrix",
     "mass_matrix",
     "reduced_bias",
+    "system_momentum",
+    "target_in_tip_frame",
     "tip_inverse_inertia",
     "tip_velocity",
     "virtual_mass",
@@ -166,6 +173,7 @@ __all__ = [
     "tip_pose",
     "tip_position",
     "umetani1990",
+    "with_payload",
     *_LAZY,
 ]
 

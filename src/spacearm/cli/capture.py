@@ -31,8 +31,14 @@ tip and the target's speed change, and writes into ``--out``:
   is installed (``--no-html`` leaves it out);
 - ``manifest.json``: the resolved run, the target file's SHA-256, versions, timings.
 
-The replay is of the robot alone with its momentum after the grasp: a robot record has no
-payload on its tip, so the target's mass and inertia are not in it (the command says so).
+The replay is of the robot holding the target: after a rigid grasp the target moves with the
+tip frame, so it is welded to the tip's body (`spacearm.grasped_robot`: its mass, centroid and
+inertia turned into tip axes at the grasp and merged by the parallel-axis theorem), and the
+combined system starts at the post-grasp bus velocity and joint rates, whose momentum
+(`spacearm.system_momentum`) is the robot's plus the target's after the grasp. A planar link
+holds its centroid on its line, so a planar robot's replay needs the target's centroid on the
+last link's line at the grasp; otherwise no replay is written and the command prints why (the
+numbers, which include the target, are printed and written as always).
 The folder changes as a whole or not at all (`spacearm.io.folders`); invalid input ends with
 exit status 2 and one message naming the file or option and the field, before anything is written.
 """
@@ -55,10 +61,6 @@ from .simulate import write_replay
 # The files a capture run writes; the other entries of --out are kept.
 _FILES = frozenset({"capture.json", "capture.html", "manifest.json"})
 _MAX_INTERVALS = 100_000
-REPLAY_NOTE = (
-    "the replay is the robot alone after the grasp: a robot record has no tip payload, so the "
-    "target's mass and inertia are not in it"
-)
 
 
 def register(subparsers) -> None:
@@ -160,17 +162,46 @@ def run(args: argparse.Namespace) -> int:
     with claimed_folder(out, "capture", label=f"--out {out}"):
         began = time.perf_counter()
         result = grasp(robot, family, state, target, tip[0], args.joints)
+        carried, payload = holding(robot, state, target, tip[0], result)
         check_finite(result, "the capture's")
-        arrays = _replay_run(robot, family, state, result, intervals, args.dt, tip[0]) if html else None
+        arrays = None
+        if html and carried is not None:
+            arrays = _replay_run(carried, family, state, result, intervals, args.dt, tip[0])
         if arrays is not None:
             check_finite(arrays, "the replay's")
         seconds = time.perf_counter() - began
-        config = _config(args, state, target, tip, intervals)
+        config = _config(args, state, target, tip, intervals, payload)
         with replacing_folder(out, keep=lambda name: name not in _FILES) as staging:
-            files = _write(robot, staging, config, result, arrays)
+            files = _write(carried, staging, config, result, arrays)
             write_run_manifest(staging, "capture", config, files, git, seconds)
-    _summary(args, robot, tip, target, result, out, files, html)
+    _summary(args, robot, tip, target, result, out, files, html, payload)
     return 0
+
+
+def holding(robot, state, target: dict, tip: int, result: dict):
+    """The robot with the target welded to its tip at the grasp (`spacearm.grasped_robot`: the
+    target in tip axes, `spacearm.target_in_tip_frame`, merged by `spacearm.with_payload`) and
+    that payload as lists, or ``(None, {"skipped": reason})`` where the family cannot hold it (a
+    planar target centred off the last link's line).
+
+    Adds ``momentum_with_target`` to ``result``: the combined system's momentum at the
+    post-grasp bus velocity and joint rates (`spacearm.system_momentum`), the state the replay
+    starts from (the robot's momentum after plus the target's after, as the grasp conserves it).
+    """
+    from .. import system_momentum, target_in_tip_frame, with_payload
+
+    posture, _, rotation, _ = state
+    payload = {
+        key: np.asarray(value) for key, value in target_in_tip_frame(robot, posture, target, rotation, tip).items()
+    }
+    try:
+        carried = with_payload(robot, payload["mass"], payload["com"], payload["inertia"], tip)
+    except ConfigError as error:
+        return None, {"skipped": str(error)}
+    result["momentum_with_target"] = np.asarray(
+        system_momentum(carried, posture, result["qd_after"], result["base_after"], rotation)
+    )
+    return carried, {key: value.tolist() for key, value in payload.items()}
 
 
 def grasp(robot, family, state, target: dict, tip: int, joints: str) -> dict:
@@ -242,14 +273,15 @@ def _turned(axes: np.ndarray, twist: np.ndarray) -> np.ndarray:
 
 
 def _replay_run(robot, family, state, result: dict, intervals: int, dt: float, tip: int) -> dict:
-    """The robot alone for ``intervals`` of ``dt`` after the grasp, without joint torques,
-    with its momentum after the grasp: the arrays `write_replay` draws."""
+    """The robot holding the target (`holding`) for ``intervals`` of ``dt`` after the grasp,
+    without joint torques, from the post-grasp joint rates and the combined system's momentum
+    (``momentum_with_target``): the arrays `write_replay` draws."""
     from .. import simulate, tip_position
 
     posture, _, rotation, _ = state
     n = family.joint_count(robot)
     torques = np.zeros((intervals, n))
-    momentum = result["momentum_after"]
+    momentum = result["momentum_with_target"]
     times = dt * np.arange(intervals + 1)
     if family.posture_offset:
         phi, _ = simulate(robot, posture, result["qd_after"], torques, dt, momentum=momentum)
@@ -267,7 +299,7 @@ def _replay_run(robot, family, state, result: dict, intervals: int, dt: float, t
     return arrays
 
 
-def _config(args: argparse.Namespace, state, target: dict, tip: tuple[int, str], intervals: int) -> dict:
+def _config(args: argparse.Namespace, state, target: dict, tip: tuple[int, str], intervals: int, payload: dict) -> dict:
     """The resolved inputs, SI units (capture.json's and the manifest's config)."""
     from ..io.manifest import file_sha256
 
@@ -285,7 +317,7 @@ def _config(args: argparse.Namespace, state, target: dict, tip: tuple[int, str],
         "momentum": momentum.tolist(),
         "tip": {"index": tip[0], "name": tip[1]},
         "joints": args.joints,
-        "replay": {"seconds": intervals * args.dt, "dt_s": args.dt, "intervals": intervals, "note": REPLAY_NOTE},
+        "replay": {"seconds": intervals * args.dt, "dt_s": args.dt, "intervals": intervals, "payload": payload},
     }
 
 
@@ -298,6 +330,7 @@ def _write(robot, staging: Path, config: dict, result: dict, arrays: dict | None
         "base_before": "[v of the bus centroid, m/s; w, rad/s], inertial axes",
         "impulse": "on the tip frame: [linear, N s; angular about its origin, N m s], inertial axes",
         "momentum_after": "the robot's own [P, kg m/s; L about its centroid, kg m^2/s], inertial axes",
+        "momentum_with_target": "robot and target welded: [P, kg m/s; L about their centroid, kg m^2/s], inertial axes",
         "target_after": "[v of its centroid, m/s; w, rad/s], inertial axes",
     }
     state = {name: np.asarray(value).tolist() for name, value in result.items()}
@@ -307,7 +340,7 @@ def _write(robot, staging: Path, config: dict, result: dict, arrays: dict | None
     return files
 
 
-def _summary(args, robot, tip, target: dict, result: dict, out: Path, files: list[Path], html: bool) -> None:
+def _summary(args, robot, tip, target: dict, result: dict, out: Path, files: list[Path], html: bool, payload) -> None:
     force, torque = _split(result["impulse"])
     v_after, w_after = _split(result["base_after"])
     _, w_before = _split(result["base_before"])
@@ -325,8 +358,10 @@ def _summary(args, robot, tip, target: dict, result: dict, out: Path, files: lis
         f" m/s); spin {degrees(np.linalg.norm(w0)):.6g} -> {degrees(np.linalg.norm(w1)):.6g} deg/s",
     ]
     lines += [f"wrote          {out / path.name}" for path in files] + [f"manifest       {out / 'manifest.json'}"]
-    if html:
-        lines.append(f"replay         {args.seconds:g} s: {REPLAY_NOTE}")
+    if "skipped" in payload:
+        lines.append(f"replay         not written: {payload['skipped']} (the numbers above include the target)")
+    elif html:
+        lines.append(f"replay         {args.seconds:g} s of the robot holding the target (welded to the tip)")
     elif not args.no_html:
         lines.append("replay         not written: it needs the 'view' extra (pip install -e \".[view]\")")
     print("\n".join(lines))

@@ -45,6 +45,11 @@ from .impacts import (
     tip_inverse_inertia as tip_inverse_inertia,
     virtual_mass as virtual_mass,
 )
+from .payload import (
+    grasped_robot as grasped_robot,
+    system_momentum as system_momentum,
+    target_in_tip_frame as target_in_tip_frame,
+)
 from .state import DynamicState as DynamicState
 from .velocities import base_velocity as base_velocity, tip_velocity as tip_velocity
 from .wheels import wheel_momentum as wheel_momentum
@@ -60,11 +65,14 @@ __all__ = [
     "capture",
     "forward_dynamics",
     "free_motion",
+    "grasped_robot",
     "impulse_response",
     "inverse_dynamics",
     "joint_mass_matrix",
     "mass_matrix",
     "reduced_bias",
+    "system_momentum",
+    "target_in_tip_frame",
     "tip_inverse_inertia",
     "tip_velocity",
     "virtual_mass",

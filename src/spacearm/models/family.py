@@ -283,6 +283,16 @@ class RobotFamily:
         I_S, I_M = self.momentum_map(robot, joints)
         return J_M - J_S @ jnp.linalg.solve(I_S, I_M), self.attitude_rate_map(robot, joints)
 
+    def with_payload(self, robot, mass, com, inertia, tip=0):
+        """The same robot with a rigid payload welded to tip ``tip`` (`spacearm.models.payload`).
+
+        The payload (mass kg, centroid m and inertia about it kg m^2, both in the TIP frame) is
+        merged into the body that carries the tip by the parallel-axis theorem: one body of the
+        combined mass, centroid and inertia, in that body's own frame. What a rigid grasp makes
+        of a grasped object. Families implement it on their own fields.
+        """
+        raise NotImplementedError(f"the {self.name} family takes no payload")
+
     def tip_frame(self, robot, joints: jax.Array) -> tuple[jax.Array, jax.Array]:
         """``(position (space,), axes (space, space))``: the tip frame at one posture, base axes.
 

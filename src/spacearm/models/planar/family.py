@@ -20,6 +20,7 @@ import spacearm.models.planar.fields as planar_fields  # the module, not the pac
 from ..._core.groups import SO2
 from ..._core.magnus import composite_gauss, line_integral
 from ..family import Capabilities, FastPaths, RobotFamily
+from ..payload import planar_payload
 from .closed_forms import (
     arm_jacobian,
     base_jacobian,
@@ -86,6 +87,11 @@ class PlanarFamily(RobotFamily):
 
     def joint_count(self, robot: PlanarRobot) -> int:
         return robot.n_links
+
+    def with_payload(self, robot: PlanarRobot, mass, com, inertia, tip=0) -> PlanarRobot:
+        """The payload merged into link n, exact for a payload centred on its line
+        (`spacearm.models.payload.planar_payload`; ConfigError otherwise)."""
+        return planar_payload(robot, mass, com, inertia, tip)
 
     def dynamic_tree(self, robot: PlanarRobot):
         """The arm in the bus's x-y plane (`spacearm.models.planar.embedding.as_tree`)."""

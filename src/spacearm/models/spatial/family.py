@@ -24,10 +24,12 @@ import jax.numpy as jnp
 
 import spacearm.models.spatial.fields as spatial_fields  # the module, not the package (no cycle)
 
+from ..._core.errors import ConfigError
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import Capabilities, FastPaths, RobotFamily
+from ..payload import merged_link_fields
 from ..tree.shell import tip_shell
 from .primitives import (
     as_tree,
@@ -138,6 +140,15 @@ class SpatialFamily(RobotFamily):
 
     def fixed_base_jacobian(self, robot: SpatialRobot, joints: jax.Array) -> jax.Array:
         return fixed_base_jacobian(robot, joints)
+
+    def with_payload(self, robot: SpatialRobot, mass, com, inertia, tip=0) -> SpatialRobot:
+        """The payload (tip frame) merged into body n, which carries the tip (`spacearm.models.payload`)."""
+        if not (tip == 0 or (isinstance(tip, str) and tip == robot.labels.tip)):
+            raise ConfigError(f"tip {tip!r}: a spatial arm has one tip, 0 ({robot.labels.tip or 'its tip link'})")
+        fields = merged_link_fields(
+            robot, robot.n_joints - 1, robot.tip_rotation, robot.tip_translation, mass, com, inertia
+        )
+        return robot.replace(**fields)
 
     def dynamic_tree(self, robot: SpatialRobot):
         """The arm as its one-tip tree (`spacearm.models.spatial.primitives.as_tree`)."""

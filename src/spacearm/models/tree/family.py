@@ -27,10 +27,12 @@ import numpy as np
 
 import spacearm.models.tree.fields as tree_fields  # the module, not the package (no cycle)
 
+from ..._core.errors import ConfigError
 from ..._core.groups import SO3
 from ..._core.linalg import gram_root_determinant
 from ..._core.magnus import DEFAULT_ORDER, DEFAULT_STEPS, path_rotation
 from ..family import Capabilities, FastPaths, RobotFamily
+from ..payload import merged_link_fields
 from .primitives import (
     base_twist_map,
     fixed_base_jacobian,
@@ -258,6 +260,25 @@ class TreeFamily(RobotFamily):
     def fixed_base_jacobian(self, robot: TreeRobot, joints: jax.Array) -> jax.Array:
         """``(k, 6, n)`` fixed-base Jacobians of the tips, bus axes (``(6, n)`` for a focused tree)."""
         return _fixed_base_jacobian(robot, joints)
+
+    def with_payload(self, robot: TreeRobot, mass, com, inertia, tip=0) -> TreeRobot:
+        """The payload (tip frame) merged into body ``tip_bodies[tip]`` (`spacearm.models.payload`);
+        ``tip`` indexes the tree's tips (a focus does not renumber them), or names one."""
+        names = tuple(robot.tip_names)
+        index = names.index(tip) if isinstance(tip, str) and tip in names else tip
+        if isinstance(index, str) or not 0 <= int(index) < robot.n_tips:
+            raise ConfigError(f"tip {tip!r}: the tree's tips are 0..{robot.n_tips - 1} ({', '.join(names)})")
+        t = int(index)
+        fields = merged_link_fields(
+            robot,
+            robot.tip_bodies[t],
+            jnp.asarray(robot.tip_rotation)[..., t, :, :],
+            jnp.asarray(robot.tip_translation)[..., t, :],
+            mass,
+            com,
+            inertia,
+        )
+        return robot.replace(**fields)
 
     def dynamic_tree(self, robot: TreeRobot) -> TreeRobot:
         """The tree itself with every joint free and every tip (a focus dropped)."""
