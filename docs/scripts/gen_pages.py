@@ -46,6 +46,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.models.family", "Models", "the seam: the per-posture primitives every family implements"),
     ("spacearm.models.budget", "Models", "the mass budget: the bus, each root body, the moving links, the total"),
     ("spacearm.models.view_model", "Models", "a robot as one family-free tree of bodies on a free bus, for drawing"),
+    ("spacearm.models.payload", "Models", "a rigid payload welded to a tip: mass properties merged into its body"),
     (
         "spacearm.models.dynamics",
         "Models",
@@ -132,6 +133,7 @@ API_MODULES: list[tuple[str, str, str]] = [
     ("spacearm.dynamics.velocities", "Dynamics", "the bus's and the tip's velocity for any momentum"),
     ("spacearm.dynamics.impacts", "Dynamics", "G (extended inversed inertia), the impulse response, capture"),
     ("spacearm.dynamics.wheels", "Dynamics", "the reaction-wheel momentum that holds the bus attitude"),
+    ("spacearm.dynamics.payload", "Dynamics", "a grasped target as a tip payload; the momentum of a given velocity"),
     (
         "spacearm.kinematics",
         "Kinematics",
