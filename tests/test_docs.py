@@ -352,7 +352,13 @@ def test_the_two_arm_tutorial_shows_the_file_it_ships():
 # Each ```python block of these pages runs, in order, in one namespace from the repository's
 # root; a ```text block right after a python block is what that block prints, character for
 # character. (Printed numbers are rounded so that they do not depend on the last bits.)
-EXECUTED_PAGES = ("tutorials/two-arms.md", "explanation/trees.md", "tutorials/dynamics.md")
+EXECUTED_PAGES = (
+    "tutorials/two-arms.md",
+    "explanation/trees.md",
+    "tutorials/dynamics.md",
+    "tutorials/wheel-sizing.md",
+    "tutorials/capture-mount.md",
+)
 
 _BLOCK = re.compile(r"```(python|text)\n(.*?)```", flags=re.S)
 

@@ -195,6 +195,11 @@ API_MODULES: list[tuple[str, str, str]] = [
         "averages over the joint box (w*, conditioning, base disturbance, w_d) by randomized QMC, with error estimates",
     ),
     (
+        "spacearm.analysis.impacts",
+        "Analysis",
+        "impact quantities as joint-box metrics: virtual mass, bus-rate jump, bus rate after a reference capture",
+    ),
+    (
         "spacearm.analysis.workspace_search",
         "Analysis",
         "spatial reach radii, dynamic singular sets, the path-independent radius, the 3-D straight-path workspace",
