@@ -22,9 +22,8 @@ import jax
 import jax.numpy as jnp
 
 from .._core.groups import vee
-from ..models.dynamics import system_mass_matrix
+from ..models.dynamics import system_mass_matrix, tip_axes
 from ..models.payload import as_payload, with_payload
-from ..models.tree.primitives import tip_frames
 from .state import DynamicState, apply
 
 __all__ = ["grasped_robot", "system_momentum", "target_in_tip_frame"]
@@ -35,8 +34,7 @@ def _tip_axes(system: DynamicState, tip: int):
     k = len(system.tree.tip_bodies)
     if not 0 <= int(tip) < k:
         raise ValueError(f"tip: expected an index 0..{k - 1} of the robot's tips, got {tip!r}")
-    axes = jnp.vectorize(lambda q: tip_frames(system.tree, q)[1], signature="(n)->(k,i,j)")(system.q)
-    return system.R @ axes[..., int(tip), :, :]
+    return system.R @ tip_axes(system.tree, system.q)[..., int(tip), :, :]
 
 
 def target_in_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) -> dict:

@@ -62,11 +62,12 @@ from .tree.primitives import (
     _tip_rows,
     _tree_pass,
     descendants,
+    tip_frames,
     tree_constants,
 )
 from .tree.robot import TreeRobot
 
-__all__ = ["free_dynamics", "mass_and_bias", "system_mass_matrix", "tip_maps"]
+__all__ = ["free_dynamics", "mass_and_bias", "system_mass_matrix", "tip_axes", "tip_maps"]
 
 
 def _mass_from_pass(robot: TreeRobot, state, batch):
@@ -244,3 +245,8 @@ def free_dynamics(robot: TreeRobot, q, qd, load, momentum, moving=None, forward:
     batch = jnp.broadcast_shapes(*[a.shape[:-1] for a in arrays])
     stacked = jnp.concatenate([jnp.broadcast_to(a, batch + a.shape[-1:]) for a in arrays], axis=-1)
     return (_free_forward if forward else _free_inverse)(robot, stacked)
+
+
+def tip_axes(robot: TreeRobot, q: jax.Array) -> jax.Array:
+    """``(..., k, 3, 3)`` every tip frame's axes in bus axes at postures ``q`` ``(..., n)``."""
+    return jnp.vectorize(lambda posture: tip_frames(robot, posture)[1], signature="(n)->(k,i,j)")(q)
