@@ -38,19 +38,34 @@ FAST_OPTIONS = {
     "reach_radii": {"starts": 8, "steps": 20},
     "path_independent_radius": {"samples": 1024, "keep": 4, "candidates": 4, "descent_steps": 5, "newton_steps": 2},
     "straight_path_area": {"n_directions": 16},
+    "virtual_mass": _AVERAGE,
+    "bus_rate_jump": _AVERAGE,
+    "capture_bus_rate": _AVERAGE,
+}
+# The reference target of capture_bus_rate: a 20 kg client drifting and tumbling (in the plane
+# for the planar arm).
+TARGETS = {
+    "planar": {"mass": 20.0, "inertia": 1.5, "offset": [0.2, 0.0], "velocity": [0.05, 0.0, 0.1]},
+    "spatial": {"mass": 20.0, "inertia": [[1, 0, 0], [0, 1.5, 0], [0, 0, 2]], "velocity": [0.05, 0, 0, 0, 0, 0.1]},
 }
 BOUND_S = 420  # the whole run, cold compile included, on a loaded 2-core machine
 STALL_S = 60  # a chunk with no CPU used for this long ends the run with one line
 
 
 # Metrics of one tip: on the two-arm tree, the second arm's.
-PER_TIP = {"posture", "w_avg", "gci", "dynamic_manipulability"}
+PER_TIP = {"posture", "w_avg", "gci", "dynamic_manipulability", "virtual_mass", "bus_rate_jump", "capture_bus_rate"}
 
 
 def _metrics(family: str) -> list[dict]:
     tip = {"tip": "right/tool0"} if family == "tree" else {}
+    target = {"target": TARGETS["planar" if family == "planar" else "spatial"]}
     return [
-        {"name": name, **FAST_OPTIONS.get(name, {}), **(tip if name in PER_TIP else {})}
+        {
+            "name": name,
+            **FAST_OPTIONS.get(name, {}),
+            **(tip if name in PER_TIP else {}),
+            **(target if name == "capture_bus_rate" else {}),
+        }
         for name, metric in METRICS.items()
         if family in metric.families
     ]

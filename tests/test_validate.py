@@ -56,7 +56,8 @@ def test_shipped_files_validate(name, capsys):
         (dict(objectives="wbar"), "objectives: must be a list"),
         (
             dict(objectives=["wbar", "S_GG"]),
-            "objectives[1]: must be one of wbar, S_G, S_M, reach_radius, got 'S_GG' (did you mean 'S_G'?)",
+            "objectives[1]: must be one of wbar, S_G, S_M, low_virtual_mass, low_bus_rate_jump, low_capture_bus_rate, "
+            "reach_radius, got 'S_GG' (did you mean 'S_G'?)",
         ),
         (dict(reference_point=[0.0, "x"]), "reference_point[1]: must be a number"),
         (
