@@ -103,7 +103,8 @@ def test_virtual_mass_and_bus_rate_jump_match_pinocchio(impact_system, joints):
 
 def test_joint_box_averages_are_the_means_of_the_kernels():
     """Each impact average agrees with a plain Monte Carlo mean of its kernel at 4096
-    independent uniform postures of the joint box, within 5 combined standard errors."""
+    independent uniform postures of the joint box, within 5 combined standard errors (the
+    capture's reference target held the same way by the hand: offset and inertia in tip axes)."""
     robot = sa.load_robot(UR5)
     setup = impact_setup("test", {"target": TARGET, "direction": [0.0, 1.0, 1.0]}, robot, need_target=True)
     metrics = ("virtual_mass", "bus_rate_jump", "capture_bus_rate")
@@ -111,7 +112,8 @@ def test_joint_box_averages_are_the_means_of_the_kernels():
     lower, upper = (np.asarray(bound) for bound in joint_box(robot))
     q = np.random.default_rng(3).uniform(lower, upper, (4096, len(lower)))
     u = np.array([0.0, 1.0, 1.0]) / np.sqrt(2.0)
-    _, base, _ = sa.capture(robot, q, np.zeros_like(q), setup.target)
+    held = sa.dynamics.payload.target_from_tip_frame(robot, q, setup.target)  # held the same way by the hand
+    _, base, _ = sa.capture(robot, q, np.zeros_like(q), held)
     values = {
         "virtual_mass": np.asarray(sa.virtual_mass(robot, q, u)),
         "bus_rate_jump": np.asarray(sa.bus_rate_jump(robot, q, u)),
@@ -302,6 +304,7 @@ def test_planar_wheel_peaks_are_about_the_plane_normal():
         ({"name": "virtual_mass", "direction": [1, 0]}, "metrics[0].direction: must be a list of 3 numbers"),
         ({"name": "virtual_mass", "joints": "stiff"}, "metrics[0].joints: must be one of"),
         ({"name": "virtual_mass", "target": TARGET}, "metrics[0]: unknown key 'target'"),
+        ({"name": "capture_bus_rate", "target": TARGET, "direction": [1, 0, 0]}, "metrics[0]: unknown key 'direction'"),
         ({"name": "virtual_mass", "tip": "left/tool0"}, "metrics[0].tip: the robot has one tip"),
     ],
 )
@@ -364,3 +367,65 @@ def test_a_target_no_rigid_body_could_be_is_refused():
     robot = sa.load_robot(UR5)
     with pytest.raises(ConfigError, match=r"t\.inertia: no rigid body has these principal moments"):
         impact_setup("t", {"target": {**TARGET, "inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 3]]}}, robot, need_target=True)
+
+
+def test_a_target_at_rest_keeps_every_gradient_finite():
+    """A target at rest leaves the resting bus at rest (a rate of exactly 0 at every posture);
+    the reverse-mode gradient of every objective stays finite (the rate's norm is taken with
+    a finite derivative at 0), so the other objectives still steer the search."""
+    problem = load_problem(
+        {
+            "name": "rest",
+            "robot": UR5,
+            "variables": {"mount.xyz[0]": [-0.4, 0.6], "base.mass": [200.0, 800.0]},
+            "objectives": ["low_capture_bus_rate", "low_virtual_mass"],
+            "impact": {"target": {"mass": 50.0, "inertia": [[4, 0, 0], [0, 5, 0], [0, 0, 6]]}},
+            "average": {"samples": 64, "randomizations": 4, "seed": 0},
+            "reference_point": [-1.0, -100.0],
+        }
+    )
+    x = jnp.array([0.1, 450.0])
+    f = problem.objective_function()
+    np.testing.assert_array_equal(f(x)[0], 0.0)
+    jacobian = np.asarray(jax.jacrev(f)(x))
+    assert np.all(np.isfinite(jacobian)) and np.all(jacobian[0] == 0) and np.all(jacobian[1] != 0)
+
+
+def test_a_planar_target_lies_in_the_plane():
+    robot = sa.umetani1990()
+    target = {"mass": 10.0, "inertia": 2.0, "offset": [0.1, 0.2, 0.3], "velocity": [0.1, 0.0, 0.2]}
+    posture, rates = np.radians([10.0, 30.0, 60.0]), np.array([0.1, -0.2])
+    with pytest.raises(ValueError, match=r"^target\.offset: a planar robot's target lies in the plane"):
+        sa.capture(robot, posture, rates, target)
+    tilted = {**target, "offset": [0.1, 0.2], "inertia": [[1.0, 0.0, 0.5], [0.0, 1.0, 0.0], [0.5, 0.0, 2.0]]}
+    with pytest.raises(ValueError, match=r"^target\.inertia: a planar robot's target turns about z alone"):
+        sa.capture(robot, posture, rates, tilted)
+    # Ixx and Iyy do not enter the in-plane grasp: only Izz does
+    flat = {**target, "offset": [0.1, 0.2]}
+    full = {**flat, "inertia": [[7.0, 0.3, 0.0], [0.3, 5.0, 0.0], [0.0, 0.0, 2.0]]}
+    for mine, same in zip(
+        sa.capture(robot, posture, rates, flat), sa.capture(robot, posture, rates, full), strict=True
+    ):
+        np.testing.assert_allclose(mine, same, rtol=1e-13, atol=1e-15)
+    with pytest.raises(ConfigError, match=r"t\.offset: a planar robot's target lies in the plane"):
+        impact_setup("t", {"target": target}, robot, need_target=True)
+
+
+def test_kernel_arguments_are_named_when_wrong():
+    robot = sa.load_robot(DUAL)
+    q = np.zeros(12)
+    with pytest.raises(ValueError, match=r"^direction: must not be zero"):
+        sa.virtual_mass(robot, q, [0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match=r"^tip: the index of a tip \(0\.\.1\), got the name 'right/tool0'"):
+        sa.capture(robot, q, q, {**TARGET}, tip="right/tool0")
+    with pytest.raises(ConfigError, match=r"impact\.target: only the bus rate after a capture"):
+        load_problem(
+            {
+                "name": "p",
+                "robot": UR5,
+                "variables": {"mount.xyz[0]": [-0.4, 0.6]},
+                "objectives": ["w_avg", "low_virtual_mass"],
+                "impact": {"target": TARGET},
+                "reference_point": [0.0, -100.0],
+            }
+        )

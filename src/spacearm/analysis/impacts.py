@@ -9,7 +9,10 @@ attitude the identity (inertial axes = bus axes) and zero system momentum:
 - ``bus_rate_jump``: ||dw_bus|| under a unit linear impulse at the tip along u, rad/s per N s
   (`spacearm.dynamics.bus_rate_jump`);
 - ``capture_bus_rate``: ||w_bus|| right after a rigid, plastic grasp of a reference target by
-  the resting robot, rad/s (`spacearm.dynamics.capture`).
+  the resting robot, rad/s (`spacearm.dynamics.capture`). The target is held the same way at
+  every posture: its offset and inertia are given in the TIP frame (turned to inertial axes
+  at each posture by `spacearm.dynamics.payload.target_from_tip_frame`), its velocity in
+  bus axes (a client drifting past the servicer, whatever the arm's posture).
 
 `ImpactSetup` carries what they need besides the posture: the direction u (bus axes; default
 `DEFAULT_DIRECTION`, the bus x axis), the reference target (`target_from_mapping`) and whether
@@ -27,8 +30,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.errors import ConfigError
+from .._core.groups import safe_norm
 from .._core.schema import check_keys, choice, number
 from ..dynamics import JOINT_MODES, bus_rate_jump, capture, virtual_mass
+from ..dynamics.payload import target_from_tip_frame
 from ..models.family import family_of
 
 __all__ = [
@@ -53,8 +58,9 @@ class ImpactSetup:
 
     Attributes:
         direction: ``(d,)`` unit direction of the tip impulse, bus axes (d = 3; planar 2).
-        target: the reference target as `spacearm.dynamics.capture` takes it (a dict of
-            arrays), or None when no capture metric is asked for.
+        target: the reference target (a dict of arrays: ``mass``; ``offset`` and ``inertia``
+            in TIP axes, the hand holding it the same way at every posture; ``velocity`` in
+            bus axes), or None when no capture metric is asked for.
         joints: ``"free"`` or ``"locked"`` during the impact.
     """
 
@@ -101,9 +107,11 @@ def _inertia(where: str, value: Any, planar: bool) -> np.ndarray:
 
 def target_from_mapping(where: str, entry: Any, robot) -> dict[str, np.ndarray]:
     """A capture target as a file gives it, checked: ``mass`` (kg), ``inertia`` (3x3 about its
-    centroid, inertial axes, kg m^2; planar robots also Izz alone), ``offset`` (its centroid
-    minus the tip frame's origin, m; default zero; planar 2 or 3 numbers) and ``velocity``
-    ([v of its centroid; w], m/s and rad/s; default zero; planar [vx, vy, w]).
+    centroid, kg m^2; planar robots also Izz alone), ``offset`` (its centroid minus the tip
+    frame's origin, m; default zero; planar 2 or 3 numbers, z = 0) and ``velocity`` ([v of its
+    centroid; w], m/s and rad/s; default zero; planar [vx, vy, w]). The axes are the reader's:
+    inertial at one grasp (``spacearm capture``); tip axes for the offset and the inertia of
+    a sweep's or problem's reference target (`ImpactSetup`).
 
     Raises:
         ConfigError: naming ``where`` and the field.
@@ -123,6 +131,10 @@ def target_from_mapping(where: str, entry: Any, robot) -> dict[str, np.ndarray]:
     twist = len(family_of(robot).twist_axes)
     velocity = _vector(f"{where}.velocity", entry.get("velocity", [0.0] * twist), (twist,))
     inertia = _inertia(f"{where}.inertia", entry["inertia"], planar)
+    if planar and len(offset) == 3 and offset[2] != 0:
+        raise ConfigError(f"{where}.offset: a planar robot's target lies in the plane (z = 0), got {offset.tolist()}")
+    if planar and inertia.ndim == 2 and np.any(inertia[[0, 1], 2] != 0):
+        raise ConfigError(f"{where}.inertia: a planar robot's target turns about z alone (Ixz = Iyz = 0)")
     return {"mass": np.asarray(mass), "inertia": inertia, "offset": offset, "velocity": velocity}
 
 
@@ -148,6 +160,8 @@ def impact_setup(where: str, entry: Any, robot, *, need_target: bool) -> ImpactS
         if "target" not in entry:
             raise ConfigError(f"{where}.target: missing; the bus rate after a capture needs the reference target")
         target = target_from_mapping(f"{where}.target", entry["target"], robot)
+    elif "target" in entry:
+        raise ConfigError(f"{where}.target: only the bus rate after a capture uses a reference target")
     return ImpactSetup(direction / np.linalg.norm(direction), target, joints)
 
 
@@ -162,9 +176,9 @@ def _bus_rate_jump(robot, posture, setup: ImpactSetup, tip: int):
 def _capture_bus_rate(robot, posture, setup: ImpactSetup, tip: int):
     n = family_of(robot).joint_count(robot)
     rest = jnp.zeros(posture.shape[:-1] + (n,), posture.dtype)
-    _, base, _ = capture(robot, posture, rest, setup.target, tip=tip, joints=setup.joints)
-    angular = base[..., linear_axes(robot) :]
-    return jnp.sqrt(jnp.sum(angular**2, axis=-1))
+    target = target_from_tip_frame(robot, posture, setup.target, tip=tip)
+    _, base, _ = capture(robot, posture, rest, target, tip=tip, joints=setup.joints)
+    return safe_norm(base[..., linear_axes(robot) :])[0]  # finite gradient where a target at rest gives 0
 
 
 # Metric name -> the per-posture function (robot, postures (..., p), setup, tip) -> (...).

@@ -15,8 +15,10 @@ trade-off computable.
 * Objectives (all maximized): planar ``wbar`` (eq. 12, from
   `spacearm.paper.normalized_wbar`), ``S_G`` (eq. 8 normalized by
   pi L^2, see `guaranteed_area`) and ``S_M`` (maximum reachable space); joint-box
-  averages ``w_avg``, ``gci``, ``low_disturbance``, ``w_d_avg`` (`AVERAGE_OBJECTIVES`),
-  all from one fixed QMC rule and one chain pass per posture; ``low_total_mass``; and
+  averages ``w_avg``, ``gci``, ``low_disturbance``, ``w_d_avg`` and the impact averages
+  ``low_virtual_mass``, ``low_bus_rate_jump``, ``low_capture_bus_rate``
+  (`AVERAGE_OBJECTIVES`), all from one fixed QMC rule; the task peaks (``low_peak_*``,
+  `TASK_OBJECTIVES`); ``low_total_mass``; and
   ``reach_radius`` (the path-independent workspace radius, single-arm robots of either
   family, with its envelope-theorem gradient; `spacearm.design.objectives.reach_radius`).
 * `hybrid_search` (the default of ``spacearm optimize``): an NSGA-II population refined

@@ -1,9 +1,10 @@
 """The design objectives, all maximized.
 
 Planar closed forms: w-bar (eq. 12), S_G (eq. 8) and S_M, over pi L^2. Joint-box
-averages (`AVERAGE_OBJECTIVES`, spatial robots): the mean translational w*, the global
-conditioning index, minus the mean base disturbance and the mean dynamic manipulability,
-evaluated together by `spacearm.analysis.averages.joint_averages`. On a robot with several
+averages (`AVERAGE_OBJECTIVES`): the mean translational w*, the global conditioning index,
+minus the mean base disturbance and the mean dynamic manipulability (spatial robots and
+trees), and the impact averages below (every family), evaluated together by
+`spacearm.analysis.averages.joint_averages`. On a robot with several
 tips (a tree) the per-tip averages name their tip, ``w_avg[left/tool0]``; the disturbance
 is of the whole system (C_w over every joint) and ``low_total_mass`` counts every arm.
 

@@ -20,9 +20,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._core.groups import hat
+from .._core.groups import hat, safe_norm
 from ..models.dynamics import system_mass_matrix
 from ..models.family import family_of
+from ..models.payload import as_payload
 from .state import DynamicState, apply, full_velocity, solve, solve_columns
 
 __all__ = [
@@ -44,7 +45,7 @@ def check_joints(joints: str) -> None:
 
 
 def _response_map(system: DynamicState, joints: str):
-    """``(J (*batch, [k,] 6, 6 + n), X (*batch, 6 + n, [k,] 6 ...))``: X = H^-1 J^T (``"locked"``:
+    """``(J (*batch, [k,] 6, 6 + n), X (*batch, [k,] 6 + n, 6))``: X = H^-1 J^T (``"locked"``:
     only the bus columns, H_b^-1 J_S^T, joint rows zero), bus axes."""
     H = system.locked(system_mass_matrix(system.tree, system.q))
     J = system.tip_maps()
@@ -60,10 +61,10 @@ def _response_map(system: DynamicState, joints: str):
 
 @functools.partial(jax.jit, static_argnames=("joints",))
 def tip_inverse_inertia(robot, q: jax.Array, base_rotation=None, joints: str = "free") -> jax.Array:
-    """``(..., 6, 6)`` (trees ``(..., k, 6, 6)``) G = J H^-1 J^T of the tip frame's origin, rows
-    [v; w], inertial axes: Yoshida's extended inversed inertia tensor, the tip twist jump per
-    tip impulse [linear; angular]. ``joints="locked"``: the whole robot as one rigid body
-    (planar ``(..., 3, 3)``)."""
+    """``(..., 6, 6)`` (trees ``(..., k, 6, 6)``; planar ``(..., 3, 3)`` over [vx, vy, w]) G =
+    J H^-1 J^T of the tip frame's origin, rows [v; w], inertial axes: Yoshida's extended
+    inversed inertia tensor, the tip twist jump per tip impulse [linear; angular].
+    ``joints="locked"``: the whole robot as one rigid body."""
     check_joints(joints)
     system = DynamicState(robot, q, base_rotation)
     J, X = _response_map(system, joints)
@@ -77,6 +78,8 @@ def _chosen_tip(system: DynamicState, per_tip, tip):
     """The ``tip``-th of a tree's per-tip maps ``(*batch, k, ...)``; a robot without a tip axis
     (one tip, or a tree focused on one) takes only ``tip=0``. Checked where ``tip`` is concrete."""
     k = None if system.tips is not None else len(system.tree.tip_bodies)
+    if isinstance(tip, str):
+        raise ValueError(f"tip: the index of a tip (0..{(k or 1) - 1}), got the name {tip!r}")
     if not isinstance(tip, jax.core.Tracer) and not 0 <= int(tip) < (k or 1):
         raise ValueError(f"tip: {tip} is not one of the robot's {k or 1} tip(s) (numbered from 0)")
     if per_tip is None or k is None:
@@ -120,6 +123,8 @@ def _impulse_along(robot, direction) -> jax.Array:
         raise ValueError(f"direction: needs {linear} components (the tip's linear axes), got shape {u.shape}")
     if not jnp.issubdtype(u.dtype, jnp.floating):
         u = u.astype(float)
+    if not isinstance(u, jax.core.Tracer) and np.any(np.linalg.norm(np.asarray(u), axis=-1) == 0):
+        raise ValueError("direction: must not be zero")
     u = u / jnp.linalg.norm(u, axis=-1, keepdims=True)
     return jnp.concatenate([u, jnp.zeros(u.shape[:-1] + (len(keep) - linear,), u.dtype)], axis=-1)
 
@@ -133,7 +138,7 @@ def _unit_response(robot, q, impulse, base_rotation, tip, joints: str):
     jump = apply(X, system.unrotate(system.twists["impulse"]))
     along = jnp.sum(system.rotate(apply(J, jump)) * system.twists["impulse"], axis=-1)
     angular = system.reduce(system.rotate(jump[..., :6]))[..., int(np.sum(system.keep < 3)) :]
-    return along, jnp.sqrt(jnp.sum(angular**2, axis=-1))
+    return along, safe_norm(angular)[0]
 
 
 def _checked_response(robot, q, direction, base_rotation, tip, joints):
@@ -169,14 +174,12 @@ def _target_in_bus_axes(system: DynamicState, target, dtype):
     ``(*batch, 6)`` [v of its point at the tip origin; w], bus axes.
 
     A planar target gives the in-plane parts: velocity [vx, vy, w], offset (2,) or (3,), and
-    its moment about z (a scalar) or a 3x3 inertia."""
-    mass = jnp.asarray(target["mass"], dtype)
-    inertia = jnp.asarray(target["inertia"], dtype)
-    if inertia.ndim == 0 or inertia.shape[-2:] != (3, 3):
-        inertia = inertia[..., None, None] * jnp.eye(3, dtype=dtype)  # a moment about the plane's normal
-    offset = jnp.asarray(target["offset"], dtype)
-    if offset.shape[-1] == 2:
-        offset = jnp.concatenate([offset, jnp.zeros(offset.shape[:-1] + (1,), dtype)], axis=-1)
+    its moment about z (a scalar) or a 3x3 inertia; it moves in the plane, so only its offset's
+    x, y and its moment Izz enter (the plane's motions and the others decouple)."""
+    mass, offset, inertia = as_payload(target["mass"], target["offset"], target["inertia"], dtype)
+    if len(system.keep) < 6:
+        offset = offset.at[..., 2].set(0.0)
+        inertia = inertia[..., 2, 2, None, None] * jnp.eye(3, dtype=dtype)
     Rt = jnp.swapaxes(system.R, -1, -2)
     d = apply(Rt, offset)
     inertia = Rt @ inertia @ system.R
@@ -193,9 +196,9 @@ def _target_in_bus_axes(system: DynamicState, target, dtype):
 _TARGET_KEYS = ("mass", "inertia", "offset", "velocity")
 
 
-def _check_target(robot, target) -> None:
+def _check_target(robot, target, batch: tuple[int, ...]) -> None:
     """Refuse a target whose keys or trailing shapes do not fit the robot's family, naming the
-    key: ``mass`` ``(...)``, ``inertia`` ``(..., 3, 3)`` (planar also ``(...)``, Izz),
+    key: ``mass`` ``(...)``, ``inertia`` ``(..., 3, 3)`` (planar also Izz, one or one per state),
     ``offset`` ``(..., 3)`` (planar also 2), ``velocity`` ``(..., 6)`` (planar 3)."""
     if not hasattr(target, "keys"):
         raise ValueError(f"target: a mapping with {', '.join(_TARGET_KEYS)}, got {type(target).__name__}")
@@ -214,18 +217,42 @@ def _check_target(robot, target) -> None:
     twist = len(family_of(robot).twist_axes)
     planar = twist == 3
     shapes = {
-        "inertia": [()] if planar else [(3, 3)],  # planar: Izz or a 3x3
+        "inertia": [(3, 3)],
         "offset": [(2,), (3,)] if planar else [(3,)],
         "velocity": [(twist,)],
     }
     for key, allowed in shapes.items():
         shape = np.shape(target[key])
+        if planar and key == "inertia" and _broadcasts(shape, batch):
+            continue  # Izz alone, or one per state
         if not any(len(shape) >= len(tail) and shape[len(shape) - len(tail) :] == tail for tail in allowed):
             wanted = " or ".join(str(tail) for tail in allowed)
             raise ValueError(f"target.{key}: expected trailing axes {wanted}, got shape {shape}")
     mass = target["mass"]
     if not isinstance(mass, jax.core.Tracer) and not np.all(np.asarray(mass) > 0):
         raise ValueError(f"target.mass: must be positive (kg), got {np.asarray(mass).tolist()}")
+    if planar:
+        _check_in_plane(target)
+
+
+def _broadcasts(shape: tuple[int, ...], batch: tuple[int, ...]) -> bool:
+    try:
+        return np.broadcast_shapes(shape, batch) == batch
+    except ValueError:
+        return False
+
+
+def _check_in_plane(target) -> None:
+    """A planar robot's target moves in the plane: no offset along z, no inertia products
+    with z (Ixz, Iyz), where they are concrete."""
+    offset, inertia = target["offset"], target["inertia"]
+    concrete = not isinstance(offset, jax.core.Tracer) and not isinstance(inertia, jax.core.Tracer)
+    if concrete and np.shape(offset)[-1:] == (3,) and np.any(np.asarray(offset)[..., 2] != 0):
+        raise ValueError("target.offset: a planar robot's target lies in the plane (z = 0)")
+    matrix = concrete and np.shape(inertia)[-2:] == (3, 3)
+    products = np.abs(np.asarray(inertia)[..., [0, 1], 2]) if matrix else 0.0
+    if matrix and np.any(products > 1e-12 * np.max(np.abs(inertia))):
+        raise ValueError("target.inertia: a planar robot's target turns about z alone (Ixz = Iyz = 0)")
 
 
 def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, joints: str = "free"):
@@ -253,7 +280,7 @@ def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, join
         inertial axes (planar robots: the in-plane parts).
     """
     check_joints(joints)
-    _check_target(robot, target)
+    _check_target(robot, target, np.shape(q)[:-1])
     if not isinstance(tip, jax.core.Tracer):
         _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
     return _capture(robot, q, qd, dict(target), base_rotation, momentum, tip, joints)

@@ -26,7 +26,7 @@ from ..models.dynamics import system_mass_matrix, tip_axes
 from ..models.payload import as_payload, with_payload
 from .state import DynamicState, apply
 
-__all__ = ["grasped_robot", "system_momentum", "target_in_tip_frame"]
+__all__ = ["grasped_robot", "system_momentum", "target_from_tip_frame", "target_in_tip_frame"]
 
 
 def _tip_axes(system: DynamicState, tip: int):
@@ -58,6 +58,18 @@ def target_in_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) -> d
     R_tip = _tip_axes(system, tip)
     Rt = jnp.swapaxes(R_tip, -1, -2)
     return {"mass": mass, "com": apply(Rt, offset), "inertia": Rt @ inertia @ R_tip}
+
+
+def target_from_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) -> dict:
+    """A target held the same way by the hand at every posture, in inertial axes: its
+    ``offset`` and ``inertia`` given in TIP axes become R_tip offset and R_tip I R_tip^T
+    (what `spacearm.capture` takes); ``mass`` and ``velocity`` (inertial) pass through. The
+    inverse of `target_in_tip_frame`."""
+    system = DynamicState(robot, q, base_rotation)
+    mass, offset, inertia = as_payload(target["mass"], target["offset"], target["inertia"], system.q.dtype)
+    R_tip = _tip_axes(system, tip)
+    inertial = {"offset": apply(R_tip, offset), "inertia": R_tip @ inertia @ jnp.swapaxes(R_tip, -1, -2)}
+    return {"mass": mass, **inertial, "velocity": target["velocity"]}
 
 
 def grasped_robot(robot, q, target, base_rotation=None, tip: int = 0):

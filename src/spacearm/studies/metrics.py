@@ -255,7 +255,7 @@ def _split_options(options: dict) -> tuple[dict, dict]:
 
 
 def _check_impact(name: str):
-    allowed = ("direction", "joints", "target") if name == "capture_bus_rate" else ("direction", "joints")
+    allowed = ("joints", "target") if name == "capture_bus_rate" else ("direction", "joints")
 
     def check(where: str, options: dict) -> None:
         average, impact = _split_options(options)
@@ -398,7 +398,8 @@ _IMPACT_AVERAGES = {
         "capture_bus_rate",
         "capture_bus_rate_radps",
         "mean bus angular rate right after the resting robot grasps the reference target (option target: "
-        "mass, inertia, offset, velocity), over the joint box (rad/s); joints free (default) or locked",
+        "mass, inertia and offset in tip axes, velocity in bus axes), over the joint box (rad/s); joints free "
+        "(default) or locked",
     ),
 }
 assert set(_IMPACT_AVERAGES) == set(IMPACT_METRICS)
