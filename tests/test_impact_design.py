@@ -429,3 +429,31 @@ def test_kernel_arguments_are_named_when_wrong():
                 "reference_point": [0.0, -100.0],
             }
         )
+
+
+def test_planar_impact_and_wheel_objective_gradients_match_central_differences():
+    """The paper's arm: the impact averages (direction, target in the plane) and the wheel
+    peaks along a task, against central differences in the attachment and the link split."""
+    problem = load_problem(
+        {
+            "name": "planar-impact",
+            "fixed": {"base_mass": 1000.0, "base_inertia": 635.3, "arm_mass": 200.0, "reach": 2.0},
+            "variables": {"b0": [0.5, 2.0], "l1_over_L": [0.3, 0.7]},
+            "objectives": ["low_virtual_mass", "low_bus_rate_jump", "low_capture_bus_rate", "low_peak_wheel_torque"],
+            "impact": {
+                "direction": [1.0, 1.0],
+                "target": {"mass": 40.0, "inertia": 2.0, "offset": [0.2, 0.0], "velocity": [0.05, -0.02, 0.1]},
+            },
+            "task": {"waypoints": [[0.0, 0.5], [1.0, 1.5], [2.0, 0.3]], "duration": 6.0},
+            "average": {"samples": 64, "randomizations": 4, "seed": 0},
+            "reference_point": [-1000.0, -1.0, -1.0, -1e4],
+        }
+    )
+    f = problem.objective_function()
+    x = np.array([1.2, 0.45])
+    jacobian = np.asarray(jax.jit(jax.jacfwd(f))(jnp.asarray(x)))
+    h = 1e-6
+    differences = np.stack([(f(x + e) - f(x - e)) / (2 * h) for e in np.eye(2) * h], -1)
+    scale = np.abs(jacobian).max(axis=1, keepdims=True)
+    np.testing.assert_allclose(jacobian / scale, differences / scale, rtol=0, atol=1e-6)
+    assert np.all(scale > 0)
