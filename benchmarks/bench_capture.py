@@ -20,9 +20,13 @@ the same work per state:
   held (w = 0, so the linear momentum is m_total R v and v needs no solve), the bodies'
   angular momentum about the system centroid, and h = R^T (L - L_bodies).
 
+A second baseline does the same per-state Pinocchio calls but batches the NumPy algebra over
+all the states (as ``bench_tree.py`` does): most of the loop's time is NumPy's per-call
+overhead on 6x6 and 12x12 matrices, not Pinocchio.
+
 Wall and CPU time (user + sys of the process) are both printed: on a shared machine the CPU
-time depends much less on the other jobs. The loop's states are checked against the batch
-(max relative difference per state, per output) in the same run. The loop stays in
+time depends much less on the other jobs. Both baselines' states are checked against the
+batch (max relative difference per state, per output) in the same run. They stay in
 Pinocchio's coordinates (its free-flyer velocity is LOCAL at the bus-frame origin, ours
 [v of the bus centroid; w]); its bus velocity after the grasp is turned into ours after the
 timing.
@@ -43,6 +47,7 @@ from dynamics_common import (
     CONFIG,
     PinocchioSmallsat,
     max_relative,
+    median_of,
     random_rotations,
     random_states,
     time_batch,
@@ -102,6 +107,77 @@ def pinocchio_loops():
     return capture, wheel
 
 
+def _hat(d: np.ndarray) -> np.ndarray:
+    """``(..., 3, 3)`` cross-product matrices of ``(..., 3)`` vectors."""
+    zero = np.zeros(d.shape[:-1])
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+
+
+def _solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.linalg.solve(A, b[..., None])[..., 0]
+
+
+def pinocchio_batched():
+    """``(capture, wheel)`` on all states at once: Pinocchio per state (the centroidal map,
+    ``crba``, the frame Jacobian) into preallocated arrays, then the same algebra as
+    `pinocchio_loops` batched in NumPy (one call per step for all states). Same outputs."""
+    smallsat = PinocchioSmallsat()
+    pin, model, data, config = smallsat.pin, smallsat.model, smallsat.data, smallsat.config
+    tip, frame, nv = model.getFrameId(TIP), pin.LOCAL_WORLD_ALIGNED, model.nv
+
+    def maps(q, R, full: bool):
+        A = np.empty((len(q), 6, nv))
+        H, J = (np.empty((len(q), nv, nv)), np.empty((len(q), 6, nv))) if full else (None, None)
+        for k in range(len(q)):
+            config[3:7] = pin.Quaternion(R[k]).coeffs()
+            config[7:] = q[k]
+            A[k] = pin.computeCentroidalMap(model, data, config)
+            if full:
+                H[k] = pin.crba(model, data, config)
+                J[k] = pin.computeFrameJacobian(model, data, config, tip, frame)
+        return A, H, J
+
+    def capture(q, qd, R, m, mass, inertia, offset, twist):
+        A, H, J = maps(q, R, True)
+        nu = np.concatenate([_solve(A[:, :, :6], m - np.einsum("kij,kj->ki", A[:, :, 6:], qd)), qd], axis=1)
+        skew, mass = _hat(offset), mass[:, None, None]
+        eye = np.broadcast_to(np.eye(3), skew.shape)
+        M_t = np.concatenate(
+            [
+                np.concatenate([mass * eye, -mass * skew], -1),
+                np.concatenate([mass * skew, inertia - mass * skew @ skew], -1),
+            ],
+            -2,
+        )
+        t_t = np.concatenate([twist[:, :3] - np.cross(twist[:, 3:], offset), twist[:, 3:]], axis=1)
+        coupled = np.swapaxes(J, 1, 2) @ M_t
+        after = _solve(H + coupled @ J, np.einsum("kij,kj->ki", H, nu) + np.einsum("kij,kj->ki", coupled, t_t))
+        impulse = np.einsum("kij,kj->ki", M_t, t_t - np.einsum("kij,kj->ki", J, after))
+        return np.concatenate([after, impulse], axis=1)
+
+    def wheel(q, qd, R, m):
+        A, _, _ = maps(q, R, False)
+        Rt = np.swapaxes(R, 1, 2)
+        v = np.einsum("kij,kj->ki", Rt, m[:, :3] - np.einsum("kij,kj->ki", A[:, :3, 6:], qd)) / data.mass[0]
+        bodies = np.einsum("kij,kj->ki", A[:, 3:, :3], v) + np.einsum("kij,kj->ki", A[:, 3:, 6:], qd)
+        return np.einsum("kij,kj->ki", Rt, m[:, 3:] - bodies)
+
+    return capture, wheel
+
+
+def time_whole(name, function, arrays, repeats):
+    """The median time of one call on all the states; returns (results, [wall, CPU] seconds per state)."""
+    results = function(*arrays)  # warm-up
+    count = len(arrays[0])
+    per_state = median_of(lambda: function(*arrays), repeats) / count
+    print(
+        f"  {name}: {per_state[0] * 1e6:.2f} / {per_state[1] * 1e6:.2f} us/state wall / CPU "
+        f"({count:,} states, median of {repeats})"
+    )
+    return results, per_state
+
+
 def pinocchio_capture_to_ours(loop: np.ndarray, R: np.ndarray) -> np.ndarray:
     """[qd+; base+ (v of the bus centroid; w), inertial axes; F] from the capture loop's
     [nu+ (Pinocchio: v of the bus origin, w, bus axes; qd+); F]."""
@@ -130,8 +206,8 @@ def compare(name, parts, batch, loop, ours, theirs) -> None:
         start += width
     ratio = theirs / ours
     print(
-        f"  {name}: batch vs loop max relative difference {', '.join(differences)}; "
-        f"spacearm is {ratio[0]:.1f}x the Pinocchio loop in wall time, {ratio[1]:.1f}x in CPU time"
+        f"  {name}: max relative difference {', '.join(differences)}; "
+        f"spacearm is {ratio[0]:.1f}x the Pinocchio baseline in wall time, {ratio[1]:.1f}x in CPU time"
     )
 
 
@@ -171,16 +247,29 @@ def main(argv=None) -> int:
         3,
     )
     loop_h, pin_h = time_loop("Pinocchio centroidal map", pin_wheel, pick("q", "qd", "R", "m"), 3)
-    n = robot.n_joints
-    compare(
-        "capture free",
-        (("qd+", n), ("bus+", 6), ("impulse", 6)),
-        np.concatenate([part[:few] for part in grasp], axis=1),
-        pinocchio_capture_to_ours(loop_grasp, s["R"][:few]),
-        grasp_seconds,
-        pin_grasp,
+    batched_capture, batched_wheel = pinocchio_batched()
+    whole_grasp, whole_grasp_seconds = time_whole(
+        "Pinocchio per state, the algebra batched in NumPy: capture",
+        batched_capture,
+        pick("q", "qd", "R", "m", *target),
+        3,
     )
-    compare("wheel_momentum", (("h", 3),), h[:few], loop_h, h_seconds, pin_h)
+    whole_h, whole_h_seconds = time_whole(
+        "Pinocchio per state, the algebra batched in NumPy: wheel momentum", batched_wheel, pick("q", "qd", "R", "m"), 3
+    )
+    n, ours_grasp = robot.n_joints, np.concatenate([part[:few] for part in grasp], axis=1)
+    parts = (("qd+", n), ("bus+", 6), ("impulse", 6))
+    for name, loop, seconds in (("loop", loop_grasp, pin_grasp), ("batched algebra", whole_grasp, whole_grasp_seconds)):
+        compare(
+            f"capture free vs {name}",
+            parts,
+            ours_grasp,
+            pinocchio_capture_to_ours(loop, s["R"][:few]),
+            grasp_seconds,
+            seconds,
+        )
+    for name, loop, seconds in (("loop", loop_h, pin_h), ("batched algebra", whole_h, whole_h_seconds)):
+        compare(f"wheel_momentum vs {name}", (("h", 3),), h[:few], loop, h_seconds, seconds)
     print(f"  load average at the end {os.getloadavg()[0]:.1f}")
     return 0
 
