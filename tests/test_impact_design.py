@@ -457,3 +457,39 @@ def test_planar_impact_and_wheel_objective_gradients_match_central_differences()
     scale = np.abs(jacobian).max(axis=1, keepdims=True)
     np.testing.assert_allclose(jacobian / scale, differences / scale, rtol=0, atol=1e-6)
     assert np.all(scale > 0)
+
+
+def test_a_point_target_grasp_is_the_rigid_grasp_formula():
+    """A target of negligible inertia grasped at its centroid: the linear impulse is
+    (G_v + I / m_t)^-1 (v_t - v_hand), the two-body plastic impact with G_v the hand's inverse
+    inertia (docs/explanation/capture.md), at random postures and masses; and the numbers the
+    page quotes at the zero posture (a regression pin of this kernel: m_v along x)."""
+    robot = sa.load_robot(UR5)
+    rng = np.random.default_rng(8)
+    q = rng.uniform(-2.5, 2.5, (6, 6))
+    G = np.asarray(sa.tip_inverse_inertia(robot, q))[:, :3, :3]
+    for mass in (1.0, 10.0, 50.0):
+        velocity = rng.normal(size=(6, 3)) * 0.1
+        target = {"mass": mass, "inertia": np.eye(3) * 1e-12, "offset": np.zeros(3)}
+        target["velocity"] = np.c_[velocity, np.zeros((6, 3))]
+        _, _, impulse = sa.capture(robot, q, np.zeros_like(q), target)
+        expect = np.linalg.solve(G + np.eye(3) / mass, velocity[..., None])[..., 0]
+        np.testing.assert_allclose(np.asarray(impulse)[:, :3], expect, rtol=0, atol=1e-9 * np.abs(expect).max())
+    np.testing.assert_allclose(sa.virtual_mass(robot, np.zeros(6), [1.0, 0.0, 0.0]), 10.00, atol=0.005)
+
+
+def test_a_focused_tree_grasps_and_carries_with_its_focused_hand():
+    """On two UR5 focused on the right arm, tip 0 is the right hand everywhere: the capture,
+    the target in tip axes and the robot carrying it equal the whole tree's tip 1."""
+    dual = sa.load_robot(DUAL)
+    focused = dual.focus(tip=dual.tip_names[1])
+    rng = np.random.default_rng(4)
+    q, qd = rng.uniform(-2.0, 2.0, 12), rng.normal(size=12) * 0.3
+    for mine, tree in zip(sa.capture(focused, q, qd, TARGET), sa.capture(dual, q, qd, TARGET, tip=1), strict=True):
+        np.testing.assert_allclose(mine, tree, rtol=1e-13, atol=1e-15)
+    held, whole = sa.target_in_tip_frame(focused, q, TARGET), sa.target_in_tip_frame(dual, q, TARGET, tip=1)
+    np.testing.assert_allclose(held["com"], whole["com"], rtol=1e-13)
+    carried, carried_tree = sa.grasped_robot(focused, q, TARGET), sa.grasped_robot(dual, q, TARGET, tip=1)
+    np.testing.assert_allclose(carried.link_mass, carried_tree.link_mass, rtol=1e-15)
+    with pytest.raises(ValueError, match=r"^tip: 1 is not one of the robot's 1 tip"):
+        sa.target_in_tip_frame(focused, q, TARGET, tip=1)

@@ -134,7 +134,7 @@ def _tip(args: argparse.Namespace, robot, family) -> tuple[int, str]:
         return 0, "tip"
     names = tuple(robot.tip_names)
     tip = names[0] if args.tip is None else args.tip
-    if tip not in names and tip.lstrip("-").isdigit():
+    if tip not in names and tip.isdigit():
         tip = int(tip)
     try:
         index = robot.focus(tip=tip).active_tip
@@ -361,7 +361,8 @@ def _summary(args, robot, tip, target: dict, result: dict, out: Path, files: lis
     if "skipped" in payload:
         lines.append(f"replay         not written: {payload['skipped']} (the numbers above include the target)")
     elif html:
-        lines.append(f"replay         {args.seconds:g} s of the robot holding the target (welded to the tip)")
+        length = round(args.seconds / args.dt) * args.dt  # whole intervals of --dt
+        lines.append(f"replay         {length:g} s of the robot holding the target (welded to the tip)")
     elif not args.no_html:
         lines.append("replay         not written: it needs the 'view' extra (pip install -e \".[view]\")")
     print("\n".join(lines))

@@ -74,19 +74,6 @@ def tip_inverse_inertia(robot, q: jax.Array, base_rotation=None, joints: str = "
     return rotated[..., rows[:, None], rows[None, :]]
 
 
-def _chosen_tip(system: DynamicState, per_tip, tip):
-    """The ``tip``-th of a tree's per-tip maps ``(*batch, k, ...)``; a robot without a tip axis
-    (one tip, or a tree focused on one) takes only ``tip=0``. Checked where ``tip`` is concrete."""
-    k = None if system.tips is not None else len(system.tree.tip_bodies)
-    if isinstance(tip, str):
-        raise ValueError(f"tip: the index of a tip (0..{(k or 1) - 1}), got the name {tip!r}")
-    if not isinstance(tip, jax.core.Tracer) and not 0 <= int(tip) < (k or 1):
-        raise ValueError(f"tip: {tip} is not one of the robot's {k or 1} tip(s) (numbered from 0)")
-    if per_tip is None or k is None:
-        return per_tip
-    return jnp.take(per_tip, tip, axis=len(system.batch))
-
-
 def impulse_response(robot, q, impulse, base_rotation=None, tip=0, joints: str = "free"):
     """``(dqd (..., n), dbase (..., 6))``: the jump of the joint rates and of [v of the bus
     centroid; w of the bus] (INERTIAL axes) under an impulse [linear; angular] at the tip
@@ -97,7 +84,7 @@ def impulse_response(robot, q, impulse, base_rotation=None, tip=0, joints: str =
     """
     check_joints(joints)
     if not isinstance(tip, jax.core.Tracer):
-        _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
+        DynamicState(robot, q, base_rotation).pick_tip(None, tip)
     return _impulse_response(robot, q, impulse, base_rotation, tip, joints)
 
 
@@ -105,7 +92,7 @@ def impulse_response(robot, q, impulse, base_rotation=None, tip=0, joints: str =
 def _impulse_response(robot, q, impulse, base_rotation, tip, joints: str):
     system = DynamicState(robot, q, base_rotation, twists={"impulse": impulse})
     _, X = _response_map(system, joints)
-    X = _chosen_tip(system, X, tip)
+    X = system.pick_tip(X, tip)
     jump = apply(X, system.unrotate(system.twists["impulse"]))
     return jump[..., 6:], system.reduce(system.rotate(jump[..., :6]))
 
@@ -134,7 +121,7 @@ def _unit_response(robot, q, impulse, base_rotation, tip, joints: str):
     """``(u . tip jump, bus angular-rate jump)`` for the unit impulse ``impulse`` at the tip."""
     system = DynamicState(robot, q, base_rotation, twists={"impulse": impulse})
     J, X = _response_map(system, joints)
-    X, J = _chosen_tip(system, X, tip), _chosen_tip(system, J, tip)
+    X, J = system.pick_tip(X, tip), system.pick_tip(J, tip)
     jump = apply(X, system.unrotate(system.twists["impulse"]))
     along = jnp.sum(system.rotate(apply(J, jump)) * system.twists["impulse"], axis=-1)
     angular = system.reduce(system.rotate(jump[..., :6]))[..., int(np.sum(system.keep < 3)) :]
@@ -145,7 +132,7 @@ def _checked_response(robot, q, direction, base_rotation, tip, joints):
     check_joints(joints)
     impulse = _impulse_along(robot, direction)
     if not isinstance(tip, jax.core.Tracer):
-        _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
+        DynamicState(robot, q, base_rotation).pick_tip(None, tip)
     return _unit_response(robot, q, impulse, base_rotation, tip, joints)
 
 
@@ -282,7 +269,7 @@ def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, join
     check_joints(joints)
     _check_target(robot, target, np.shape(q)[:-1])
     if not isinstance(tip, jax.core.Tracer):
-        _chosen_tip(DynamicState(robot, q, base_rotation), None, tip)
+        DynamicState(robot, q, base_rotation).pick_tip(None, tip)
     return _capture(robot, q, qd, dict(target), base_rotation, momentum, tip, joints)
 
 
@@ -292,7 +279,7 @@ def _capture(robot, q, qd, target, base_rotation, momentum, tip, joints: str):
     qd = system.rates("qd")
     H = system.locked(system_mass_matrix(system.tree, system.q))
     nu = full_velocity(system, qd)
-    J = _chosen_tip(system, system.tip_maps(), tip)
+    J = system.pick_tip(system.tip_maps(), tip)
     M_t, t_t = _target_in_bus_axes(system, target, qd.dtype)
     coupled = jnp.swapaxes(J, -1, -2) @ M_t
     if joints == "free":

@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from .._core.groups import vee
-from ..models.dynamics import system_mass_matrix, tip_axes
+from ..models.dynamics import system_mass_matrix
 from ..models.payload import as_payload, with_payload
 from .state import DynamicState, apply
 
@@ -30,11 +30,9 @@ __all__ = ["grasped_robot", "system_momentum", "target_from_tip_frame", "target_
 
 
 def _tip_axes(system: DynamicState, tip: int):
-    """``(*batch, 3, 3)`` the tip frame's axes in INERTIAL axes (R_bus times its bus-axes frame)."""
-    k = len(system.tree.tip_bodies)
-    if not 0 <= int(tip) < k:
-        raise ValueError(f"tip: expected an index 0..{k - 1} of the robot's tips, got {tip!r}")
-    return system.R @ tip_axes(system.tree, system.q)[..., int(tip), :, :]
+    """``(*batch, 3, 3)`` the grasping tip frame's axes in INERTIAL axes (a focused tree's tip 0
+    is its focus, as in `spacearm.capture`)."""
+    return system.pick_tip(system.tip_axes(), tip)
 
 
 def target_in_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) -> dict:
@@ -47,7 +45,8 @@ def target_in_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) -> d
             its moment about the plane's normal, a number) and ``offset`` (its centroid minus
             the tip origin, inertial axes; planar also (2,)), as `spacearm.capture` takes them.
         base_rotation: the bus attitude (spatial robots and trees).
-        tip: which of the robot's tips grasps (a tree's index; a focus does not renumber them).
+        tip: which of the robot's tips grasps, numbered as `spacearm.capture` numbers them (a
+            tree's index; a tree focused on one tip has that tip alone, tip 0).
 
     Returns:
         ``{"mass", "com" (..., 3), "inertia" (..., 3, 3)}``: the centroid and the inertia about
@@ -79,7 +78,8 @@ def grasped_robot(robot, q, target, base_rotation=None, tip: int = 0):
     centred on the last link's line (ConfigError otherwise: a planar link has no other place
     for its centroid)."""
     payload = target_in_tip_frame(robot, q, target, base_rotation, tip)
-    return with_payload(robot, payload["mass"], payload["com"], payload["inertia"], tip)
+    body_tip = DynamicState(robot, q, base_rotation).tree_tip(tip)  # with_payload counts the tree's own tips
+    return with_payload(robot, payload["mass"], payload["com"], payload["inertia"], body_tip)
 
 
 @jax.jit

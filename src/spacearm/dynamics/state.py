@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._core.groups import vee
-from ..models.dynamics import system_mass_matrix, tip_maps
+from ..models.dynamics import system_mass_matrix, tip_axes, tip_maps
 from ..models.family import family_of
 
 __all__ = ["DynamicState", "apply", "full_velocity", "solve", "solve_columns"]
@@ -117,9 +117,44 @@ class DynamicState:
         joints' columns zero."""
         J = tip_maps(self.tree, self.q)
         J = J * jnp.concatenate([jnp.ones(6, J.dtype), self.moving.astype(J.dtype)])
+        return self._weighted(J)
+
+    def tip_axes(self):
+        """``(*batch, [k,] 3, 3)`` the axes of every tip frame, or of the chosen one, INERTIAL axes."""
+        axes = self._weighted(tip_axes(self.tree, self.q))
+        R = self.R if self.tips is not None else self.R[..., None, :, :]
+        return R @ axes
+
+    def _weighted(self, per_tip):
         if self.tips is None:
-            return J
-        return jnp.einsum("t,...tij->...ij", jnp.asarray(self.tips, J.dtype), J)
+            return per_tip
+        return jnp.einsum("t,...tij->...ij", jnp.asarray(self.tips, per_tip.dtype), per_tip)
+
+    @property
+    def tip_count(self) -> int | None:
+        """k, the tips on the tip axis of per-tip results; None when they have none (one tip, or
+        a tree focused on one: then that tip is tip 0)."""
+        return None if self.tips is not None else len(self.tree.tip_bodies)
+
+    def pick_tip(self, per_tip, tip):
+        """The ``tip``-th of per-tip results ``(*batch, k, ...)`` (``per_tip`` None: only the
+        check). A robot without a tip axis takes only ``tip=0``; checked where ``tip`` is
+        concrete, naming it."""
+        k = self.tip_count
+        if isinstance(tip, str):
+            raise ValueError(f"tip: the index of a tip (0..{(k or 1) - 1}), got the name {tip!r}")
+        if not isinstance(tip, jax.core.Tracer) and (
+            isinstance(tip, bool) or int(tip) != tip or not 0 <= int(tip) < (k or 1)
+        ):
+            raise ValueError(f"tip: {tip!r} is not one of the robot's {k or 1} tip(s) (numbered from 0)")
+        if per_tip is None or k is None:
+            return per_tip
+        return jnp.take(per_tip, tip, axis=len(self.batch))
+
+    def tree_tip(self, tip: int) -> int:
+        """The index among the tree's own tips of ``tip`` (a focused tree's tip 0 is its focus)."""
+        self.pick_tip(None, tip)
+        return int(np.argmax(np.asarray(self.tips))) if self.tips is not None else int(tip)
 
 
 def _trailing(name: str, value, shape: tuple[int, ...]):

@@ -97,8 +97,10 @@ def merged_link_fields(robot, body: int, tip_rotation, tip_translation, mass, co
 
 
 # How far across the last link (relative to the tip's distance from the joint) a planar
-# payload's centroid may lie and still count as on the link line: rounding of a turn to tip axes.
-PLANAR_LINE_TOLERANCE = 1e-9
+# payload's centroid may lie and still count as on the link line: an offset typed to a few
+# digits and turned to tip axes lands micrometres off it, and dropping so small a distance
+# changes the link's moment by m_p y^2, below 1e-12 of it for any real payload.
+PLANAR_LINE_TOLERANCE = 1e-6
 
 
 def planar_payload(robot, mass, com, inertia, tip=0):
