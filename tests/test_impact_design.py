@@ -418,6 +418,8 @@ def test_kernel_arguments_are_named_when_wrong():
         sa.virtual_mass(robot, q, [0.0, 0.0, 0.0])
     with pytest.raises(ValueError, match=r"^tip: the index of a tip \(0\.\.1\), got the name 'right/tool0'"):
         sa.capture(robot, q, q, {**TARGET}, tip="right/tool0")
+    with pytest.raises(ValueError, match=r"^target: missing offset"):
+        sa.target_in_tip_frame(robot, q, {"mass": 5.0, "inertia": np.eye(3)}, tip=1)
     with pytest.raises(ConfigError, match=r"impact\.target: only the bus rate after a capture"):
         load_problem(
             {

@@ -48,6 +48,7 @@ from .impacts import (
 from .payload import (
     grasped_robot as grasped_robot,
     system_momentum as system_momentum,
+    target_from_tip_frame as target_from_tip_frame,
     target_in_tip_frame as target_in_tip_frame,
 )
 from .state import DynamicState as DynamicState
@@ -72,6 +73,7 @@ __all__ = [
     "mass_matrix",
     "reduced_bias",
     "system_momentum",
+    "target_from_tip_frame",
     "target_in_tip_frame",
     "tip_inverse_inertia",
     "tip_velocity",

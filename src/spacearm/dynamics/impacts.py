@@ -31,6 +31,7 @@ __all__ = [
     "bus_rate_jump",
     "capture",
     "check_joints",
+    "check_target",
     "impulse_response",
     "tip_inverse_inertia",
     "virtual_mass",
@@ -183,13 +184,14 @@ def _target_in_bus_axes(system: DynamicState, target, dtype):
 _TARGET_KEYS = ("mass", "inertia", "offset", "velocity")
 
 
-def _check_target(robot, target, batch: tuple[int, ...]) -> None:
+def check_target(robot, target, batch: tuple[int, ...], *, moving: bool = True) -> None:
     """Refuse a target whose keys or trailing shapes do not fit the robot's family, naming the
     key: ``mass`` ``(...)``, ``inertia`` ``(..., 3, 3)`` (planar also Izz, one or one per state),
-    ``offset`` ``(..., 3)`` (planar also 2), ``velocity`` ``(..., 6)`` (planar 3)."""
+    ``offset`` ``(..., 3)`` (planar also 2), ``velocity`` ``(..., 6)`` (planar 3; required
+    only when ``moving``: a grasp needs it, a payload does not)."""
     if not hasattr(target, "keys"):
         raise ValueError(f"target: a mapping with {', '.join(_TARGET_KEYS)}, got {type(target).__name__}")
-    missing = [key for key in _TARGET_KEYS if key not in target]
+    missing = [key for key in _TARGET_KEYS[: 4 if moving else 3] if key not in target]
     unknown = [str(key) for key in target if key not in _TARGET_KEYS]
     if missing or unknown:
         what = "; ".join(
@@ -209,6 +211,8 @@ def _check_target(robot, target, batch: tuple[int, ...]) -> None:
         "velocity": [(twist,)],
     }
     for key, allowed in shapes.items():
+        if key not in target:
+            continue
         shape = np.shape(target[key])
         if planar and key == "inertia" and _broadcasts(shape, batch):
             continue  # Izz alone, or one per state
@@ -267,7 +271,7 @@ def capture(robot, q, qd, target, base_rotation=None, momentum=None, tip=0, join
         inertial axes (planar robots: the in-plane parts).
     """
     check_joints(joints)
-    _check_target(robot, target, np.shape(q)[:-1])
+    check_target(robot, target, np.shape(q)[:-1])
     if not isinstance(tip, jax.core.Tracer):
         DynamicState(robot, q, base_rotation).pick_tip(None, tip)
     return _capture(robot, q, qd, dict(target), base_rotation, momentum, tip, joints)

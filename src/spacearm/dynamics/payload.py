@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._core.groups import vee
 from ..models.dynamics import system_mass_matrix
 from ..models.payload import as_payload, with_payload
+from .impacts import check_target
 from .state import DynamicState, apply
 
 __all__ = ["grasped_robot", "system_momentum", "target_from_tip_frame", "target_in_tip_frame"]
@@ -52,6 +54,7 @@ def target_in_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) -> d
         ``{"mass", "com" (..., 3), "inertia" (..., 3, 3)}``: the centroid and the inertia about
         it in TIP axes (R_tip^T offset, R_tip^T I R_tip), what `with_payload` takes.
     """
+    check_target(robot, target, np.shape(q)[:-1], moving=False)
     system = DynamicState(robot, q, base_rotation)
     mass, offset, inertia = as_payload(target["mass"], target["offset"], target["inertia"], system.q.dtype)
     R_tip = _tip_axes(system, tip)
@@ -64,6 +67,7 @@ def target_from_tip_frame(robot, q, target, base_rotation=None, tip: int = 0) ->
     ``offset`` and ``inertia`` given in TIP axes become R_tip offset and R_tip I R_tip^T
     (what `spacearm.capture` takes); ``mass`` and ``velocity`` (inertial) pass through. The
     inverse of `target_in_tip_frame`."""
+    check_target(robot, target, np.shape(q)[:-1])
     system = DynamicState(robot, q, base_rotation)
     mass, offset, inertia = as_payload(target["mass"], target["offset"], target["inertia"], system.q.dtype)
     R_tip = _tip_axes(system, tip)
