@@ -32,6 +32,7 @@ __all__ = [
     "log",
     "polar_rotation",
     "rpy_matrix",
+    "second_moment",
     "vee",
 ]
 
@@ -54,6 +55,12 @@ def hat(v: jax.Array) -> jax.Array:
 def vee(W: jax.Array) -> jax.Array:
     """``(..., 3, 3) -> (..., 3)`` the vector of the skew part of W (inverse of `hat`)."""
     return 0.5 * jnp.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0], W[..., 1, 0] - W[..., 0, 1]], -1)
+
+
+def second_moment(c: jax.Array) -> jax.Array:
+    """``(..., 3) -> (..., 3, 3)`` |c|^2 1 - c c^T = [c]x^T [c]x: the inertia of a unit point
+    mass at c about the origin (the parallel-axis term per unit mass)."""
+    return jnp.sum(c * c, -1)[..., None, None] * jnp.eye(3, dtype=c.dtype) - c[..., :, None] * c[..., None, :]
 
 
 def safe_norm(v: jax.Array) -> tuple[jax.Array, jax.Array]:

@@ -14,15 +14,14 @@ move; default all, so the other arms move too), through
 from __future__ import annotations
 
 import argparse
-from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
-from .._core.errors import ConfigError, RunError
+from .._core.errors import ConfigError
 from .._core.groups import rpy_matrix
 from ..io.folders import check_output_folder, claimed_folder, replacing_folder
-from ._args import check_limits, comma_numbers
+from ._args import check_finite, check_limits, comma_numbers
 
 # The files a reach run writes; the other entries of --out are kept.
 _REACH_FILES = frozenset({"reach.png", "reach.npz", "reach.gif", "reach.html"})
@@ -33,19 +32,6 @@ def _result_folder(out: Path):
     run's files) that replaces ``out`` as a whole when the block ends without an error
     (`spacearm.io.folders.replacing_folder`); the caller holds the folder's lock."""
     return replacing_folder(out, keep=lambda name: name not in _REACH_FILES)
-
-
-def _check_finite(arrays: Mapping[str, object]) -> None:
-    """RunError naming the first quantity of the plan that came out non-finite (exit 1)."""
-    for name, value in arrays.items():
-        values = np.asarray(value, dtype=float)
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            where = f" at index {tuple(int(i) for i in np.unravel_index(bad[0], values.shape))}" if values.ndim else ""
-            raise RunError(
-                f"the plan's {name} is {float(values.flat[bad[0]])}{where} "
-                f"({bad.size} non-finite of {values.size}); nothing was written"
-            )
 
 
 def register(subparsers) -> None:
@@ -223,7 +209,7 @@ def _run_planar(args: argparse.Namespace, robot, out: Path) -> int:
         joint_waypoints_rad=plan.joint_waypoints,
         target_m=plan.target,
     )
-    _check_finite({**arrays, "tip error": plan.error, "base rotation": plan.delta_phi0})
+    check_finite({**arrays, "tip error": plan.error, "base rotation": plan.delta_phi0}, "the plan's")
     with _result_folder(out) as staging:
         draw_reach(robot, phi, plan, staging / "reach.png")
         if args.animate:
@@ -269,7 +255,7 @@ def _run_spatial(args: argparse.Namespace, robot, out: Path, several: bool) -> i
         target_m=target,
     )
     tree = _tree_record(robot, arrays) if several else []
-    _check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn})
+    check_finite({**arrays, "tip error": plan.error, "bus rotation": plan.bus_turn}, "the plan's")
     with _result_folder(out) as staging:
         draw_spatial_reach(robot, plan, staging / "reach.png")  # one arm or several
         write_npz(staging / "reach.npz", **arrays)
@@ -353,7 +339,7 @@ def _run_pose(args: argparse.Namespace, robot, out: Path, several: bool) -> int:
         target_rotation=T1,
     )
     tree = _tree_record(robot, arrays) if several else []
-    _check_finite({**arrays, "tip error": plan.error, "tip axes error": plan.rotation_error})
+    check_finite({**arrays, "tip error": plan.error, "tip axes error": plan.rotation_error}, "the plan's")
     with _result_folder(out) as staging:
         draw_spatial_reach(robot, plan, staging / "reach.png")  # one arm or several
         write_npz(staging / "reach.npz", **arrays)

@@ -24,6 +24,7 @@ import jax
 import jax.numpy as jnp
 
 from .._core.errors import ConfigError
+from .._core.groups import second_moment
 from .family import family_of
 
 __all__ = [
@@ -34,12 +35,6 @@ __all__ = [
     "planar_payload",
     "with_payload",
 ]
-
-
-def _second_moment(offset):
-    """``(..., 3, 3)`` [d]x^T [d]x = |d|^2 I - d d^T: the parallel-axis term per unit mass."""
-    eye = jnp.eye(3, dtype=offset.dtype)
-    return jnp.sum(offset * offset, -1)[..., None, None] * eye - offset[..., :, None] * offset[..., None, :]
 
 
 def merge_rigid_bodies(mass, com, inertia, payload_mass, payload_com, payload_inertia):
@@ -59,9 +54,9 @@ def merge_rigid_bodies(mass, com, inertia, payload_mass, payload_com, payload_in
     centroid = jnp.where(positive[..., None], weighted / jnp.where(positive, total, 1.0)[..., None], com)
     combined = (
         jnp.asarray(inertia)
-        + mass[..., None, None] * _second_moment(com - centroid)
+        + mass[..., None, None] * second_moment(com - centroid)
         + jnp.asarray(payload_inertia)
-        + payload_mass[..., None, None] * _second_moment(payload_com - centroid)
+        + payload_mass[..., None, None] * second_moment(payload_com - centroid)
     )
     return total, centroid, 0.5 * (combined + jnp.swapaxes(combined, -1, -2))
 

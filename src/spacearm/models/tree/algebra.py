@@ -199,10 +199,6 @@ def _axis_frame(axis: jax.Array) -> jax.Array:
     return jnp.stack([x, y, a], axis=-1)
 
 
-def _second_moment(c: jax.Array) -> jax.Array:
-    return jnp.dot(c, c) * jnp.eye(3, dtype=c.dtype) - jnp.outer(c, c)
-
-
 # The steps of the pass ------------------------------------------------------------------
 #
 # Posture arrays carry their batch axes LAST here (q is (n, *batch)), so every scalar of

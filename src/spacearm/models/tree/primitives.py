@@ -34,6 +34,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..._core.groups import second_moment
 from .algebra import (
     _add,
     _axis_frame,
@@ -51,7 +52,6 @@ from .algebra import (
     _point_twist_map,
     _rows,
     _scale,
-    _second_moment,
     _sub,
     _sym_add,
     _vec,
@@ -178,9 +178,9 @@ def tree_constants(robot: TreeRobot) -> TreeConstants:
         fixed_moment=robot.base_mass * base_com + root_mass @ root_com,
         fixed_inertia=(
             robot.base_inertia
-            + robot.base_mass * _second_moment(base_com)
+            + robot.base_mass * second_moment(base_com)
             + jnp.sum(root_inertia, axis=0)
-            + jnp.sum(root_mass[:, None, None] * jax.vmap(_second_moment)(root_com), axis=0)
+            + jnp.sum(root_mass[:, None, None] * second_moment(root_com), axis=0)
         ),
         tip_offset=jnp.einsum("kji,kj->ki", frames[tips], robot.tip_translation),
         tip_rotation=jnp.einsum("kji,kjl->kil", frames[tips], robot.tip_rotation),
